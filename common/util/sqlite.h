@@ -1,0 +1,86 @@
+// A thin RAII layer over SQLite: a connection with a cache of prepared
+// statements, statements with typed binds, and a transaction that rolls back
+// in its destructor unless committed. Errors carry the database path, the
+// SQL and SQLite's extended code.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+
+namespace portico::sql {
+
+class Statement {
+ public:
+  Statement(sqlite3* db, sqlite3_stmt* stmt, std::string sql) : db_(db), stmt_(stmt), sql_(std::move(sql)) {}
+  ~Statement();
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  // Binds are 1-based like SQLite's.
+  Statement& bind(int index, int64_t value);
+  Statement& bind(int index, double value);
+  Statement& bind(int index, std::string_view text);
+  Statement& bindBlob(int index, const void* data, size_t bytes);
+  Statement& bindNull(int index);
+  // Steps once: true while a row is available.
+  bool step();
+  // Steps to completion (for statements returning no rows).
+  void run();
+  void reset();   // resets and clears bindings, ready for reuse
+
+  int64_t columnInt(int column) const { return sqlite3_column_int64(stmt_, column); }
+  double columnDouble(int column) const { return sqlite3_column_double(stmt_, column); }
+  std::string columnText(int column) const;
+  std::span<const uint8_t> columnBlob(int column) const;
+  bool columnIsNull(int column) const { return sqlite3_column_type(stmt_, column) == SQLITE_NULL; }
+
+ private:
+  [[noreturn]] void fail(int code, std::string_view what) const;
+  sqlite3* db_;
+  sqlite3_stmt* stmt_;
+  std::string sql_;
+};
+
+class Database {
+ public:
+  enum class Mode { ReadOnly, ReadWriteCreate };
+  Database(const std::string& path, Mode mode);
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+
+  void exec(std::string_view sql);   // one or more statements, no results
+  // A cached prepared statement, reset and ready. Valid until the database closes.
+  Statement& prepare(const std::string& sql);
+  int64_t lastInsertRowId() const { return sqlite3_last_insert_rowid(db_); }
+  int64_t changes() const { return sqlite3_changes64(db_); }
+  int userVersion();
+  void setUserVersion(int version);
+  const std::string& path() const { return path_; }
+  sqlite3* handle() const { return db_; }
+
+ private:
+  std::string path_;
+  sqlite3* db_ = nullptr;
+  std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;
+};
+
+// BEGIN IMMEDIATE ... COMMIT; rolls back when destroyed uncommitted.
+class Transaction {
+ public:
+  explicit Transaction(Database& db);
+  ~Transaction();
+  void commit();
+
+ private:
+  Database& db_;
+  bool done_ = false;
+};
+
+}  // namespace portico::sql

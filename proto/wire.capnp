@@ -1,0 +1,201 @@
+@0x9621b7a49b1d521a;
+# Messages between portico's coordinator, workers and clients (ZeroMQ
+# frames, packed encoding). Every frame is one `Envelope`.
+using Cxx = import "/capnp/c++.capnp";
+$Cxx.namespace("portico::wire");
+
+const protocolVersion :UInt32 = 1;
+
+enum Phase {
+  photons @0;
+  render @1;
+}
+
+enum RayKind {
+  photon @0;   # carries power; deposits at diffuse hits
+  camera @1;   # carries throughput; shades at its first hit
+  shadow @2;   # carries the unoccluded contribution; adds it if it reaches tMax
+}
+
+# Everything needed to finish a ray, so a ray never waits on anything else.
+# Flat fields (no nested structs) keep a list of rays one contiguous block.
+struct Ray {
+  kind @0 :RayKind;
+  depth @1 :UInt16;        # bounces so far
+  pathId @2 :UInt64;       # photon index, or pixel * spp + sample
+  pixel @3 :UInt32;
+  ox @4 :Float32;
+  oy @5 :Float32;
+  oz @6 :Float32;
+  dx @7 :Float32;
+  dy @8 :Float32;
+  dz @9 :Float32;
+  tMin @10 :Float32;
+  tMax @11 :Float32;
+  r @12 :Float32;          # power, throughput or contribution
+  g @13 :Float32;
+  b @14 :Float32;
+}
+
+# A stored photon: where it landed, where it came from, what it carries.
+struct Photon {
+  pathId @0 :UInt64;
+  bounce @1 :UInt16;       # 0: first hit after leaving the light (direct)
+  px @2 :Float32;
+  py @3 :Float32;
+  pz @4 :Float32;
+  dx @5 :Float32;          # direction of travel when it arrived
+  dy @6 :Float32;
+  dz @7 :Float32;
+  r @8 :Float32;
+  g @9 :Float32;
+  b @10 :Float32;
+}
+
+struct PhotonBatch {
+  photons @0 :List(Photon);
+}
+
+# Work generators: compact descriptions the worker expands itself, so a job
+# of a billion photons does not start as a billion queued rays.
+struct EmitRange {
+  light @0 :UInt32;
+  firstPath @1 :UInt64;
+  count @2 :UInt32;
+  photonsOfLight @3 :UInt64;   # the light's share; each photon carries power / share
+}
+
+struct CameraRange {
+  firstPixel @0 :UInt32;
+  pixelCount @1 :UInt32;
+}
+
+struct RayBatch {
+  union {
+    rays @0 :List(Ray);
+    emit @1 :EmitRange;
+    camera @2 :CameraRange;
+  }
+}
+
+struct JobSpec {
+  store @0 :Text;          # scene store directory (absolute)
+  output @1 :Text;         # image path (.png or .exr), absolute
+  photons @2 :UInt64;
+  spp @3 :UInt32;
+  seed @4 :UInt64;
+  accel @5 :Text;
+  width @6 :UInt32;        # 0: the camera's
+  height @7 :UInt32;
+  exposure @8 :Float32;
+  lightSamples @9 :UInt32;
+  photonK @10 :UInt32;     # photons per density estimate
+}
+
+struct Counter {
+  name @0 :Text;
+  value @1 :Int64;
+}
+
+# Fixed-point radiance sums (see common/film.h): integer addition is
+# associative, so the film does not depend on the order results arrive in.
+struct PixelSum {
+  pixel @0 :UInt32;
+  r @1 :Int64;
+  g @2 :Int64;
+  b @3 :Int64;
+}
+
+struct CellRays {
+  cell @0 :UInt32;
+  rays @1 :List(Ray);
+}
+
+struct Hello {
+  version @0 :UInt32;
+  name @1 :Text;
+  cores @2 :UInt32;
+  memoryBytes @3 :UInt64;
+}
+
+struct Welcome {
+  version @0 :UInt32;
+  heartbeatMs @1 :UInt32;
+}
+
+struct Assign {
+  lease @0 :UInt64;
+  attempt @1 :UInt32;
+  job @2 :UInt64;
+  phase @3 :Phase;
+  cell @4 :UInt32;
+  spec @5 :JobSpec;
+  batches @6 :List(RayBatch);
+}
+
+struct Result {
+  lease @0 :UInt64;
+  counters @1 :List(Counter);
+  crossings @2 :List(CellRays);
+  deposits @3 :PhotonBatch;
+  film @4 :List(PixelSum);
+}
+
+struct Failure {
+  lease @0 :UInt64;
+  message @1 :Text;
+}
+
+struct FetchPhotons {
+  job @0 :UInt64;
+  cell @1 :UInt32;
+}
+
+struct PhotonsReply {
+  job @0 :UInt64;
+  cell @1 :UInt32;
+  batches @2 :List(Data);   # each a packed PhotonBatch message
+}
+
+struct Submit {
+  spec @0 :JobSpec;
+}
+
+struct SubmitReply {
+  job @0 :UInt64;
+  error @1 :Text;           # empty on success
+}
+
+struct StatusRequest {
+  job @0 :UInt64;           # 0: all jobs
+}
+
+struct StatusReply {
+  json @0 :Text;            # one JSON object (see coordinator/status.cpp)
+}
+
+struct CancelRequest {
+  job @0 :UInt64;
+}
+
+struct Envelope {
+  union {
+    hello @0 :Hello;
+    welcome @1 :Welcome;
+    heartbeat @2 :Void;
+    ready @3 :Void;
+    assign @4 :Assign;
+    result @5 :Result;
+    failure @6 :Failure;
+    fetchPhotons @7 :FetchPhotons;
+    photons @8 :PhotonsReply;
+    submit @9 :Submit;
+    submitReply @10 :SubmitReply;
+    status @11 :StatusRequest;
+    statusReply @12 :StatusReply;
+    cancel @13 :CancelRequest;
+    shutdown @14 :Void;
+    error @15 :Text;         # a request the coordinator refused
+    goodbye @16 :Void;       # a worker leaving cleanly
+  }
+}
