@@ -90,6 +90,7 @@ struct JobSpec {
   exposure @8 :Float32;
   lightSamples @9 :UInt32;
   photonK @10 :UInt32;     # photons per density estimate
+  photonRadius @11 :Float32;  # largest density-estimate radius (metres)
 }
 
 struct Counter {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <string_view>
@@ -52,5 +53,41 @@ AcceleratorSpec parseAcceleratorSpec(std::string_view text);
 // the returned accelerator. Throws std::invalid_argument for unknown kinds or
 // parameters (naming them).
 std::unique_ptr<Accelerator> buildAccelerator(const AcceleratorSpec& spec, const MeshView& mesh);
+
+// Checks kind, variant and parameters as buildAccelerator would, without
+// building: lets a coordinator refuse a bad --accel before any work starts.
+void validateAcceleratorSpec(const AcceleratorSpec& spec);
+
+// The kinds buildAccelerator knows, in the order they are listed to users.
+std::vector<std::string_view> acceleratorKinds();
+
+// Reads one spec's variant and parameters for the kind that builds it, and
+// remembers what was read, so that a misspelt or foreign parameter becomes an
+// error naming it (after pbrt's ParameterDictionary::ReportUnused).
+class AcceleratorParameters {
+ public:
+  explicit AcceleratorParameters(const AcceleratorSpec& spec);
+
+  // The variant if one of `allowed`, defaultVariant if none was given.
+  std::string variant(std::initializer_list<std::string_view> allowed,
+                      std::string_view defaultVariant);
+  // An integer in [minimum, maximum]; defaultValue when the parameter is absent.
+  int integer(std::string_view name, int defaultValue, int minimum, int maximum);
+  // A finite number > 0; defaultValue when the parameter is absent.
+  double positiveNumber(std::string_view name, double defaultValue);
+  // Throws if a parameter was never read, or a variant was given but never read.
+  void reportUnused() const;
+
+  // Throws std::invalid_argument "accelerator spec '<text>': <problem>".
+  [[noreturn]] void fail(std::string_view problem) const;
+
+ private:
+  const std::pair<std::string, std::string>* find(std::string_view name);
+
+  const AcceleratorSpec& spec_;
+  std::vector<bool> used_;
+  std::vector<std::string> asked_;  // parameter names the kind reads, for error messages
+  bool variantRead_ = false;
+};
 
 }  // namespace portico

@@ -32,9 +32,17 @@ class CellGeometry {
   uint32_t material(uint32_t primitive) const { return materials_[primitive]; }
   const std::vector<CellPortalView>& portals() const { return portals_; }
   uint64_t bytes() const { return mappedBytes_; }
+  // Whether positions, indices and material ids are used where they lie in
+  // the mapping (true when each was stored as one chunk): no copy was made.
+  bool readInPlace() const;
 
  private:
   CellGeometry() = default;
+  CellGeometry(const CellGeometry&) = delete;
+  CellGeometry& operator=(const CellGeometry&) = delete;
+  // Reads and validates the mapped message; throws kj::Exception or
+  // std::runtime_error (load() adds the path).
+  void readMapped(uint32_t expectedCellId, size_t materialCount);
   uint32_t id_ = 0;
   Bounds3 bounds_;
   MeshView mesh_;

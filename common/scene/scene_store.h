@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -23,6 +24,8 @@ class SceneStore {
   const std::vector<Material>& materials() const { return materials_; } // indexed by material id
   const std::vector<AreaLight>& lights() const { return lights_; }     // indexed by light id
   const Camera& camera() const { return camera_; }
+  // Free-form facts about the store (format, generator, seed, ...).
+  const std::map<std::string, std::string>& meta() const { return meta_; }
   std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
   // The cell whose bounds contain p (the smallest, when several do); nullopt if none.
   std::optional<uint32_t> locateCell(const Vec3& p) const;
@@ -35,6 +38,7 @@ class SceneStore {
   std::vector<Material> materials_;
   std::vector<AreaLight> lights_;
   Camera camera_;
+  std::map<std::string, std::string> meta_;
 };
 
 // The geometry of one cell as written to its cell file.
@@ -57,6 +61,11 @@ class SceneStoreWriter {
   SceneStoreWriter(const SceneStoreWriter&) = delete;
   SceneStoreWriter& operator=(const SceneStoreWriter&) = delete;
 
+  // Bulk lists in cell files are cut into chunks of at most this many
+  // elements (default and maximum 2^28 - 1; whole vertices / triangles per
+  // chunk). Smaller values exist so tests can exercise multi-chunk cells.
+  void setMaxChunkElements(uint64_t elements);
+
   uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0));
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
@@ -66,6 +75,9 @@ class SceneStoreWriter {
   // Writes cells/<id>.cell with its triangles and the portals that touch it.
   void writeCell(const CellContent& cell);
   // Validates (every portal's cells written, camera cell exists, ...) and publishes.
+  // An existing directory is replaced only if it is empty or a scene store.
+  // Every error is a std::runtime_error naming the object and the problem,
+  // and leaves `directory` untouched.
   void commit();
 
  private:

@@ -1,0 +1,76 @@
+// `grid`: a uniform grid of voxels over the cell's triangles, traversed with
+// a 3D-DDA (Amanatides & Woo 1987) and mailboxing. The paper's workhorse:
+// it builds in O(n) and is hard to beat when triangles are spread evenly,
+// as they are in most rooms.
+//
+// Parameters:
+//   res=N      voxels along the longest axis of the bounds; the other axes get
+//              as many as keep voxels near-cubic (at least 1). 1..512.
+//              Default: chosen from the triangle count and the cell's shape.
+//   density=L  for the automatic resolution: voxels per triangle (the lambda
+//              of Cleary & Wyvill's rule), default 3.
+//
+// Hits are identical, bit for bit, to those of `brute` for rays starting
+// within a few grid diagonals of the cell (the renderer's rays start inside
+// it or on its portals); see uniform_grid.cpp for why.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string_view>
+#include <vector>
+
+#include "common/accel/accelerator.h"
+
+namespace portico {
+
+struct UniformGridOptions {
+  int resolution = 0;    // voxels along the longest axis; 0 = automatic
+  double density = 3.0;  // automatic resolution: voxels per triangle
+};
+
+// Reads res and density from a `grid` spec.
+UniformGridOptions readUniformGridOptions(AcceleratorParameters& parameters);
+
+// Voxels per axis for a box of this extent holding triangleCount triangles:
+// about density * triangleCount near-cubic voxels, 1..256 per axis. Axes too
+// thin for one voxel get one, and the others share the voxel budget.
+std::array<int, 3> automaticGridResolution(const std::array<double, 3>& extent,
+                                           size_t triangleCount, double density);
+
+class UniformGrid final : public Accelerator {
+ public:
+  // mesh's arrays must outlive this object.
+  explicit UniformGrid(const MeshView& mesh, const UniformGridOptions& options = {},
+                       std::string_view spec = "grid");
+
+  Hit intersect(const Ray& ray) const override;
+  bool occluded(const Ray& ray) const override;
+  Bounds3 bounds() const override { return meshBounds_; }
+  const AcceleratorStats& stats() const override { return stats_; }
+
+  // Voxels per axis ({0, 0, 0} for an empty mesh).
+  std::array<int, 3> resolution() const { return resolution_; }
+  // The box the voxels tile: the mesh bounds, slightly padded.
+  std::array<double, 3> gridLow() const { return low_; }
+  std::array<double, 3> voxelSize() const { return voxelSize_; }
+
+ private:
+  template <bool AnyHit>
+  bool traverse(const Ray& ray, Hit& best) const;
+
+  MeshView mesh_;
+  Bounds3 meshBounds_;
+  // Geometry of the grid, in double: traversal runs in double so that its
+  // voxel boundaries are exact to far below the triangle test's rounding.
+  std::array<int, 3> resolution_{0, 0, 0};
+  std::array<double, 3> low_{0, 0, 0}, high_{0, 0, 0};
+  std::array<double, 3> voxelSize_{0, 0, 0}, inverseVoxelSize_{0, 0, 0};
+  // Compressed rows: voxel i (x fastest, then y, then z) holds the triangles
+  // references_[voxelStart_[i] .. voxelStart_[i + 1]), in increasing order.
+  std::vector<uint32_t> voxelStart_;
+  std::vector<uint32_t> references_;
+  AcceleratorStats stats_;
+};
+
+}  // namespace portico

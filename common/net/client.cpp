@@ -1,0 +1,71 @@
+#include "common/net/client.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace portico::net {
+
+CoordinatorClient::CoordinatorClient(const std::string& endpoint)
+    : endpoint_(endpoint), context_(1), socket_(context_, zmq::socket_type::dealer) {
+  socket_.set(zmq::sockopt::linger, 200);
+  socket_.set(zmq::sockopt::maxmsgsize, int64_t(kMaxFrameBytes));
+  socket_.connect(endpoint);
+}
+
+std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder& message,
+                                                    std::chrono::milliseconds timeout) {
+  socket_.send(encode(message), zmq::send_flags::none);
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0)
+      throw std::runtime_error(fmt::format("coordinator at {} did not answer within {} ms", endpoint_, timeout.count()));
+    zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::poll(items, 1, left);
+    if (!(items[0].revents & ZMQ_POLLIN)) continue;
+    zmq::message_t frame;
+    if (!socket_.recv(frame, zmq::recv_flags::dontwait)) continue;
+    auto decoded = std::make_unique<Decoded>(frame);
+    auto which = decoded->envelope().which();
+    if (which == wire::Envelope::HEARTBEAT) continue;   // not ours; workers' traffic only
+    if (which == wire::Envelope::ERROR)
+      throw std::runtime_error(fmt::format("coordinator at {}: {}", endpoint_, decoded->envelope().getError().cStr()));
+    return decoded;
+  }
+}
+
+uint64_t CoordinatorClient::submit(capnp::MallocMessageBuilder& submitEnvelope) {
+  auto reply = request(submitEnvelope);
+  if (reply->envelope().which() != wire::Envelope::SUBMIT_REPLY)
+    throw std::runtime_error("coordinator sent an unexpected reply to Submit");
+  auto answer = reply->envelope().getSubmitReply();
+  if (answer.getError().size()) throw std::runtime_error(fmt::format("job refused: {}", answer.getError().cStr()));
+  return answer.getJob();
+}
+
+std::string CoordinatorClient::statusJson(uint64_t job) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initStatus().setJob(job);
+  auto reply = request(message);
+  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
+    throw std::runtime_error("coordinator sent an unexpected reply to Status");
+  return reply->envelope().getStatusReply().getJson();
+}
+
+std::string CoordinatorClient::cancel(uint64_t job) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initCancel().setJob(job);
+  auto reply = request(message);
+  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
+    throw std::runtime_error("coordinator sent an unexpected reply to Cancel");
+  return reply->envelope().getStatusReply().getJson();
+}
+
+void CoordinatorClient::shutdown() {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().setShutdown();
+  socket_.send(encode(message), zmq::send_flags::none);
+}
+
+}  // namespace portico::net

@@ -1,0 +1,60 @@
+// Cap'n Proto envelopes over ZeroMQ frames: packed on the wire, decoded from
+// an 8-byte-aligned copy with traversal limits sized for legitimate messages.
+#pragma once
+
+#include <capnp/message.h>
+#include <capnp/serialize-packed.h>
+#include <kj/io.h>
+
+#include <stdexcept>
+
+#include <memory>
+#include <string>
+#include <zmq.hpp>
+
+#include "proto/wire.capnp.h"
+
+namespace portico::net {
+
+// Largest frame accepted from the network (a big Result or photon reply).
+constexpr size_t kMaxFrameBytes = size_t(512) << 20;
+
+zmq::message_t encode(capnp::MessageBuilder& message);
+
+// Reads a packed message from bytes that stay alive as long as this reader.
+// Unpacking copies into fresh word arrays, so the input need not be aligned.
+// Throws std::runtime_error("malformed message: ...") on bad input.
+class PackedReader {
+ public:
+  PackedReader(const void* data, size_t bytes);
+  template <typename T>
+  typename T::Reader root() {
+    try {
+      return reader_->getRoot<T>();
+    } catch (const kj::Exception& e) {
+      throw std::runtime_error(std::string("malformed message: ") + e.getDescription().cStr());
+    }
+  }
+
+ private:
+  kj::ArrayInputStream input_;
+  kj::BufferedInputStreamWrapper buffered_;
+  std::unique_ptr<capnp::PackedMessageReader> reader_;
+};
+
+// A decoded envelope from one ZeroMQ frame (the frame is copied).
+class Decoded {
+ public:
+  explicit Decoded(const zmq::message_t& frame);
+  wire::Envelope::Reader envelope() const { return envelope_; }
+
+ private:
+  std::string bytes_;
+  std::unique_ptr<PackedReader> reader_;
+  wire::Envelope::Reader envelope_;
+};
+
+// Packs a standalone message (for blobs stored in SQLite).
+std::string packToString(capnp::MessageBuilder& message);
+
+}  // namespace portico::net

@@ -1,0 +1,238 @@
+#include "common/transport/cell_kernel.h"
+
+#include "common/rng.h"
+#include "common/transport/sampling.h"
+
+namespace portico {
+
+namespace {
+Vec3 hitNormalFacing(const MeshView& mesh, uint32_t primitive, const Vec3& direction, bool& frontFacing) {
+  const Vec3 n = normalize(mesh.geometricNormal(primitive));
+  frontFacing = dot(n, direction) < 0;
+  return frontFacing ? n : -n;
+}
+
+Ray toRay(const RayState& state) { return {state.origin, state.direction, state.tMin, state.tMax}; }
+}  // namespace
+
+CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
+                       const PhotonMap* indirectPhotons)
+    : scene_(scene),
+      tracer_(tracer),
+      parameters_(parameters),
+      indirectPhotons_(indirectPhotons),
+      lightSampler_(scene.lights()) {
+  if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
+}
+
+void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight,
+                             KernelOutputs& out) {
+  const AreaLight& light = scene_.lights().at(lightId);
+  const Vec3 normal = light.normal();
+  const Vec3 power = light.power() / float(photonsOfLight);
+  const uint64_t seed = parameters_.seed;
+  for (uint64_t path = firstPath; path < firstPath + count; ++path) {
+    const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
+    const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
+    const Vec3 point = light.corner + light.edge1 * u + light.edge2 * v;
+    RayState photon;
+    photon.kind = RayKind::Photon;
+    photon.pathId = path;
+    photon.origin = offsetAlongNormal(point, normal);
+    photon.direction = sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
+                                              randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
+    photon.weight = power;
+    ++out.counters.photonsEmitted;
+    tracePhoton(photon, out);
+  }
+}
+
+void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out) {
+  if (!camera_) throw std::logic_error("camera rays need the image size");
+  const uint32_t spp = parameters_.spp;
+  const Vec3 weight(1.0f / float(spp));
+  for (uint32_t pixel = firstPixel; pixel < firstPixel + pixelCount; ++pixel) {
+    const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
+    for (uint32_t sample = 0; sample < spp; ++sample) {
+      RayState ray;
+      ray.kind = RayKind::Camera;
+      ray.pathId = uint64_t(pixel) * spp + sample;
+      ray.pixel = pixel;
+      // Box filter: uniform positions over the pixel's footprint.
+      const float px = x + randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::PixelX);
+      const float py = y + randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::PixelY);
+      ray.origin = camera_->origin();
+      ray.direction = camera_->direction(px, py);
+      ray.weight = weight;
+      ++out.counters.cameraRays;
+      traceCameraRay(ray, out);
+    }
+  }
+}
+
+void CellKernel::trace(const RayState& ray, KernelOutputs& out) {
+  if (!isValid(ray)) {
+    ++out.counters.raysInvalid;
+    return;
+  }
+  switch (ray.kind) {
+    case RayKind::Photon: tracePhoton(ray, out); break;
+    case RayKind::Camera: traceCameraRay(ray, out); break;
+    case RayKind::Shadow: traceShadowRay(ray, out); break;
+  }
+}
+
+void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out) {
+  // Restart exactly on the portal; the neighbour ignores the portal it came
+  // through because rays only leave a cell through outward-facing portals.
+  ray.origin = ray.origin + ray.direction * event.t;
+  ray.tMax = ray.tMax - event.t;
+  ray.tMin = 0;
+  out.crossings[event.neighborCell].push_back(ray);
+}
+
+void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
+  const MeshView& mesh = tracer_.cell().mesh();
+  const uint64_t seed = parameters_.seed;
+  for (;;) {
+    ++out.counters.raySegments;
+    const CellEvent event = tracer_.trace(toRay(photon));
+    if (event.kind == CellEvent::Kind::Leave) {
+      ++out.counters.photonsEscaped;
+      return;
+    }
+    if (event.kind == CellEvent::Kind::Portal) {
+      ++out.counters.photonCrossings;
+      cross(photon, event, out);
+      return;
+    }
+    const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
+    if (material.emissive() || !(maxComponent(material.albedo) > 0)) {
+      ++out.counters.photonsAbsorbed;
+      return;
+    }
+    const Vec3 point = photon.origin + photon.direction * event.t;
+    out.deposits.push_back({point, photon.direction, photon.weight, photon.pathId, photon.depth});
+    ++out.counters.photonDeposits;
+    // Russian roulette on the albedo: survivors carry power * albedo / p, so
+    // the expected power is unchanged.
+    const float survival = std::min(1.0f, maxComponent(material.albedo));
+    const uint32_t bounce = photon.depth;
+    if (randomUniform(seed, RandomStream::Photon, photon.pathId, bounce, dim::Roulette) >= survival ||
+        bounce + 1u >= parameters_.maxPhotonBounces) {
+      ++out.counters.photonsAbsorbed;
+      return;
+    }
+    bool front;
+    const Vec3 normal = hitNormalFacing(mesh, event.primitive, photon.direction, front);
+    photon.weight = photon.weight * material.albedo / survival;
+    photon.depth = static_cast<uint16_t>(bounce + 1);
+    photon.origin = offsetAlongNormal(point, normal);
+    photon.direction =
+        sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionU),
+                               randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionV));
+    photon.tMin = 0;
+    photon.tMax = kInfinity;
+  }
+}
+
+void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
+  ++out.counters.raySegments;
+  const CellEvent event = tracer_.trace(toRay(ray));
+  switch (event.kind) {
+    case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
+    case CellEvent::Kind::Portal:
+      ++out.counters.rayCrossings;
+      cross(ray, event, out);
+      return;
+    case CellEvent::Kind::Surface: shade(ray, event, out); return;
+  }
+}
+
+void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs& out) {
+  const MeshView& mesh = tracer_.cell().mesh();
+  const Material& material = scene_.materials()[tracer_.cell().material(hit.primitive)];
+  bool front;
+  const Vec3 normal = hitNormalFacing(mesh, hit.primitive, ray.direction, front);
+  const Vec3 point = ray.origin + ray.direction * hit.t;
+  auto addToFilm = [&](const Vec3& radiance) {
+    if (!isFinite(radiance)) {
+      ++out.counters.nonFiniteContributions;
+      return;
+    }
+    out.film.add(ray.pixel, radiance);
+  };
+  // Emitters are one-sided: only their front shows their radiance.
+  if (material.emissive() && front) addToFilm(ray.weight * material.emission);
+  if (!(maxComponent(material.albedo) > 0)) return;
+  const Vec3 brdf = material.albedo * (1.0f / kPi);
+
+  // Direct light: shadow rays to points on lights chosen by the light sampler.
+  const uint32_t samples = parameters_.lightSamples;
+  for (uint32_t i = 0; i < samples; ++i) {
+    const uint32_t base = dim::LightSampleBase + 3 * i;
+    const LightChoice choice = lightSampler_.choose(
+        point, normal, randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base));
+    if (choice.probability <= 0) break;
+    const AreaLight& light = scene_.lights()[choice.light];
+    const float u = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 1);
+    const float v = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 2);
+    const Vec3 target = light.corner + light.edge1 * u + light.edge2 * v;
+    const Vec3 origin = offsetAlongNormal(point, normal);
+    const Vec3 toLight = target - origin;
+    const float distance2 = dot(toLight, toLight);
+    const float distance = std::sqrt(distance2);
+    const Vec3 direction = toLight / distance;
+    const float cosSurface = dot(normal, direction);
+    const float cosLight = -dot(light.normal(), direction);
+    if (cosSurface <= 0 || cosLight <= 0) continue;
+    // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
+    const float geometry = cosSurface * cosLight * light.area() / distance2;
+    RayState shadow;
+    shadow.kind = RayKind::Shadow;
+    shadow.depth = ray.depth;
+    shadow.pathId = ray.pathId;
+    shadow.pixel = ray.pixel;
+    shadow.origin = origin;
+    shadow.direction = direction;
+    // Stop just short of the light so its own triangles do not block it.
+    shadow.tMax = distance * (1.0f - 1e-4f);
+    shadow.weight = ray.weight * brdf * light.radiance * (geometry / (choice.probability * float(samples)));
+    ++out.counters.shadowRays;
+    traceShadowRay(shadow, out);
+  }
+
+  // Indirect light: the density of photons that arrived after at least one bounce.
+  if (indirectPhotons_ && indirectPhotons_->size() > 0) {
+    const Vec3 indirect =
+        indirectPhotons_->radiance(point, normal, material.albedo, parameters_.photonK, parameters_.photonRadius);
+    addToFilm(ray.weight * indirect);
+  }
+}
+
+void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {
+  ++out.counters.raySegments;
+  const CellEvent event = tracer_.trace(toRay(ray));
+  switch (event.kind) {
+    case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
+    case CellEvent::Kind::Portal:
+      ++out.counters.rayCrossings;
+      cross(ray, event, out);
+      return;
+    case CellEvent::Kind::Leave:
+      // Nothing in this cell before tMax: the light is reached only if the
+      // segment ends inside this cell; otherwise it left the building.
+      if (ray.tMax < kInfinity && tracer_.cell().bounds().contains(ray.origin + ray.direction * ray.tMax)) {
+        ++out.counters.shadowReached;
+        if (isFinite(ray.weight))
+          out.film.add(ray.pixel, ray.weight);
+        else
+          ++out.counters.nonFiniteContributions;
+      } else {
+        ++out.counters.raysEscaped;
+      }
+      return;
+  }
+}
+
+}  // namespace portico

@@ -1,0 +1,65 @@
+// The light-transport work of one lease in one cell: expand generators
+// (photon emission, camera rays), trace every ray until it ends here or
+// crosses a portal, and collect deposits, crossings and film contributions.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <vector>
+
+#include "common/scene/scene_store.h"
+#include "common/transport/camera_model.h"
+#include "common/transport/cell_tracer.h"
+#include "common/transport/film.h"
+#include "common/transport/light_sampler.h"
+#include "common/transport/photon_map.h"
+#include "common/transport/ray_state.h"
+#include "common/transport/trace_counters.h"
+
+namespace portico {
+
+struct JobParameters {
+  uint64_t seed = 1;
+  uint32_t spp = 4;
+  uint32_t width = 0, height = 0;
+  uint32_t lightSamples = 2;      // shadow rays per camera hit
+  uint32_t photonK = 64;          // photons per density estimate
+  float photonRadius = 0.5f;      // largest search radius, metres
+  uint32_t maxPhotonBounces = 64;
+};
+
+struct KernelOutputs {
+  std::vector<StoredPhoton> deposits;
+  std::map<uint32_t, std::vector<RayState>> crossings;   // by destination cell
+  FilmAccumulator film;
+  TraceCounters counters;
+};
+
+class CellKernel {
+ public:
+  // indirectPhotons may be null in the photon phase.
+  CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
+             const PhotonMap* indirectPhotons);
+
+  void emitPhotons(uint32_t light, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight, KernelOutputs& out);
+  void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
+  // Runs a ray, and the shadow rays it spawns here, to its end in this cell or a crossing.
+  void trace(const RayState& ray, KernelOutputs& out);
+
+ private:
+  void tracePhoton(RayState photon, KernelOutputs& out);
+  void traceCameraRay(const RayState& ray, KernelOutputs& out);
+  void traceShadowRay(const RayState& ray, KernelOutputs& out);
+  void shade(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
+  void cross(RayState ray, const CellEvent& event, KernelOutputs& out);
+
+  const SceneStore& scene_;
+  const CellTracer& tracer_;
+  const JobParameters& parameters_;
+  const PhotonMap* indirectPhotons_;
+  LightSampler lightSampler_;
+  std::optional<CameraModel> camera_;
+};
+
+}  // namespace portico

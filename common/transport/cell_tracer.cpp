@@ -1,0 +1,64 @@
+#include "common/transport/cell_tracer.h"
+
+#include "common/accel/triangle_intersect.h"
+
+namespace portico {
+
+CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
+    : cell_(cell), accelerator_(accelerator) {
+  const Vec3 cellCenter = cell.bounds().center();
+  for (const CellPortalView& portal : cell.portals()) {
+    if (portal.polygon.size() < 3) continue;
+    Vec3 centroid(0);
+    for (const Vec3& p : portal.polygon) centroid += p;
+    centroid = centroid / float(portal.polygon.size());
+    // Newell's normal: robust for any planar polygon.
+    Vec3 normal(0);
+    for (size_t i = 0; i < portal.polygon.size(); ++i) {
+      const Vec3& a = portal.polygon[i];
+      const Vec3& b = portal.polygon[(i + 1) % portal.polygon.size()];
+      normal += cross(a, b);
+    }
+    if (!(length(normal) > 0)) continue;
+    normal = normalize(normal);
+    // Cells are convex regions (rooms, voxels): the outside of a portal is
+    // the side away from the cell's centre.
+    if (dot(normal, centroid - cellCenter) < 0) normal = -normal;
+    for (size_t i = 1; i + 1 < portal.polygon.size(); ++i)
+      portalTriangles_.push_back(
+          {portal.polygon[0], portal.polygon[i], portal.polygon[i + 1], normal, portal.neighborCell});
+  }
+}
+
+CellEvent CellTracer::trace(const Ray& ray) const {
+  CellEvent event;
+  const Hit hit = accelerator_.intersect(ray);
+  if (hit.found()) {
+    event.kind = CellEvent::Kind::Surface;
+    event.t = hit.t;
+    event.primitive = hit.primitive;
+  }
+  // Portals are few per cell: test them all. A ray leaves only through a
+  // portal it moves out of, so a ray that just entered through a portal
+  // never re-crosses it at t = 0.
+  if (!portalTriangles_.empty()) {
+    const WatertightRay frame(ray.direction);
+    Ray limited = ray;
+    limited.tMax = event.kind == CellEvent::Kind::Surface ? hit.t : ray.tMax;
+    for (const PortalTriangle& portal : portalTriangles_) {
+      if (dot(ray.direction, portal.outward) <= 0) continue;
+      float t, u, v;
+      // Strictly nearer than the geometry: a wall at the same t wins.
+      if (intersectTriangle(frame, limited, portal.v0, portal.v1, portal.v2, t, u, v) && t < limited.tMax) {
+        limited.tMax = t;
+        event.kind = CellEvent::Kind::Portal;
+        event.t = t;
+        event.primitive = kNoPrimitive;
+        event.neighborCell = portal.neighborCell;
+      }
+    }
+  }
+  return event;
+}
+
+}  // namespace portico

@@ -1,0 +1,38 @@
+// Traces one ray through one cell: the nearest of the cell's geometry (via
+// its accelerator) and the portals it may leave through.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/accel/accelerator.h"
+#include "common/scene/cell_geometry.h"
+
+namespace portico {
+
+struct CellEvent {
+  enum class Kind { Surface, Portal, Leave } kind = Kind::Leave;
+  float t = kInfinity;
+  uint32_t primitive = kNoPrimitive;    // Surface
+  uint32_t neighborCell = 0;            // Portal
+};
+
+class CellTracer {
+ public:
+  CellTracer(const CellGeometry& cell, const Accelerator& accelerator);
+  // Geometry wins ties with a portal: a wall flush with a portal's edge is hit.
+  CellEvent trace(const Ray& ray) const;
+  const CellGeometry& cell() const { return cell_; }
+
+ private:
+  struct PortalTriangle {
+    Vec3 v0, v1, v2;
+    Vec3 outward;            // unit normal pointing out of this cell
+    uint32_t neighborCell;
+  };
+  const CellGeometry& cell_;
+  const Accelerator& accelerator_;
+  std::vector<PortalTriangle> portalTriangles_;
+};
+
+}  // namespace portico

@@ -1,0 +1,103 @@
+// A cell's photon map: the photons deposited in (and near) one cell, a
+// balanced kd-tree over their positions, exact k-nearest-neighbour queries
+// and the radiance estimate the renderer takes at a hit point.
+//
+// Determinism: the constructor sorts the photons by (pathId, bounce) — with a
+// total tie-break on the remaining fields — before building, so the map, its
+// indices and every query result are bit-identical whatever order the photons
+// arrived in (workers, batches, retries). Queries break distance ties by
+// photon index.
+//
+// Layout: two flat arrays and no pointers. `photons_` holds the photons in
+// sorted order (photon(i) is the i-th); `nodes_` is a left-balanced kd-tree
+// in implicit heap order (the children of node i are 2i+1 and 2i+2), one
+// node per photon, 16 bytes: its position and one word packing the split
+// axis (2 bits) with the photon's index (30 bits) — Jensen's layout with
+// Tungsten's packed word. Both arrays can be written out and read back as-is.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "common/math.h"
+
+namespace portico {
+
+struct StoredPhoton {
+  Vec3 position;
+  Vec3 direction;   // of travel when it arrived, unit
+  Vec3 power;
+  uint64_t pathId = 0;
+  uint16_t bounce = 0;
+};
+
+class PhotonMap {
+ public:
+  // The most photons one map holds: node words keep 30 bits of index.
+  static constexpr size_t kMaxPhotons = (size_t{1} << 30) - 1;
+  // Cone filter constant k_c (Jensen): w = 1 - d / (k_c r).
+  static constexpr float kConeFilter = 1.1f;
+  // Photons farther than this fraction of the search radius from the tangent
+  // plane are ignored by radiance(): a flattened "disc" search, so thin walls
+  // and corners do not leak light into each other.
+  static constexpr float kDiscThickness = 0.25f;
+
+  // Takes the photons, sorts them and builds the tree. Throws
+  // std::invalid_argument when a position is not finite or there are more
+  // than kMaxPhotons.
+  explicit PhotonMap(std::vector<StoredPhoton> photons);
+
+  size_t size() const { return photons_.size(); }
+  bool empty() const { return photons_.empty(); }
+  const StoredPhoton& photon(size_t i) const { return photons_[i]; }
+  // Tight bounds of the photon positions (empty bounds for an empty map).
+  const Bounds3& bounds() const { return bounds_; }
+
+  // The k nearest photons to p with squared distance <= maxRadius^2, written
+  // to `out` (cleared first) as indices for photon(i), nearest first; equal
+  // distances in increasing index order. The squared distance is
+  // dot(photon(i).position - p, photon(i).position - p) in float. Exact, not
+  // approximate.
+  //
+  // Returns the squared radius of the region that holds the result and was
+  // searched completely: the squared distance of the k-th (farthest) photon
+  // when k were found, else maxRadius^2 (infinity for an infinite radius).
+  // k == 0 returns 0 and leaves `out` empty.
+  //
+  // Allocates nothing except growth of `out` and, on a thread's first query
+  // with a larger k than before, a thread-local heap.
+  float nearest(const Vec3& p, uint32_t k, float maxRadius, std::vector<uint32_t>& out) const;
+
+  // Radiance reflected towards the viewer by a Lambertian surface with this
+  // albedo at p, normal n (unit, on the viewer's side):
+  //   L = albedo/pi * sum_i power_i * w_i / (norm * pi * r^2)
+  // over the k nearest photons within maxRadius that arrived from the front
+  // (dot(direction, n) < 0; photons from behind do not count against k),
+  // dropping those farther than kDiscThickness * r from the tangent plane.
+  // w_i = 1 - d_i / (k_c r) is Jensen's cone filter, norm = 1 - 2 / (3 k_c).
+  // r is the distance of the k-th photon when k were found, else maxRadius
+  // (the whole disc was searched); for an infinite maxRadius and fewer than
+  // k photons, the farthest found. Returns 0 when no photon is found or r is
+  // 0 (all found photons sit exactly on p).
+  Vec3 radiance(const Vec3& p, const Vec3& n, const Vec3& albedo, uint32_t k, float maxRadius) const;
+
+  // Memory held by the map, in bytes.
+  uint64_t bytes() const;
+
+ private:
+  struct Node {
+    Vec3 position;
+    uint32_t axisAndIndex;   // split axis in the top 2 bits, photon index below
+  };
+  static_assert(sizeof(Node) == 16);
+
+  template <typename Accept>
+  uint32_t search(const Vec3& p, uint32_t k, float maxRadiusSquared, Accept accept, uint64_t* heap) const;
+
+  std::vector<StoredPhoton> photons_;
+  std::vector<Node> nodes_;
+  Bounds3 bounds_;
+};
+
+}  // namespace portico

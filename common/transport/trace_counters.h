@@ -1,0 +1,40 @@
+// What a lease did, counted. Summed per job by the coordinator; the photon
+// counters prove conservation: emitted == absorbed + escaped + still queued.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace portico {
+
+struct TraceCounters {
+  int64_t photonsEmitted = 0;
+  int64_t photonDeposits = 0;
+  int64_t photonsAbsorbed = 0;    // ended by Russian roulette, an emitter or the depth cap
+  int64_t photonsEscaped = 0;     // left a cell where no portal was
+  int64_t photonCrossings = 0;
+  int64_t cameraRays = 0;
+  int64_t shadowRays = 0;
+  int64_t shadowBlocked = 0;
+  int64_t shadowReached = 0;
+  int64_t rayCrossings = 0;       // camera and shadow rays handed to a neighbour cell
+  int64_t raysEscaped = 0;        // camera and shadow rays that left the building
+  int64_t raySegments = 0;        // rays traced through one cell (all kinds)
+  int64_t raysInvalid = 0;        // malformed rays received and dropped
+  int64_t nonFiniteContributions = 0;
+
+  // Stable names used on the wire, in jobs.db and in the statistics JSON.
+  std::vector<std::pair<std::string_view, int64_t>> named() const {
+    return {{"photons.emitted", photonsEmitted},   {"photons.deposits", photonDeposits},
+            {"photons.absorbed", photonsAbsorbed}, {"photons.escaped", photonsEscaped},
+            {"photons.crossings", photonCrossings}, {"rays.camera", cameraRays},
+            {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
+            {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
+            {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},
+            {"rays.invalid", raysInvalid},         {"film.non_finite", nonFiniteContributions}};
+  }
+};
+
+}  // namespace portico

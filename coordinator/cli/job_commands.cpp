@@ -1,0 +1,92 @@
+#include <capnp/message.h>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include "common/net/client.h"
+#include "coordinator/cli/commands.h"
+#include "coordinator/cli/progress.h"
+
+namespace portico::cli {
+
+void addRenderOptions(CLI::App& command, RenderOptions& o) {
+  command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
+  command.add_option("--accel", o.accel, "per-cell accelerator: grid, grid:res=N, brute")->capture_default_str();
+  command.add_option("--photons", o.photons, "photons emitted in all")->capture_default_str();
+  command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str();
+  command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
+      ->capture_default_str();
+  command.add_option("--seed", o.seed, "random seed")->capture_default_str();
+  command.add_option("--width", o.width, "image width (default: the camera's)");
+  command.add_option("--height", o.height, "image height (default: the camera's)");
+  command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")->capture_default_str();
+  command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
+  command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
+  command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
+}
+
+void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
+  if (o.gather != 0)
+    throw std::invalid_argument("--gather > 0 (final gathering) is not implemented yet; use --gather 0");
+  auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
+  spec.setStore(std::filesystem::absolute(o.store).lexically_normal().string());
+  spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
+  spec.setAccel(o.accel);
+  spec.setPhotons(o.photons);
+  spec.setSpp(o.spp);
+  spec.setSeed(o.seed);
+  spec.setWidth(o.width);
+  spec.setHeight(o.height);
+  spec.setLightSamples(o.lightSamples);
+  spec.setPhotonK(o.photonK);
+  spec.setPhotonRadius(o.photonRadius);
+  spec.setExposure(o.exposure);
+}
+
+int runSubmit(const std::string& endpoint, const RenderOptions& render) {
+  capnp::MallocMessageBuilder message;
+  fillSubmit(render, message);
+  net::CoordinatorClient client(endpoint);
+  std::cout << client.submit(message) << "\n";
+  return 0;
+}
+
+int runStatus(const std::string& endpoint, uint64_t job, bool json) {
+  net::CoordinatorClient client(endpoint);
+  const auto status = nlohmann::json::parse(client.statusJson(job));
+  if (json) {
+    std::cout << status.dump() << "\n";
+    return 0;
+  }
+  std::cout << describeStatus(status);
+  return 0;
+}
+
+int runWait(const std::string& endpoint, uint64_t job, bool quiet) {
+  net::CoordinatorClient client(endpoint);
+  ProgressDisplay display(quiet);
+  for (;;) {
+    const auto status = nlohmann::json::parse(client.statusJson(job));
+    display.update(status);
+    const std::string state = status.value("state", "");
+    if (state == "done" || state == "failed" || state == "cancelled") {
+      display.finish(status);
+      return state == "done" ? 0 : 1;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  }
+}
+
+int runCancel(const std::string& endpoint, uint64_t job) {
+  net::CoordinatorClient client(endpoint);
+  const auto status = nlohmann::json::parse(client.cancel(job));
+  std::cout << fmt::format("job {}: {}\n", job, status.value("state", "?"));
+  return 0;
+}
+
+}  // namespace portico::cli

@@ -1,0 +1,99 @@
+#include "coordinator/cli/progress.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+namespace portico::cli {
+
+namespace {
+int64_t steadyMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string summaryLine(const nlohmann::json& s) {
+  const auto& p = s["progress"];
+  std::string line = fmt::format("job {} {:8} photons {}/{}  camera rays {}/{}  {:.2f} Mrays/s",
+                                 s.value("job", 0), s.value("state", "?"), p.value("photons_done", 0),
+                                 p.value("photons_total", 0), p.value("camera_rays_done", 0),
+                                 p.value("camera_rays_total", 0), s.value("rays_per_s", 0.0) / 1e6);
+  if (s.contains("eta_s")) line += fmt::format("  ETA {:.0f} s", s["eta_s"].get<double>());
+  return line;
+}
+}  // namespace
+
+std::string describeStatus(const nlohmann::json& s) {
+  std::string text;
+  if (s.contains("jobs")) {
+    for (const auto& job : s["jobs"])
+      text += fmt::format("job {} {}{}\n", job.value("job", 0), job.value("state", "?"),
+                          job.value("error", "").empty() ? "" : " — " + job.value("error", ""));
+    if (s["jobs"].empty()) text += "no jobs\n";
+  } else {
+    text += summaryLine(s) + "\n";
+    if (s.contains("error")) text += fmt::format("error: {}\n", s.value("error", ""));
+    const auto& photons = s["photons"];
+    text += fmt::format("photons: emitted {} deposited {} absorbed {} escaped {} queued {}\n",
+                        photons.value("emitted", 0), photons.value("deposits", 0), photons.value("absorbed", 0),
+                        photons.value("escaped", 0), photons.value("queued", 0));
+    text += fmt::format("rays: traced {} crossings {} ({:.3f} per camera ray)\n", s["rays"].value("traced", 0),
+                        s["rays"].value("crossings", 0), s["rays"].value("crossings_per_camera_ray", 0.0));
+    text += fmt::format("cells: loaded {} cache hits {} bytes read {}\n", s["cells"].value("loaded", 0),
+                        s["cells"].value("cache_hits", 0), s["cells"].value("bytes_read", 0));
+    if (!s["pending_cells"].empty()) {
+      text += "pending work by cell:";
+      for (const auto& c : s["pending_cells"]) text += fmt::format(" {}:{}", c.value("cell", 0), c.value("work", 0));
+      text += "\n";
+    }
+  }
+  if (s.contains("workers")) {
+    text += fmt::format("workers: {}\n", s["workers"].size());
+    for (const auto& w : s["workers"]) {
+      text += fmt::format("  {} {} ({} leases), holds", w.value("name", "?"), w.value("idle", false) ? "idle" : "busy",
+                          w.value("leases", 0));
+      for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", 0));
+      text += "\n";
+    }
+  }
+  return text;
+}
+
+ProgressDisplay::ProgressDisplay(bool quiet) : quiet_(quiet), terminal_(isatty(STDERR_FILENO)) {}
+
+void ProgressDisplay::update(const nlohmann::json& s) {
+  if (quiet_) return;
+  const double fraction = s["progress"].value("fraction", 0.0);
+  if (terminal_) {
+    const int width = 30;
+    const int filled = static_cast<int>(fraction * width + 0.5);
+    std::string bar(filled, '#');
+    bar.resize(width, '.');
+    std::fprintf(stderr, "\r[%s] %3.0f%% %s\033[K", bar.c_str(), fraction * 100, summaryLine(s).c_str());
+    std::fflush(stderr);
+    return;
+  }
+  const int64_t now = steadyMs();
+  const std::string state = s.value("state", "");
+  if (now - lastLineMs_ >= 5000 || state != lastState_) {
+    lastLineMs_ = now;
+    lastState_ = state;
+    std::cerr << fmt::format("{:3.0f}% {}\n", fraction * 100, summaryLine(s));
+  }
+}
+
+void ProgressDisplay::finish(const nlohmann::json& s) {
+  if (quiet_) return;
+  if (terminal_) std::fprintf(stderr, "\n");
+  const std::string state = s.value("state", "?");
+  if (state == "done")
+    std::cerr << fmt::format("job {} done in {:.1f} s: {}\n", s.value("job", 0), s.value("elapsed_s", 0.0),
+                             s["settings"].value("output", ""));
+  else
+    std::cerr << fmt::format("job {} {}: {}\n", s.value("job", 0), state, s.value("error", ""));
+}
+
+}  // namespace portico::cli

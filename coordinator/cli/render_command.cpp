@@ -1,0 +1,108 @@
+// `portico render`: everything on this machine. Starts a coordinator on a
+// free loopback port with a private jobs.db, N workers, submits the job,
+// shows progress, and stops the services when the job ends.
+#include <capnp/message.h>
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+#include <signal.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "common/net/client.h"
+#include "common/util/child_process.h"
+#include "coordinator/cli/commands.h"
+#include "coordinator/cli/progress.h"
+
+namespace portico::cli {
+
+void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message);
+
+namespace {
+volatile sig_atomic_t interrupted = 0;
+void onInterrupt(int) { interrupted = 1; }
+
+std::string readEndpoint(const std::string& path, ChildProcess& coordinator, const std::string& log) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    std::ifstream in(path);
+    std::string endpoint;
+    if (in >> endpoint && !endpoint.empty()) return endpoint;
+    if (!coordinator.running())
+      throw std::runtime_error(fmt::format("the coordinator exited (status {}) before listening; see {}",
+                                           coordinator.exitCode(), log));
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  throw std::runtime_error(fmt::format("the coordinator did not start listening within 20 s; see {}", log));
+}
+}  // namespace
+
+int runRender(const RenderOptions& render, const LocalRunOptions& local) {
+  if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
+  capnp::MallocMessageBuilder submit;
+  fillSubmit(render, submit);   // validates options before anything starts
+
+  char pattern[] = "/tmp/portico-render-XXXXXX";
+  if (!mkdtemp(pattern)) throw std::runtime_error("cannot create a temporary directory under /tmp");
+  const std::filesystem::path work(pattern);
+  const std::string coordinatorLog = (work / "coordinator.log").string();
+  const std::string endpointFile = (work / "endpoint").string();
+
+  ChildProcess coordinator({findProgram("portico-coordinator"), "--listen", "tcp://127.0.0.1:*", "--db",
+                            (work / "jobs.db").string(), "--endpoint-file", endpointFile, "--log-level",
+                            local.logLevel},
+                           coordinatorLog);
+  const std::string endpoint = readEndpoint(endpointFile, coordinator, coordinatorLog);
+  std::vector<ChildProcess> workers;
+  const std::string workerProgram = findProgram("portico-worker");
+  for (uint32_t i = 0; i < local.workers; ++i)
+    workers.emplace_back(std::vector<std::string>{workerProgram, "--connect", endpoint, "--memory", local.memory,
+                                                  "--name", fmt::format("local-{}", i), "--log-level", local.logLevel},
+                         (work / fmt::format("worker-{}.log", i)).string());
+
+  signal(SIGINT, onInterrupt);
+  signal(SIGTERM, onInterrupt);
+  net::CoordinatorClient client(endpoint);
+  const uint64_t job = client.submit(submit);
+  ProgressDisplay display(false);
+  std::string state;
+  nlohmann::json status;
+  while (!interrupted) {
+    status = nlohmann::json::parse(client.statusJson(job));
+    display.update(status);
+    state = status.value("state", "");
+    if (state == "done" || state == "failed" || state == "cancelled") break;
+    if (!coordinator.running()) {
+      state = "failed";
+      status["error"] = fmt::format("the coordinator exited (status {}); see {}", coordinator.exitCode(), coordinatorLog);
+      break;
+    }
+    size_t alive = 0;
+    for (ChildProcess& w : workers) alive += w.running();
+    if (alive == 0) {
+      state = "failed";
+      status["error"] = fmt::format("every worker exited; see the logs in {}", work.string());
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  }
+  if (interrupted) {
+    client.cancel(job);
+    state = "cancelled";
+    status["error"] = "interrupted";
+  }
+  display.finish(status);
+  for (ChildProcess& w : workers) w.stop();
+  client.shutdown();
+  coordinator.stop();
+  const bool ok = state == "done";
+  if (ok && !local.keepLogs)
+    std::filesystem::remove_all(work);
+  else
+    std::cerr << fmt::format("logs and jobs.db kept in {}\n", work.string());
+  return ok ? 0 : 1;
+}
+
+}  // namespace portico::cli

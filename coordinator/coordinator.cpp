@@ -1,0 +1,477 @@
+#include "coordinator/coordinator.h"
+
+#include <capnp/message.h>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <fstream>
+
+#include "coordinator/job_planner.h"
+#include "coordinator/job_report.h"
+
+namespace portico {
+
+int64_t nowMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+namespace {
+// Wall-clock for records that outlive the process (job creation, phases).
+int64_t wallMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string shortId(const std::string& identity) {
+  std::string hex;
+  for (unsigned char c : identity) hex += fmt::format("{:02x}", c);
+  return hex;
+}
+}  // namespace
+
+Coordinator::Coordinator(CoordinatorOptions options)
+    : options_(std::move(options)), store_(options_.database), zmq_(1), router_(zmq_, zmq::socket_type::router) {
+  router_.set(zmq::sockopt::linger, 0);
+  // Refuse frames far beyond any legitimate message before they are buffered.
+  router_.set(zmq::sockopt::maxmsgsize, int64_t(net::kMaxFrameBytes));
+  router_.set(zmq::sockopt::router_mandatory, false);
+  router_.bind(options_.listen);
+  endpoint_ = router_.get(zmq::sockopt::last_endpoint);
+  if (!options_.endpointFile.empty()) {
+    const std::string temporary = options_.endpointFile + ".tmp";
+    std::ofstream(temporary) << endpoint_ << "\n";
+    std::rename(temporary.c_str(), options_.endpointFile.c_str());
+  }
+  const int requeued = store_.requeueAllOpenLeases();
+  const auto active = store_.jobs(true);
+  spdlog::info("coordinator listening on {} (db {}, {} active jobs, {} leases requeued)", endpoint_,
+               options_.database, active.size(), requeued);
+  // A coordinator killed between a phase's last result and the next phase
+  // resumes here.
+  for (const JobRecord& job : active) advanceIfPhaseDone(job.id);
+}
+
+Coordinator::~Coordinator() = default;
+
+void Coordinator::run() {
+  while (!stopping_) {
+    zmq::pollitem_t items[] = {{router_.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::poll(items, 1, std::chrono::milliseconds(100));
+    // Drain what arrived, then schedule once.
+    for (int drained = 0; drained < 256; ++drained) {
+      zmq::message_t identity, frame;
+      if (!router_.recv(identity, zmq::recv_flags::dontwait)) break;
+      std::string id(static_cast<const char*>(identity.data()), identity.size());
+      bool garbage = false;
+      if (!identity.more()) garbage = true;
+      else {
+        (void)router_.recv(frame);
+        // A peer that sends more than one frame is not speaking our protocol.
+        while (frame.more()) {
+          zmq::message_t extra;
+          (void)router_.recv(extra);
+          garbage = true;
+          frame.move(extra);
+        }
+      }
+      if (garbage) {
+        spdlog::warn("dropped a message from {}: unexpected frame layout", shortId(id));
+        continue;
+      }
+      handle(id, frame);
+    }
+    const int64_t now = nowMs();
+    if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
+      lastHeartbeatMs_ = now;
+      checkLiveness();
+      for (auto& [identity, worker] : workers_) {
+        capnp::MallocMessageBuilder message;
+        message.initRoot<wire::Envelope>().setHeartbeat();
+        send(identity, message);
+      }
+    }
+    dispatch();
+  }
+  spdlog::info("coordinator stopping");
+}
+
+void Coordinator::handle(const std::string& identity, const zmq::message_t& frame) {
+  try {
+    net::Decoded decoded(frame);
+    auto envelope = decoded.envelope();
+    if (auto it = workers_.find(identity); it != workers_.end()) it->second.lastSeenMs = nowMs();
+    switch (envelope.which()) {
+      case wire::Envelope::HELLO: onHello(identity, envelope.getHello()); break;
+      case wire::Envelope::HEARTBEAT: break;
+      case wire::Envelope::READY: onReady(identity); break;
+      case wire::Envelope::RESULT: onResult(identity, envelope.getResult()); break;
+      case wire::Envelope::FAILURE: onFailure(identity, envelope.getFailure()); break;
+      case wire::Envelope::FETCH_PHOTONS: onFetchPhotons(identity, envelope.getFetchPhotons()); break;
+      case wire::Envelope::SUBMIT: onSubmit(identity, envelope.getSubmit()); break;
+      case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
+      case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
+      case wire::Envelope::GOODBYE: onGoodbye(identity); break;
+      case wire::Envelope::SHUTDOWN:
+        spdlog::info("shutdown requested by {}", shortId(identity));
+        stopping_ = true;
+        break;
+      default:
+        spdlog::warn("dropped a message from {}: unexpected type {}", shortId(identity), int(envelope.which()));
+    }
+  } catch (const kj::Exception& e) {
+    spdlog::warn("dropped a malformed message from {}: {}", shortId(identity), e.getDescription().cStr());
+  } catch (const std::exception& e) {
+    spdlog::warn("dropped a message from {}: {}", shortId(identity), e.what());
+  }
+}
+
+void Coordinator::send(const std::string& identity, capnp::MallocMessageBuilder& message) {
+  zmq::message_t id(identity.data(), identity.size());
+  router_.send(id, zmq::send_flags::sndmore);
+  router_.send(net::encode(message), zmq::send_flags::none);
+}
+
+void Coordinator::sendError(const std::string& identity, const std::string& error) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().setError(error);
+  send(identity, message);
+}
+
+void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello) {
+  if (hello.getVersion() != wire::PROTOCOL_VERSION) {
+    spdlog::warn("refused worker {}: protocol version {} (this coordinator speaks {})", hello.getName().cStr(),
+                 hello.getVersion(), wire::PROTOCOL_VERSION);
+    sendError(identity, fmt::format("protocol version {} is not supported (coordinator speaks {})",
+                                    hello.getVersion(), wire::PROTOCOL_VERSION));
+    return;
+  }
+  WorkerInfo& worker = workers_[identity];
+  worker.identity = identity;
+  worker.name = hello.getName();
+  worker.cores = hello.getCores();
+  worker.memoryBytes = hello.getMemoryBytes();
+  worker.lastSeenMs = nowMs();
+  spdlog::info("worker {} joined ({} cores, {} MiB budget)", worker.name, worker.cores, worker.memoryBytes >> 20);
+  capnp::MallocMessageBuilder message;
+  auto welcome = message.initRoot<wire::Envelope>().initWelcome();
+  welcome.setVersion(wire::PROTOCOL_VERSION);
+  welcome.setHeartbeatMs(options_.heartbeatMs);
+  send(identity, message);
+}
+
+void Coordinator::onReady(const std::string& identity) {
+  auto it = workers_.find(identity);
+  if (it == workers_.end()) {
+    sendError(identity, "say Hello first");
+    return;
+  }
+  it->second.idle = it->second.leases.empty();
+}
+
+Coordinator::JobContext& Coordinator::context(uint64_t job) {
+  auto it = jobs_.find(job);
+  if (it != jobs_.end()) return it->second;
+  auto record = store_.job(job);
+  if (!record) throw std::runtime_error(fmt::format("job {} does not exist", job));
+  JobContext context;
+  context.spec = std::make_unique<capnp::MallocMessageBuilder>();
+  net::PackedReader reader(record->spec.data(), record->spec.size());
+  context.spec->setRoot(reader.root<wire::JobSpec>());
+  context.scene = std::make_unique<SceneStore>(SceneStore::open(context.reader().getStore().cStr()));
+  return jobs_.emplace(job, std::move(context)).first->second;
+}
+
+void Coordinator::dispatch() {
+  for (auto& [identity, worker] : workers_) {
+    if (!worker.idle) continue;
+    if (!assignWork(worker)) break;   // nothing left to hand out
+  }
+}
+
+bool Coordinator::assignWork(WorkerInfo& worker) {
+  const auto candidates = store_.pendingCells(64);
+  if (candidates.empty()) return false;
+  // Memory coherence: among the cells with most work, prefer one this worker
+  // already holds; otherwise take the one with the most work.
+  const PendingCell* chosen = &candidates.front();
+  for (const PendingCell& c : candidates) {
+    if (c.job != candidates.front().job) break;
+    if (worker.holds(c.job, c.cell)) {
+      chosen = &c;
+      break;
+    }
+  }
+  JobContext* job;
+  try {
+    job = &context(chosen->job);
+  } catch (const std::exception& e) {
+    failJob(chosen->job, e.what());
+    return true;
+  }
+  std::vector<QueuedBatch> batches;
+  uint64_t lease;
+  {
+    sql::Transaction tx(store_.database());
+    lease = store_.openLease(*chosen, worker.identity, options_.maxLeaseWork, wallMs(), batches);
+    tx.commit();
+  }
+  if (!lease) return true;
+  capnp::MallocMessageBuilder message;
+  auto assign = message.initRoot<wire::Envelope>().initAssign();
+  assign.setLease(lease);
+  assign.setAttempt(1);
+  assign.setJob(chosen->job);
+  assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
+  assign.setCell(chosen->cell);
+  assign.setSpec(job->reader());
+  auto list = assign.initBatches(static_cast<unsigned>(batches.size()));
+  for (size_t i = 0; i < batches.size(); ++i) {
+    net::PackedReader reader(batches[i].payload.data(), batches[i].payload.size());
+    list.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
+  }
+  send(worker.identity, message);
+  worker.idle = false;
+  worker.leases.insert(lease);
+  worker.remember(chosen->job, chosen->cell);
+  spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches)", lease, worker.name, chosen->job,
+                chosen->cell, chosen->phase, batches.size());
+  return true;
+}
+
+void Coordinator::onResult(const std::string& identity, wire::Result::Reader result) {
+  const uint64_t leaseId = result.getLease();
+  auto lease = store_.lease(leaseId);
+  auto worker = workers_.find(identity);
+  if (worker != workers_.end()) {
+    worker->second.leases.erase(leaseId);
+    worker->second.idle = worker->second.leases.empty();
+  }
+  // Results are idempotent: one for an unknown, closed or foreign lease is dropped.
+  if (!lease || lease->state != "open" || lease->worker != identity) {
+    spdlog::info("dropped a result for lease {} (unknown, closed or not this worker's)", leaseId);
+    return;
+  }
+  auto job = store_.job(lease->job);
+  const bool active = job && isActive(job->state) && phaseOf(job->state) == lease->phase;
+  JobContext* context = nullptr;
+  if (active) context = &this->context(lease->job);
+  {
+    sql::Transaction tx(store_.database());
+    store_.completeLease(leaseId);
+    if (active) {
+      const size_t cellCount = context->scene->cells().size();
+      for (auto crossing : result.getCrossings()) {
+        if (crossing.getCell() >= cellCount)
+          throw std::runtime_error(fmt::format("result for lease {} sends rays to cell {}, which does not exist",
+                                               leaseId, crossing.getCell()));
+        capnp::MallocMessageBuilder batch;
+        batch.initRoot<wire::RayBatch>().setRays(crossing.getRays());
+        store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
+                        net::packToString(batch));
+      }
+      auto deposits = result.getDeposits();
+      if (deposits.getPhotons().size() > 0) {
+        capnp::MallocMessageBuilder batch;
+        batch.setRoot(deposits);
+        store_.addPhotons(lease->job, lease->cell, deposits.getPhotons().size(), net::packToString(batch));
+      }
+      if (result.getFilm().size() > 0) {
+        std::unordered_map<uint32_t, FixedRgb> sums;
+        for (auto pixel : result.getFilm())
+          sums[pixel.getPixel()] += FixedRgb{pixel.getR(), pixel.getG(), pixel.getB()};
+        auto spec = context->reader();
+        store_.addFilm(lease->job, sums, uint64_t(spec.getWidth()) * spec.getHeight());
+      }
+      for (auto counter : result.getCounters()) store_.addCounter(lease->job, counter.getName().cStr(), counter.getValue());
+      store_.addCounter(lease->job, "leases.completed", 1);
+    }
+    tx.commit();
+  }
+  if (active) advanceIfPhaseDone(lease->job);
+}
+
+void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader failure) {
+  const uint64_t leaseId = failure.getLease();
+  auto lease = store_.lease(leaseId);
+  if (auto worker = workers_.find(identity); worker != workers_.end()) {
+    worker->second.leases.erase(leaseId);
+    worker->second.idle = worker->second.leases.empty();
+  }
+  if (!lease || lease->state != "open" || lease->worker != identity) return;
+  const std::string message = fmt::format("cell {}: {}", lease->cell, failure.getMessage().cStr());
+  spdlog::error("lease {} failed: {}", leaseId, message);
+  {
+    sql::Transaction tx(store_.database());
+    store_.requeueLease(leaseId);
+    tx.commit();
+  }
+  // A worker-side failure (corrupt cell file, bad input) would fail again
+  // on any worker; fail the job with the worker's message.
+  failJob(lease->job, message);
+}
+
+void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request) {
+  const auto blobs = store_.photonBatches(request.getJob(), request.getCell());
+  capnp::MallocMessageBuilder message;
+  auto reply = message.initRoot<wire::Envelope>().initPhotons();
+  reply.setJob(request.getJob());
+  reply.setCell(request.getCell());
+  auto list = reply.initBatches(static_cast<unsigned>(blobs.size()));
+  for (size_t i = 0; i < blobs.size(); ++i)
+    list.set(static_cast<unsigned>(i),
+             capnp::Data::Reader(reinterpret_cast<const kj::byte*>(blobs[i].data()), blobs[i].size()));
+  send(identity, message);
+}
+
+void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader submit) {
+  capnp::MallocMessageBuilder reply;
+  auto answer = reply.initRoot<wire::Envelope>().initSubmitReply();
+  try {
+    auto spec = std::make_unique<capnp::MallocMessageBuilder>();
+    spec->setRoot(submit.getSpec());
+    auto builder = spec->getRoot<wire::JobSpec>();
+    auto scene = std::make_unique<SceneStore>(SceneStore::open(builder.getStore().cStr()));
+    validateSpec(builder, *scene);
+    const std::string packed = net::packToString(*spec);
+    uint64_t job;
+    {
+      sql::Transaction tx(store_.database());
+      job = store_.createJob(packed, wallMs());
+      queuePhotonEmission(store_, job, builder.asReader(), *scene);
+      tx.commit();
+    }
+    JobContext context{std::move(spec), std::move(scene)};
+    jobs_.emplace(job, std::move(context));
+    answer.setJob(job);
+    spdlog::info("job {} submitted: {} photons, {} spp, {}x{}, scene {}", job, builder.getPhotons(), builder.getSpp(),
+                 builder.getWidth(), builder.getHeight(), builder.getStore().cStr());
+  } catch (const std::exception& e) {
+    answer.setError(e.what());
+    spdlog::warn("submit refused: {}", e.what());
+  }
+  send(identity, reply);
+}
+
+void Coordinator::onStatus(const std::string& identity, wire::StatusRequest::Reader request) {
+  replyStatus(identity, request.getJob());
+}
+
+void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
+  nlohmann::json status;
+  const int64_t now = wallMs();
+  if (jobId != 0) {
+    auto job = store_.job(jobId);
+    if (!job) {
+      sendError(identity, fmt::format("job {} does not exist", jobId));
+      return;
+    }
+    status = jobStatus(store_, *job, context(job->id).reader(), now);
+  } else {
+    status["jobs"] = nlohmann::json::array();
+    for (const JobRecord& job : store_.jobs(false))
+      status["jobs"].push_back({{"job", job.id}, {"state", std::string(toString(job.state))}, {"error", job.error}});
+  }
+  status["workers"] = workersStatus(workers_, nowMs());
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initStatusReply().setJson(status.dump());
+  send(identity, message);
+}
+
+void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Reader request) {
+  auto job = store_.job(request.getJob());
+  if (!job) {
+    sendError(identity, fmt::format("job {} does not exist", request.getJob()));
+    return;
+  }
+  if (isActive(job->state)) {
+    sql::Transaction tx(store_.database());
+    store_.dropJobWork(job->id);
+    store_.setJobState(job->id, JobState::Cancelled, wallMs(), "cancelled by the user");
+    tx.commit();
+    spdlog::info("job {} cancelled", job->id);
+  }
+  replyStatus(identity, job->id);
+}
+
+void Coordinator::onGoodbye(const std::string& identity) { releaseWorker(identity, "left"); }
+
+void Coordinator::releaseWorker(const std::string& identity, const std::string& reason) {
+  auto it = workers_.find(identity);
+  if (it == workers_.end()) return;
+  for (const LeaseRecord& lease : store_.openLeasesOf(identity)) {
+    sql::Transaction tx(store_.database());
+    store_.requeueLease(lease.id);
+    tx.commit();
+    spdlog::warn("lease {} (job {} cell {}) requeued: worker {} {}", lease.id, lease.job, lease.cell,
+                 it->second.name, reason);
+  }
+  spdlog::info("worker {} {}", it->second.name, reason);
+  workers_.erase(it);
+}
+
+void Coordinator::checkLiveness() {
+  const int64_t now = nowMs();
+  std::vector<std::string> dead;
+  for (const auto& [identity, worker] : workers_)
+    if (now - worker.lastSeenMs > options_.livenessMs) dead.push_back(identity);
+  for (const std::string& identity : dead) releaseWorker(identity, "presumed dead (no heartbeat)");
+}
+
+void Coordinator::advanceIfPhaseDone(uint64_t jobId) {
+  auto job = store_.job(jobId);
+  if (!job || !isActive(job->state)) return;
+  const int phase = phaseOf(job->state);
+  if (store_.remainingWork(jobId, phase) > 0 || store_.openLeaseCount(jobId) > 0) return;
+  const int64_t now = wallMs();
+  JobContext* ctx;
+  try {
+    ctx = &context(jobId);
+  } catch (const std::exception& e) {
+    failJob(jobId, e.what());
+    return;
+  }
+  if (job->state == JobState::Photons) {
+    sql::Transaction tx(store_.database());
+    store_.addCounter(jobId, "time.photons_ms", now - job->phaseStartedMs);
+    queueCameraRays(store_, jobId, ctx->reader(), *ctx->scene);
+    store_.setJobState(jobId, JobState::Render, now);
+    tx.commit();
+    spdlog::info("job {}: photon phase done, rendering", jobId);
+  } else {
+    {
+      sql::Transaction tx(store_.database());
+      store_.addCounter(jobId, "time.render_ms", now - job->phaseStartedMs);
+      tx.commit();
+    }
+    finishJob(jobId);
+  }
+}
+
+void Coordinator::finishJob(uint64_t jobId) {
+  auto job = store_.job(jobId);
+  JobContext& ctx = context(jobId);
+  job->state = JobState::Done;
+  job->finishedMs = wallMs();
+  try {
+    writeJobOutputs(store_, *job, ctx.reader());
+  } catch (const std::exception& e) {
+    failJob(jobId, fmt::format("writing the image failed: {}", e.what()));
+    return;
+  }
+  sql::Transaction tx(store_.database());
+  store_.setJobState(jobId, JobState::Done, job->finishedMs);
+  tx.commit();
+  spdlog::info("job {} done: {}", jobId, ctx.reader().getOutput().cStr());
+}
+
+void Coordinator::failJob(uint64_t jobId, const std::string& error) {
+  sql::Transaction tx(store_.database());
+  store_.dropJobWork(jobId);
+  store_.setJobState(jobId, JobState::Failed, wallMs(), error);
+  tx.commit();
+  spdlog::error("job {} failed: {}", jobId, error);
+}
+
+}  // namespace portico

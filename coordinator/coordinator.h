@@ -1,0 +1,81 @@
+// The coordinator service: owns jobs.db, talks to workers and clients over
+// one ZeroMQ ROUTER socket, and schedules cell leases.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <zmq.hpp>
+
+#include "common/net/message.h"
+#include "common/scene/scene_store.h"
+#include "coordinator/job_store.h"
+#include "coordinator/worker_registry.h"
+
+namespace portico {
+
+struct CoordinatorOptions {
+  std::string listen = "tcp://127.0.0.1:5555";
+  std::string database = "jobs.db";
+  std::string endpointFile;        // where to write the bound endpoint (for port 0 / '*')
+  int heartbeatMs = 1000;
+  int livenessMs = 10000;          // silence after which a worker is presumed dead
+  int64_t maxLeaseWork = 50000;    // rays per lease: about a second of tracing
+};
+
+class Coordinator {
+ public:
+  explicit Coordinator(CoordinatorOptions options);
+  ~Coordinator();
+  // Serves until stop() or a Shutdown request.
+  void run();
+  void stop() { stopping_ = true; }
+  const std::string& endpoint() const { return endpoint_; }
+
+ private:
+  struct JobContext {
+    std::unique_ptr<capnp::MallocMessageBuilder> spec;   // root: wire::JobSpec
+    std::unique_ptr<SceneStore> scene;
+    wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
+  };
+
+  void handle(const std::string& identity, const zmq::message_t& frame);
+  void onHello(const std::string& identity, wire::Hello::Reader hello);
+  void onReady(const std::string& identity);
+  void onResult(const std::string& identity, wire::Result::Reader result);
+  void onFailure(const std::string& identity, wire::Failure::Reader failure);
+  void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
+  void onSubmit(const std::string& identity, wire::Submit::Reader submit);
+  void onStatus(const std::string& identity, wire::StatusRequest::Reader request);
+  void replyStatus(const std::string& identity, uint64_t job);   // job 0: all jobs
+  void onCancel(const std::string& identity, wire::CancelRequest::Reader request);
+  void onGoodbye(const std::string& identity);
+
+  void dispatch();
+  bool assignWork(WorkerInfo& worker);
+  void advanceIfPhaseDone(uint64_t job);
+  void finishJob(uint64_t job);
+  void failJob(uint64_t job, const std::string& error);
+  void checkLiveness();
+  void releaseWorker(const std::string& identity, const std::string& reason);
+  JobContext& context(uint64_t job);
+
+  void send(const std::string& identity, capnp::MallocMessageBuilder& message);
+  void sendError(const std::string& identity, const std::string& error);
+
+  CoordinatorOptions options_;
+  JobStore store_;
+  zmq::context_t zmq_;
+  zmq::socket_t router_;
+  std::string endpoint_;
+  WorkerRegistry workers_;
+  std::map<uint64_t, JobContext> jobs_;
+  std::atomic<bool> stopping_{false};
+  int64_t lastHeartbeatMs_ = 0;
+};
+
+int64_t nowMs();
+
+}  // namespace portico

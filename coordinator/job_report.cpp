@@ -1,0 +1,130 @@
+#include "coordinator/job_report.h"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "common/image/image_writer.h"
+
+namespace portico {
+
+namespace {
+int64_t get(const std::map<std::string, int64_t>& counters, const std::string& name) {
+  auto it = counters.find(name);
+  return it == counters.end() ? 0 : it->second;
+}
+}  // namespace
+
+nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  const auto counters = store.counters(job.id);
+  nlohmann::json stats;
+  stats["job"] = job.id;
+  stats["state"] = std::string(toString(job.state));
+  if (!job.error.empty()) stats["error"] = job.error;
+  stats["settings"] = {{"store", spec.getStore().cStr()},   {"output", spec.getOutput().cStr()},
+                       {"photons", spec.getPhotons()},      {"spp", spec.getSpp()},
+                       {"seed", spec.getSeed()},            {"accel", spec.getAccel().cStr()},
+                       {"width", spec.getWidth()},          {"height", spec.getHeight()},
+                       {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
+                       {"photon_radius", spec.getPhotonRadius()}};
+  stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
+                      {"deposits", get(counters, "photons.deposits")},
+                      {"absorbed", get(counters, "photons.absorbed")},
+                      {"escaped", get(counters, "photons.escaped")},
+                      {"crossings", get(counters, "photons.crossings")},
+                      {"queued", store.queuedRays(job.id, 0)}};
+  const int64_t camera = get(counters, "rays.camera");
+  const int64_t crossings = get(counters, "rays.crossings");
+  stats["rays"] = {{"camera", camera},
+                   {"shadow", get(counters, "rays.shadow")},
+                   {"shadow_blocked", get(counters, "rays.shadow_blocked")},
+                   {"shadow_reached", get(counters, "rays.shadow_reached")},
+                   {"escaped", get(counters, "rays.escaped")},
+                   {"traced", get(counters, "rays.traced")},
+                   {"crossings", crossings},
+                   {"crossings_per_camera_ray", camera ? double(crossings) / camera : 0.0},
+                   {"invalid", get(counters, "rays.invalid")},
+                   {"queued", store.queuedRays(job.id, 1)}};
+  stats["cells"] = {{"loaded", get(counters, "cells.loaded")},
+                    {"cache_hits", get(counters, "cells.cache_hits")},
+                    {"bytes_read", get(counters, "cells.bytes_read")},
+                    {"photon_maps_built", get(counters, "photon_maps.built")}};
+  stats["leases"] = get(counters, "leases.completed");
+  stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
+                      {"render", get(counters, "time.render_ms")},
+                      {"accelerator_build", get(counters, "time.accel_build_ms")},
+                      {"total", (job.finishedMs ? job.finishedMs : job.phaseStartedMs) - job.createdMs}};
+  stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
+  return stats;
+}
+
+nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs) {
+  nlohmann::json status = jobStatistics(store, job, spec);
+  const auto counters = store.counters(job.id);
+  const int64_t photonsDone = get(counters, "photons.absorbed") + get(counters, "photons.escaped");
+  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp();
+  status["progress"] = {{"photons_done", photonsDone},
+                        {"photons_total", spec.getPhotons()},
+                        {"camera_rays_done", get(counters, "rays.camera")},
+                        {"camera_rays_total", samples}};
+  // Fraction of the whole job: photons weigh as much as camera samples.
+  const double fraction =
+      job.state == JobState::Done
+          ? 1.0
+          : 0.5 * double(photonsDone) / std::max<int64_t>(1, spec.getPhotons()) +
+                0.5 * double(get(counters, "rays.camera")) / std::max<int64_t>(1, samples);
+  status["progress"]["fraction"] = fraction;
+  const double elapsed = double(nowMs - job.createdMs) / 1000.0;
+  status["elapsed_s"] = elapsed;
+  status["rays_per_s"] = elapsed > 0 ? double(get(counters, "rays.traced")) / elapsed : 0.0;
+  if (isActive(job.state) && fraction > 0.01) status["eta_s"] = elapsed * (1.0 - fraction) / fraction;
+  nlohmann::json pending = nlohmann::json::array();
+  for (const auto& [cell, work] : store.pendingWorkByCell(job.id, phaseOf(job.state), 8))
+    pending.push_back({{"cell", cell}, {"work", work}});
+  status["pending_cells"] = pending;
+  return status;
+}
+
+nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& [identity, w] : workers) {
+    nlohmann::json cells = nlohmann::json::array();
+    for (const auto& [job, cell] : w.recentCells) cells.push_back({{"job", job}, {"cell", cell}});
+    list.push_back({{"name", w.name},
+                    {"idle", w.idle},
+                    {"leases", w.leases.size()},
+                    {"last_seen_ms_ago", nowMs - w.lastSeenMs},
+                    {"cells", cells}});
+  }
+  return list;
+}
+
+void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  const uint32_t width = spec.getWidth(), height = spec.getHeight();
+  const uint64_t pixels = uint64_t(width) * height;
+  const std::vector<FixedRgb> film = store.film(job.id, pixels);
+  LinearImage image;
+  image.width = width;
+  image.height = height;
+  image.rgb.resize(pixels * 3);
+  for (uint64_t p = 0; p < pixels; ++p) {
+    image.rgb[3 * p + 0] = fromFixed(film[p].r);
+    image.rgb[3 * p + 1] = fromFixed(film[p].g);
+    image.rgb[3 * p + 2] = fromFixed(film[p].b);
+  }
+  const std::string output = spec.getOutput().cStr();
+  if (auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
+  writeImage(output, image, spec.getExposure() > 0 ? spec.getExposure() : 1.0f);
+  const std::string statsPath = output + ".json";
+  const std::string temporary = statsPath + ".tmp";
+  {
+    std::ofstream out(temporary);
+    out << jobStatistics(store, job, spec).dump(2) << "\n";
+    if (!out) throw std::runtime_error(fmt::format("cannot write {}", statsPath));
+  }
+  std::filesystem::rename(temporary, statsPath);
+}
+
+}  // namespace portico

@@ -1,0 +1,21 @@
+// What the coordinator tells about a job: the statistics JSON written beside
+// the image, the status JSON for `portico status`, and the image itself.
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "common/scene/scene_store.h"
+#include "coordinator/job_store.h"
+#include "coordinator/worker_registry.h"
+#include "proto/wire.capnp.h"
+
+namespace portico {
+
+nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
+nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
+nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);
+
+// Resolves the film into radiance and writes spec.output and spec.output + ".json".
+void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
+
+}  // namespace portico

@@ -1,0 +1,108 @@
+// jobs.db: everything the coordinator knows, so that a coordinator killed at
+// any moment and restarted on the same file resumes every unfinished job.
+// SQLite in WAL mode, owned by the coordinator alone; the caller groups
+// calls into one transaction per Result (sql::Transaction).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "common/transport/film.h"
+#include "common/util/sqlite.h"
+
+namespace portico {
+
+enum class JobState { Photons, Render, Done, Failed, Cancelled };
+std::string_view toString(JobState state);
+JobState jobStateFromString(std::string_view text);
+inline bool isActive(JobState s) { return s == JobState::Photons || s == JobState::Render; }
+// The batch phase a job in `state` is working on (0 photons, 1 render).
+inline int phaseOf(JobState s) { return s == JobState::Render ? 1 : 0; }
+
+enum class BatchKind { Rays = 0, Emit = 1, Camera = 2 };
+
+struct JobRecord {
+  uint64_t id = 0;
+  JobState state = JobState::Photons;
+  std::string error;
+  std::string spec;            // packed wire::JobSpec
+  int64_t createdMs = 0, phaseStartedMs = 0, finishedMs = 0;
+};
+
+struct PendingCell {
+  uint64_t job = 0;
+  uint32_t cell = 0;
+  int phase = 0;
+  int64_t work = 0;
+};
+
+struct QueuedBatch {
+  int64_t id = 0;
+  int64_t work = 0;
+  std::string payload;         // packed wire::RayBatch
+};
+
+struct LeaseRecord {
+  uint64_t id = 0;
+  uint64_t job = 0;
+  uint32_t cell = 0;
+  int phase = 0;
+  std::string worker;
+  uint32_t attempt = 0;
+  std::string state;           // open, done, requeued
+};
+
+class JobStore {
+ public:
+  static constexpr int kSchemaVersion = 1;
+  explicit JobStore(const std::string& path);
+
+  sql::Database& database() { return db_; }
+
+  uint64_t createJob(const std::string& spec, int64_t nowMs);
+  std::optional<JobRecord> job(uint64_t id);
+  std::vector<JobRecord> jobs(bool activeOnly);
+  void setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error = "");
+
+  // work: rays the batch holds or will generate (the scheduler's measure).
+  void addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work, const std::string& payload);
+  int64_t queuedRays(uint64_t job, int phase);   // rays in flight between cells
+  // Cells with unleased work in their job's current phase, most work first.
+  std::vector<PendingCell> pendingCells(size_t limit);
+  // Leases up to maxWork of the oldest unleased batches of (job, cell, phase)
+  // (always at least one batch). Returns the lease id, fills `batches`.
+  uint64_t openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
+                     std::vector<QueuedBatch>& batches);
+  std::optional<LeaseRecord> lease(uint64_t id);
+  std::vector<LeaseRecord> openLeasesOf(const std::string& worker);
+  // The lease's batches are consumed (deleted) and the lease closed.
+  void completeLease(uint64_t lease);
+  // The lease's batches go back to the queue.
+  void requeueLease(uint64_t lease);
+  // Startup: leases held by workers of a previous run go back to the queue.
+  int requeueAllOpenLeases();
+  int64_t remainingWork(uint64_t job, int phase);   // queued or leased batches
+  int64_t openLeaseCount(uint64_t job);
+  std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
+  void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
+
+  void addCounter(uint64_t job, std::string_view name, int64_t delta);
+  std::map<std::string, int64_t> counters(uint64_t job);
+
+  void addPhotons(uint64_t job, uint32_t cell, int64_t count, const std::string& payload);
+  std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
+
+  static constexpr uint32_t kFilmChunkPixels = 4096;
+  void addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb>& sums, uint64_t pixelCount);
+  std::vector<FixedRgb> film(uint64_t job, uint64_t pixelCount);
+
+ private:
+  void migrate();
+  sql::Database db_;
+};
+
+}  // namespace portico

@@ -1,0 +1,44 @@
+// portico-coordinator: owns jobs.db and schedules cell leases on workers.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+
+#include "coordinator/coordinator.h"
+
+namespace {
+portico::Coordinator* running = nullptr;
+void onSignal(int) {
+  if (running) running->stop();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"portico-coordinator: schedules cell work on portico workers"};
+  portico::CoordinatorOptions options;
+  std::string logLevel = "info";
+  app.add_option("--listen", options.listen, "ZeroMQ endpoint to bind (loopback by default; port * picks one)")
+      ->capture_default_str();
+  app.add_option("--db", options.database, "job database (SQLite, created if missing)")->capture_default_str();
+  app.add_option("--endpoint-file", options.endpointFile, "write the bound endpoint to this file");
+  app.add_option("--heartbeat-ms", options.heartbeatMs, "heartbeat interval")->capture_default_str();
+  app.add_option("--liveness-ms", options.livenessMs, "silence after which a worker is presumed dead")
+      ->capture_default_str();
+  app.add_option("--lease-rays", options.maxLeaseWork, "rays per lease")->capture_default_str();
+  app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(logLevel));
+  spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
+  try {
+    portico::Coordinator coordinator(options);
+    running = &coordinator;
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    coordinator.run();
+    running = nullptr;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+  return 0;
+}

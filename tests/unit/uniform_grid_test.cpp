@@ -1,0 +1,508 @@
+#include "common/accel/uniform_grid.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <bit>
+#include <functional>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "common/accel/accelerator.h"
+#include "common/accel/brute_force.h"
+
+namespace portico {
+namespace {
+
+// A mesh owned by the test, viewed as the accelerators see cells.
+struct TestMesh {
+  std::vector<float> positions;
+  std::vector<uint32_t> indices;
+
+  uint32_t addVertex(const Vec3& p) {
+    positions.insert(positions.end(), {p.x, p.y, p.z});
+    return uint32_t(positions.size() / 3 - 1);
+  }
+  void addTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
+    indices.insert(indices.end(), {addVertex(a), addVertex(b), addVertex(c)});
+  }
+  void addQuad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+    // Shared vertices, so the two halves share an edge exactly.
+    const uint32_t ia = addVertex(a), ib = addVertex(b), ic = addVertex(c), id = addVertex(d);
+    indices.insert(indices.end(), {ia, ib, ic, ia, ic, id});
+  }
+  void addBox(const Vec3& lo, const Vec3& hi) {
+    const Vec3 p[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                       {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
+    addQuad(p[0], p[1], p[2], p[3]);
+    addQuad(p[4], p[5], p[6], p[7]);
+    addQuad(p[0], p[1], p[5], p[4]);
+    addQuad(p[3], p[2], p[6], p[7]);
+    addQuad(p[0], p[3], p[7], p[4]);
+    addQuad(p[1], p[2], p[6], p[5]);
+  }
+  MeshView view() const {
+    MeshView mesh;
+    mesh.positions = positions.data();
+    mesh.vertexCount = positions.size() / 3;
+    mesh.indices = indices.data();
+    mesh.triangleCount = indices.size() / 3;
+    return mesh;
+  }
+  Bounds3 bounds() const {
+    Bounds3 box;
+    for (size_t i = 0; i < positions.size(); i += 3) box.extend({positions[i], positions[i + 1], positions[i + 2]});
+    return box;
+  }
+};
+
+void addRandomTriangles(TestMesh& mesh, int count, std::mt19937& random) {
+  std::uniform_real_distribution<float> position(0, 10), offset(-1, 1);
+  const float sizes[] = {0.02f, 0.2f, 1.0f, 3.0f};
+  for (int i = 0; i < count; ++i) {
+    const Vec3 centre{position(random), position(random), position(random)};
+    const float size = sizes[random() % 4];
+    const auto corner = [&] { return centre + Vec3(offset(random), offset(random), offset(random)) * size; };
+    mesh.addTriangle(corner(), corner(), corner());
+  }
+}
+
+// Rooms of a building: a shell, walls, stacked boxes sharing faces (coplanar
+// overlapping triangles: ties), all on a 0.5 lattice so faces fall on voxel
+// boundaries for many resolutions, plus exact duplicates of some triangles.
+void addRoom(TestMesh& mesh, std::mt19937& random) {
+  mesh.addBox({0, 0, 0}, {10, 8, 3});
+  mesh.addBox({4.5f, 0, 0}, {5, 8, 3});  // a wall, coplanar with the shell's floor and ceiling
+  for (int i = 0; i < 30; ++i) {
+    const float x = 0.5f * float(random() % 18), y = 0.5f * float(random() % 14);
+    const float w = 0.5f * float(1 + random() % 3), h = 0.5f * float(1 + random() % 3);
+    mesh.addBox({x, y, 0}, {x + w, y + w, h});
+    if (i % 3 == 0) mesh.addBox({x, y, h}, {x + w, y + w, h + 0.5f});  // stacked: shared face
+  }
+  // Duplicated triangles: the same t from different primitives.
+  const size_t existing = mesh.indices.size() / 3;
+  for (int i = 0; i < 40; ++i) {
+    const size_t source = random() % existing;
+    const uint32_t* t = &mesh.indices[3 * source];
+    const Vec3 a{mesh.positions[3 * t[0]], mesh.positions[3 * t[0] + 1], mesh.positions[3 * t[0] + 2]};
+    const Vec3 b{mesh.positions[3 * t[1]], mesh.positions[3 * t[1] + 1], mesh.positions[3 * t[1] + 2]};
+    const Vec3 c{mesh.positions[3 * t[2]], mesh.positions[3 * t[2] + 1], mesh.positions[3 * t[2] + 2]};
+    mesh.addTriangle(a, b, c);
+  }
+}
+
+// Long, thin triangles crossing the whole scene: each spans many voxels.
+void addLongThinTriangles(TestMesh& mesh, int count, std::mt19937& random) {
+  std::uniform_real_distribution<float> position(0, 10), width(-0.01f, 0.01f);
+  for (int i = 0; i < count; ++i) {
+    const Vec3 a{position(random), position(random), position(random)};
+    const Vec3 b{position(random), position(random), position(random)};
+    mesh.addTriangle(a, b, b + Vec3(width(random), width(random), width(random)));
+  }
+}
+
+TestMesh mixedScene(uint32_t seed) {
+  std::mt19937 random(seed);
+  TestMesh mesh;
+  addRandomTriangles(mesh, 400, random);
+  addRoom(mesh, random);
+  addLongThinTriangles(mesh, 40, random);
+  return mesh;
+}
+
+// Rays of every kind the grid must get right.
+std::vector<Ray> testRays(const TestMesh& mesh, const UniformGrid& grid, int count, uint32_t seed) {
+  std::mt19937 random(seed);
+  const Bounds3 box = mesh.bounds();
+  const Vec3 diagonal = box.diagonal();
+  std::uniform_real_distribution<float> unit(0, 1), symmetric(-1, 1);
+  const auto inside = [&] {
+    return box.lo + Vec3(unit(random) * diagonal.x, unit(random) * diagonal.y, unit(random) * diagonal.z);
+  };
+  const auto anywhere = [&] {  // the bounds grown by one diagonal each side
+    return box.center() + Vec3(symmetric(random) * 1.5f * diagonal.x, symmetric(random) * 1.5f * diagonal.y,
+                               symmetric(random) * 1.5f * diagonal.z);
+  };
+  const auto randomDirection = [&] {
+    Vec3 d;
+    do d = {symmetric(random), symmetric(random), symmetric(random)};
+    while (dot(d, d) < 1e-4f);
+    return d * (0.1f + 3 * unit(random));  // not normalised
+  };
+  const auto axisDirection = [&] {
+    Vec3 d(0.0f);
+    const int axis = int(random() % 3);
+    d[axis] = random() % 2 ? 1.0f : -1.0f;
+    if (random() % 3 == 0) d[(axis + 1) % 3] = symmetric(random);  // one zero component
+    return d;
+  };
+  const auto onVoxelBoundaries = [&](Vec3 p) {
+    const auto low = grid.gridLow();
+    const auto size = grid.voxelSize();
+    const auto resolution = grid.resolution();
+    for (int axis = 0; axis < 3; ++axis)
+      if (random() % 2) p[axis] = float(low[axis] + size[axis] * double(random() % (resolution[axis] + 1)));
+    return p;
+  };
+  const auto meshVertex = [&] {
+    const size_t i = random() % (mesh.positions.size() / 3);
+    return Vec3(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
+  };
+
+  std::vector<Ray> rays;
+  for (int i = 0; i < count; ++i) {
+    Ray ray;
+    switch (i % 8) {
+      case 0: ray = {inside(), randomDirection()}; break;
+      case 1: ray = {anywhere(), randomDirection()}; break;
+      case 2: ray = {inside(), axisDirection()}; break;
+      case 3: ray = {onVoxelBoundaries(inside()), random() % 2 ? axisDirection() : randomDirection()}; break;
+      case 4: {  // through a vertex: shared edges, corners of boxes, ties
+        const Vec3 origin = anywhere();
+        ray = {origin, meshVertex() - origin};
+        break;
+      }
+      case 5: {  // towards the bounds from far outside
+        const Vec3 origin = anywhere();
+        ray = {origin, inside() - origin};
+        break;
+      }
+      case 6: ray = {onVoxelBoundaries(anywhere()), axisDirection()}; break;
+      case 7: {  // a finite segment, possibly starting later
+        ray = {inside(), randomDirection()};
+        ray.tMin = unit(random) < 0.5f ? 0.0f : unit(random);
+        ray.tMax = ray.tMin + 3 * unit(random);
+        break;
+      }
+    }
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+std::string describe(const Ray& ray) {
+  std::ostringstream out;
+  out.precision(9);
+  out << "origin (" << ray.origin.x << ", " << ray.origin.y << ", " << ray.origin.z << ") direction ("
+      << ray.direction.x << ", " << ray.direction.y << ", " << ray.direction.z << ") t (" << ray.tMin
+      << ", " << ray.tMax << ")";
+  return out.str();
+}
+
+// The grid must agree with brute force exactly: same primitive, same bits.
+void expectSameAsBruteForce(const TestMesh& mesh, const UniformGrid& grid, int rayCount, uint32_t seed,
+                            double minimumHitFraction = 0.1) {
+  const BruteForce brute(mesh.view());
+  int hits = 0, mismatches = 0;
+  for (const Ray& ray : testRays(mesh, grid, rayCount, seed)) {
+    const Hit expected = brute.intersect(ray);
+    const Hit got = grid.intersect(ray);
+    hits += expected.found();
+    const bool same = got.primitive == expected.primitive &&
+                      std::bit_cast<uint32_t>(got.t) == std::bit_cast<uint32_t>(expected.t) &&
+                      std::bit_cast<uint32_t>(got.u) == std::bit_cast<uint32_t>(expected.u) &&
+                      std::bit_cast<uint32_t>(got.v) == std::bit_cast<uint32_t>(expected.v);
+    const bool sameOcclusion = grid.occluded(ray) == expected.found();
+    if ((!same || !sameOcclusion) && ++mismatches <= 5)
+      ADD_FAILURE() << describe(ray) << ": brute force primitive " << expected.primitive << " t "
+                    << expected.t << ", grid primitive " << got.primitive << " t " << got.t
+                    << (sameOcclusion ? "" : " (occluded() disagrees)");
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(hits, minimumHitFraction * rayCount);  // the rays do hit things
+}
+
+TEST(UniformGrid, MatchesBruteForceWithAutomaticResolution) {
+  const TestMesh mesh = mixedScene(1);
+  const UniformGrid grid(mesh.view());
+  expectSameAsBruteForce(mesh, grid, 20000, 100);
+}
+
+TEST(UniformGrid, MatchesBruteForceAtExplicitResolutions) {
+  const TestMesh mesh = mixedScene(2);
+  for (int resolution : {1, 2, 3, 7, 16, 20, 64, 200}) {
+    SCOPED_TRACE("res=" + std::to_string(resolution));
+    const UniformGrid grid(mesh.view(), UniformGridOptions{resolution});
+    expectSameAsBruteForce(mesh, grid, 4000, 200 + resolution);
+  }
+}
+
+TEST(UniformGrid, MatchesBruteForceOnEachSceneKind) {
+  std::mt19937 random(3);
+  TestMesh triangles, room, thin;
+  addRandomTriangles(triangles, 2000, random);
+  addRoom(room, random);
+  addLongThinTriangles(thin, 300, random);
+  for (const TestMesh* mesh : {&triangles, &room, &thin}) {
+    const UniformGrid automatic(mesh->view());
+    expectSameAsBruteForce(*mesh, automatic, 6000, 300);
+    const UniformGrid fine(mesh->view(), UniformGridOptions{100});
+    expectSameAsBruteForce(*mesh, fine, 6000, 301);
+  }
+}
+
+TEST(UniformGrid, MatchesBruteForceFarFromTheWorldOrigin) {
+  // A cell of a large building: coordinates in the thousands, size ~10.
+  std::mt19937 random(4);
+  TestMesh local;
+  addRoom(local, random);
+  addRandomTriangles(local, 300, random);
+  TestMesh far = local;
+  for (size_t i = 0; i < far.positions.size(); i += 3) {
+    far.positions[i] += 3000.0f;
+    far.positions[i + 1] -= 1200.0f;
+    far.positions[i + 2] += 40.0f;
+  }
+  const UniformGrid grid(far.view());
+  expectSameAsBruteForce(far, grid, 10000, 400);
+}
+
+TEST(UniformGrid, HandlesFlatBounds) {
+  // A floor: every vertex at z = 1, so the bounds have no thickness.
+  TestMesh floor;
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x)
+      floor.addQuad({float(x), float(y), 1}, {float(x + 1), float(y), 1}, {float(x + 1), float(y + 1), 1},
+                    {float(x), float(y + 1), 1});
+  const UniformGrid grid(floor.view());
+  EXPECT_EQ(grid.resolution()[2], 1);
+  EXPECT_GT(grid.resolution()[0], 10);
+  // Rays starting inside the flat bounds lie in the floor's plane and miss.
+  expectSameAsBruteForce(floor, grid, 8000, 500, 0.05);
+  // Straight down onto a shared vertex: both bounds exclusive, ties by id.
+  const Hit hit = grid.intersect(Ray{{5, 5, 3}, {0, 0, -1}});
+  ASSERT_TRUE(hit.found());
+  EXPECT_EQ(hit.t, 2.0f);
+  EXPECT_EQ(hit.primitive, BruteForce(floor.view()).intersect(Ray{{5, 5, 3}, {0, 0, -1}}).primitive);
+
+  // A line of triangles: flat on two axes.
+  TestMesh line;
+  for (int i = 0; i < 10; ++i) line.addTriangle({float(i), 0, 0}, {float(i + 1), 0, 0}, {float(i), 0, 0});
+  const UniformGrid lineGrid(line.view());
+  EXPECT_EQ(lineGrid.resolution()[1], 1);
+  EXPECT_EQ(lineGrid.resolution()[2], 1);
+  EXPECT_FALSE(lineGrid.intersect(Ray{{0.5f, 1, 0}, {0, -1, 0}}).found());
+}
+
+TEST(UniformGrid, HandlesAnEmptyMesh) {
+  const TestMesh empty;
+  const UniformGrid grid(empty.view());
+  const Ray ray{{0, 0, 0}, {1, 0, 0}};
+  EXPECT_FALSE(grid.intersect(ray).found());
+  EXPECT_FALSE(grid.occluded(ray));
+  EXPECT_TRUE(grid.bounds().empty());
+  EXPECT_EQ(grid.stats().nodes, 0u);
+  EXPECT_EQ(grid.stats().triangleReferences, 0u);
+
+  // Only degenerate triangles, all at one point.
+  TestMesh point;
+  point.addTriangle({2, 2, 2}, {2, 2, 2}, {2, 2, 2});
+  const UniformGrid pointGrid(point.view());
+  EXPECT_FALSE(pointGrid.intersect(Ray{{0, 0, 0}, {1, 1, 1}}).found());
+  EXPECT_FALSE(pointGrid.occluded(Ray{{0, 0, 0}, {1, 1, 1}}));
+}
+
+TEST(UniformGrid, IgnoresRaysWithoutDirectionOrWithNaN) {
+  const TestMesh mesh = mixedScene(5);
+  const UniformGrid grid(mesh.view());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const Ray& ray : {Ray{{5, 5, 5}, {0, 0, 0}}, Ray{{nan, 5, 5}, {1, 0, 0}},
+                         Ray{{5, 5, 5}, {1, nan, 0}}, Ray{{5, 5, 5}, {1, 0, 0}, 2.0f, 1.0f}}) {
+    EXPECT_FALSE(grid.intersect(ray).found());
+    EXPECT_FALSE(grid.occluded(ray));
+  }
+}
+
+TEST(UniformGrid, ExplicitResolutionFollowsTheLongestAxis) {
+  TestMesh mesh;
+  mesh.addBox({0, 0, 0}, {8, 4, 2});
+  const UniformGrid grid(mesh.view(), UniformGridOptions{64});
+  EXPECT_EQ(grid.resolution(), (std::array<int, 3>{64, 32, 16}));
+  EXPECT_EQ(grid.stats().nodes, 64u * 32u * 16u);
+  const UniformGrid coarse(mesh.view(), UniformGridOptions{2});
+  EXPECT_EQ(coarse.resolution(), (std::array<int, 3>{2, 1, 1}));
+}
+
+TEST(UniformGrid, AutomaticResolutionFollowsTriangleCountAndShape) {
+  // About density * n near-cubic voxels.
+  EXPECT_EQ(automaticGridResolution({10, 10, 10}, 1000, 3.0), (std::array<int, 3>{14, 14, 14}));
+  EXPECT_EQ(automaticGridResolution({20, 10, 5}, 8000, 1.0), (std::array<int, 3>{40, 20, 10}));
+  // A flat floor gets one voxel of thickness and a 2D grid of ~3000 voxels.
+  EXPECT_EQ(automaticGridResolution({10, 10, 1e-3}, 1000, 3.0), (std::array<int, 3>{55, 55, 1}));
+  // A corridor: a row of voxels.
+  EXPECT_EQ(automaticGridResolution({100, 1, 1}, 10, 3.0), (std::array<int, 3>{30, 1, 1}));
+  // Clamped to 256 per axis, at least 1.
+  EXPECT_EQ(automaticGridResolution({1, 1, 1}, 100000000, 3.0), (std::array<int, 3>{256, 256, 256}));
+  EXPECT_EQ(automaticGridResolution({1, 1, 1}, 0, 3.0), (std::array<int, 3>{1, 1, 1}));
+
+  const TestMesh mesh = mixedScene(6);
+  const UniformGrid grid(mesh.view());
+  const double voxels = double(grid.stats().nodes);
+  const double triangles = double(mesh.indices.size() / 3);
+  EXPECT_GT(voxels, 1.5 * triangles);
+  EXPECT_LT(voxels, 5.0 * triangles);
+}
+
+TEST(UniformGrid, ReportsStatistics) {
+  const TestMesh mesh = mixedScene(7);
+  const UniformGrid grid(mesh.view(), UniformGridOptions{32}, "grid:res=32");
+  const AcceleratorStats& stats = grid.stats();
+  const auto resolution = grid.resolution();
+  EXPECT_EQ(stats.spec, "grid:res=32");
+  EXPECT_EQ(stats.nodes, uint64_t(resolution[0]) * resolution[1] * resolution[2]);
+  EXPECT_EQ(stats.leaves + stats.emptyLeaves, stats.nodes);
+  EXPECT_GT(stats.leaves, 0u);
+  EXPECT_GT(stats.emptyLeaves, 0u);
+  EXPECT_GE(stats.triangleReferences, mesh.indices.size() / 3);
+  EXPECT_EQ(stats.averageDepth, 1.0);
+  EXPECT_EQ(stats.maxDepth, 1u);
+  EXPECT_GE(stats.bytes, (stats.nodes + 1 + stats.triangleReferences) * sizeof(uint32_t));
+  EXPECT_GE(stats.buildMs, 0.0);
+}
+
+TEST(UniformGrid, AnswersFromManyThreadsAtOnce) {
+  const TestMesh mesh = mixedScene(8);
+  const UniformGrid grid(mesh.view());
+  const std::vector<Ray> rays = testRays(mesh, grid, 4000, 800);
+  std::vector<Hit> expected;
+  for (const Ray& ray : rays) expected.push_back(grid.intersect(ray));
+  std::vector<int> mismatches(4, 0);
+  std::vector<std::thread> threads;
+  for (int thread = 0; thread < 4; ++thread)
+    threads.emplace_back([&, thread] {
+      for (int pass = 0; pass < 3; ++pass)
+        for (size_t i = 0; i < rays.size(); ++i) {
+          const Hit hit = grid.intersect(rays[i]);
+          mismatches[thread] += hit.primitive != expected[i].primitive || hit.t != expected[i].t ||
+                                grid.occluded(rays[i]) != expected[i].found();
+        }
+    });
+  for (std::thread& thread : threads) thread.join();
+  for (int count : mismatches) EXPECT_EQ(count, 0);
+}
+
+TEST(BruteForce, FindsTheNearestHitAndBreaksTiesBySmallerId) {
+  TestMesh mesh;
+  mesh.addTriangle({0, 0, 2}, {4, 0, 2}, {0, 4, 2});  // 0: farther
+  mesh.addTriangle({0, 0, 1}, {4, 0, 1}, {0, 4, 1});  // 1: nearest
+  mesh.addTriangle({0, 0, 1}, {4, 0, 1}, {0, 4, 1});  // 2: same t as 1
+  const BruteForce brute(mesh.view());
+  const Hit hit = brute.intersect(Ray{{1, 1, 0}, {0, 0, 1}});
+  EXPECT_EQ(hit.primitive, 1u);
+  EXPECT_EQ(hit.t, 1.0f);
+  EXPECT_TRUE(brute.occluded(Ray{{1, 1, 0}, {0, 0, 1}}));
+  EXPECT_FALSE(brute.occluded(Ray{{1, 1, 0}, {0, 0, 1}, 0, 1.0f}));
+  EXPECT_EQ(brute.intersect(Ray{{1, 1, 0}, {0, 0, 1}, 1.0f, kInfinity}).primitive, 0u);
+  EXPECT_EQ(brute.stats().triangleReferences, 3u);
+}
+
+// ---------------------------------------------------------------------------
+// Specs
+
+std::string errorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "(no error)";
+}
+
+TEST(AcceleratorSpec, ParsesKindVariantAndParameters) {
+  const AcceleratorSpec grid = parseAcceleratorSpec("grid");
+  EXPECT_EQ(grid.kind, "grid");
+  EXPECT_EQ(grid.variant, "");
+  EXPECT_TRUE(grid.parameters.empty());
+  EXPECT_EQ(grid.text, "grid");
+
+  const AcceleratorSpec withRes = parseAcceleratorSpec("grid:res=64");
+  EXPECT_EQ(withRes.kind, "grid");
+  ASSERT_EQ(withRes.parameters.size(), 1u);
+  EXPECT_EQ(withRes.parameters[0], (std::pair<std::string, std::string>{"res", "64"}));
+
+  const AcceleratorSpec kd = parseAcceleratorSpec("kd:sah,leaf=4,depth=20");
+  EXPECT_EQ(kd.kind, "kd");
+  EXPECT_EQ(kd.variant, "sah");
+  ASSERT_EQ(kd.parameters.size(), 2u);
+  EXPECT_EQ(kd.parameters[1].first, "depth");
+  EXPECT_EQ(kd.parameters[1].second, "20");
+
+  EXPECT_EQ(parseAcceleratorSpec("hgrid: res=16 , max=64").parameters[1].second, "64");
+}
+
+TEST(AcceleratorSpec, RejectsMalformedSpecsNamingThem) {
+  const auto parseError = [](const char* text) { return errorOf([&] { parseAcceleratorSpec(text); }); };
+  EXPECT_EQ(parseError(""), "accelerator spec '': no accelerator kind before ':' (e.g. 'grid:res=64')");
+  EXPECT_NE(parseError(":res=4").find("no accelerator kind"), std::string::npos);
+  EXPECT_EQ(parseError("grid:"), "accelerator spec 'grid:': empty item in the list after ':'");
+  EXPECT_NE(parseError("grid:res=4,,").find("empty item"), std::string::npos);
+  EXPECT_NE(parseError("kd:sah,median").find("two variants ('sah' and 'median')"), std::string::npos);
+  EXPECT_NE(parseError("grid:=4").find("without a name"), std::string::npos);
+  EXPECT_NE(parseError("grid:res=").find("parameter res has no value"), std::string::npos);
+  EXPECT_NE(parseError("grid:res=4,res=8").find("parameter res is given twice"), std::string::npos);
+}
+
+TEST(AcceleratorSpec, BuildRejectsUnknownKindsParametersAndBadValues) {
+  const TestMesh mesh = mixedScene(9);
+  const auto buildError = [&](const char* text) {
+    return errorOf([&] { buildAccelerator(parseAcceleratorSpec(text), mesh.view()); });
+  };
+  EXPECT_EQ(buildError("octree"),
+            "accelerator spec 'octree': unknown accelerator kind 'octree' (known kinds: brute, grid)");
+  EXPECT_EQ(buildError("grid:res=abc"),
+            "accelerator spec 'grid:res=abc': parameter res must be a positive integer (got 'abc')");
+  EXPECT_NE(buildError("grid:res=0").find("must be a positive integer"), std::string::npos);
+  EXPECT_NE(buildError("grid:res=-3").find("must be a positive integer"), std::string::npos);
+  EXPECT_NE(buildError("grid:res=12.5").find("must be a positive integer"), std::string::npos);
+  EXPECT_NE(buildError("grid:res=99999999999999").find("res must be"), std::string::npos);
+  EXPECT_EQ(buildError("grid:res=4096"),
+            "accelerator spec 'grid:res=4096': parameter res must be at most 512 (got 4096)");
+  EXPECT_EQ(buildError("grid:resolution=64"),
+            "accelerator spec 'grid:resolution=64': unknown parameter 'resolution' for grid "
+            "(it takes: res, density)");
+  EXPECT_NE(buildError("grid:density=-1").find("density must be a positive number"), std::string::npos);
+  EXPECT_NE(buildError("grid:density=nan").find("density must be a positive number"), std::string::npos);
+  EXPECT_EQ(buildError("grid:sah"), "accelerator spec 'grid:sah': grid takes no variant (got 'sah')");
+  EXPECT_EQ(buildError("brute:res=4"),
+            "accelerator spec 'brute:res=4': unknown parameter 'res' for brute (it takes none)");
+
+  // validateAcceleratorSpec finds the same problems without building.
+  EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("grid:res=abc")), std::invalid_argument);
+  EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah")), std::invalid_argument);
+  EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("grid:res=64,density=2")));
+}
+
+TEST(AcceleratorSpec, BuildsEachKnownKind) {
+  const TestMesh mesh = mixedScene(10);
+  EXPECT_EQ(acceleratorKinds(), (std::vector<std::string_view>{"brute", "grid"}));
+  const auto brute = buildAccelerator(parseAcceleratorSpec("brute"), mesh.view());
+  const auto automatic = buildAccelerator(parseAcceleratorSpec("grid"), mesh.view());
+  const auto explicitRes = buildAccelerator(parseAcceleratorSpec("grid:res=24"), mesh.view());
+  const auto dense = buildAccelerator(parseAcceleratorSpec("grid:density=0.5"), mesh.view());
+  EXPECT_EQ(explicitRes->stats().spec, "grid:res=24");
+  EXPECT_LT(dense->stats().nodes, automatic->stats().nodes);
+  EXPECT_EQ(static_cast<const UniformGrid&>(*explicitRes).resolution()[0], 24);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<float> coordinate(-2, 12);
+  for (int i = 0; i < 2000; ++i) {
+    const Ray ray{{coordinate(random), coordinate(random), coordinate(random)},
+                  {coordinate(random) - 5, coordinate(random) - 5, coordinate(random) - 5}};
+    const Hit expected = brute->intersect(ray);
+    for (const auto* accelerator : {automatic.get(), explicitRes.get(), dense.get()}) {
+      const Hit hit = accelerator->intersect(ray);
+      ASSERT_EQ(hit.primitive, expected.primitive);
+      ASSERT_EQ(std::bit_cast<uint32_t>(hit.t), std::bit_cast<uint32_t>(expected.t));
+      ASSERT_EQ(accelerator->occluded(ray), expected.found());
+    }
+  }
+  EXPECT_EQ(brute->bounds().lo, automatic->bounds().lo);
+  EXPECT_EQ(brute->bounds().hi, automatic->bounds().hi);
+}
+
+}  // namespace
+}  // namespace portico

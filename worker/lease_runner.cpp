@@ -1,0 +1,141 @@
+#include "worker/lease_runner.h"
+
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+
+#include "common/net/message.h"
+
+namespace portico {
+
+JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
+  JobParameters p;
+  p.seed = spec.getSeed();
+  p.spp = spec.getSpp();
+  p.width = spec.getWidth();
+  p.height = spec.getHeight();
+  p.lightSamples = spec.getLightSamples();
+  p.photonK = spec.getPhotonK();
+  p.photonRadius = spec.getPhotonRadius();
+  return p;
+}
+
+std::vector<StoredPhoton> decodeIndirectPhotons(wire::PhotonsReply::Reader reply) {
+  std::vector<StoredPhoton> photons;
+  for (auto blob : reply.getBatches()) {
+    net::PackedReader reader(blob.begin(), blob.size());
+    for (auto p : reader.root<wire::PhotonBatch>().getPhotons()) {
+      if (p.getBounce() == 0) continue;   // direct light is sampled with shadow rays instead
+      StoredPhoton photon{{p.getPx(), p.getPy(), p.getPz()},
+                          {p.getDx(), p.getDy(), p.getDz()},
+                          {p.getR(), p.getG(), p.getB()},
+                          p.getPathId(),
+                          p.getBounce()};
+      if (isFinite(photon.position) && isFinite(photon.direction) && isFinite(photon.power))
+        photons.push_back(photon);
+    }
+  }
+  return photons;
+}
+
+std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
+                                                      std::optional<std::vector<StoredPhoton>> photons) {
+  const auto started = std::chrono::steady_clock::now();
+  auto spec = assign.getSpec();
+  const std::string store = spec.getStore();
+  const uint32_t cellId = assign.getCell();
+  const JobParameters parameters = parametersFromSpec(spec);
+  const SceneStore& scene = cache.scene(store);
+  const LoadedCell& cell = cache.cell(store, cellId, spec.getAccel().size() ? spec.getAccel().cStr() : "grid");
+
+  const PhotonMap* indirect = nullptr;
+  if (assign.getPhase() == wire::Phase::RENDER) {
+    indirect = cache.photonMap(assign.getJob(), cellId);
+    if (!indirect) {
+      if (!photons) throw std::logic_error("render lease without photons");
+      indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(*photons)));
+    }
+  }
+
+  CellKernel kernel(scene, *cell.tracer, parameters, indirect);
+  KernelOutputs out;
+  for (auto batch : assign.getBatches()) {
+    switch (batch.which()) {
+      case wire::RayBatch::EMIT: {
+        auto emit = batch.getEmit();
+        if (emit.getLight() >= scene.lights().size() || scene.lights()[emit.getLight()].cell != cellId)
+          throw std::runtime_error(fmt::format("emission batch names light {}, which is not in cell {}",
+                                               emit.getLight(), cellId));
+        kernel.emitPhotons(emit.getLight(), emit.getFirstPath(), emit.getCount(), emit.getPhotonsOfLight(), out);
+        break;
+      }
+      case wire::RayBatch::CAMERA: {
+        auto camera = batch.getCamera();
+        if (uint64_t(camera.getFirstPixel()) + camera.getPixelCount() > uint64_t(parameters.width) * parameters.height)
+          throw std::runtime_error("camera batch lies outside the image");
+        kernel.generateCameraRays(camera.getFirstPixel(), camera.getPixelCount(), out);
+        break;
+      }
+      case wire::RayBatch::RAYS:
+        for (auto ray : batch.getRays()) kernel.trace(fromWire(ray), out);
+        break;
+    }
+  }
+
+  auto message = std::make_unique<capnp::MallocMessageBuilder>();
+  auto result = message->initRoot<wire::Envelope>().initResult();
+  result.setLease(assign.getLease());
+  auto crossings = result.initCrossings(static_cast<unsigned>(out.crossings.size()));
+  unsigned c = 0;
+  for (const auto& [destination, rays] : out.crossings) {
+    crossings[c].setCell(destination);
+    auto list = crossings[c].initRays(static_cast<unsigned>(rays.size()));
+    for (size_t i = 0; i < rays.size(); ++i) toWire(rays[i], list[static_cast<unsigned>(i)]);
+    ++c;
+  }
+  auto deposits = result.initDeposits().initPhotons(static_cast<unsigned>(out.deposits.size()));
+  for (size_t i = 0; i < out.deposits.size(); ++i) {
+    const StoredPhoton& p = out.deposits[i];
+    auto d = deposits[static_cast<unsigned>(i)];
+    d.setPathId(p.pathId);
+    d.setBounce(p.bounce);
+    d.setPx(p.position.x);
+    d.setPy(p.position.y);
+    d.setPz(p.position.z);
+    d.setDx(p.direction.x);
+    d.setDy(p.direction.y);
+    d.setDz(p.direction.z);
+    d.setR(p.power.x);
+    d.setG(p.power.y);
+    d.setB(p.power.z);
+  }
+  auto film = result.initFilm(static_cast<unsigned>(out.film.sums().size()));
+  unsigned f = 0;
+  for (const auto& [pixel, rgb] : out.film.sums()) {
+    film[f].setPixel(pixel);
+    film[f].setR(rgb.r);
+    film[f].setG(rgb.g);
+    film[f].setB(rgb.b);
+    ++f;
+  }
+  const CacheStatistics cacheStats = cache.takeStatistics();
+  auto named = out.counters.named();
+  named.push_back({"cells.loaded", cacheStats.cellsLoaded});
+  named.push_back({"cells.cache_hits", cacheStats.cellHits});
+  named.push_back({"cells.bytes_read", cacheStats.bytesRead});
+  named.push_back({"photon_maps.built", cacheStats.photonMapsBuilt});
+  named.push_back({"time.accel_build_ms", static_cast<int64_t>(cacheStats.acceleratorBuildMs)});
+  auto counters = result.initCounters(static_cast<unsigned>(named.size()));
+  for (size_t i = 0; i < named.size(); ++i) {
+    counters[static_cast<unsigned>(i)].setName(std::string(named[i].first));
+    counters[static_cast<unsigned>(i)].setValue(named[i].second);
+  }
+  spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
+                assign.getLease(), cellId, assign.getBatches().size(), out.deposits.size(), out.crossings.size(),
+                out.film.sums().size(),
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
+  return message;
+}
+
+}  // namespace portico

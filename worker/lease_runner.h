@@ -1,0 +1,27 @@
+// Runs one lease: loads the cell, builds what is missing (accelerator,
+// photon map), traces every batch, and packs the Result.
+#pragma once
+
+#include <capnp/message.h>
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "common/transport/cell_kernel.h"
+#include "proto/wire.capnp.h"
+#include "worker/cell_cache.h"
+
+namespace portico {
+
+JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
+
+// Photons that arrived in a PhotonsReply, decoded; only those that bounced
+// at least once feed the indirect map used at camera hits.
+std::vector<StoredPhoton> decodeIndirectPhotons(wire::PhotonsReply::Reader reply);
+
+// Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
+std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
+                                                      std::optional<std::vector<StoredPhoton>> photons);
+
+}  // namespace portico

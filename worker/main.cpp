@@ -1,0 +1,52 @@
+// portico-worker: loads cells, builds accelerators and traces the rays the
+// coordinator leases to it.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <thread>
+
+#include "common/util/size_parse.h"
+#include "worker/worker_session.h"
+
+namespace {
+portico::WorkerSession* running = nullptr;
+void onSignal(int) {
+  if (running) running->stop();
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"portico-worker: traces portico cell leases"};
+  portico::WorkerOptions options;
+  std::string memory = "2GiB", logLevel = "info";
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  options.name = std::string(host) + ":" + std::to_string(getpid());
+  app.add_option("--connect", options.connect, "coordinator endpoint")->capture_default_str();
+  app.add_option("--memory", memory, "cache budget for cells, accelerators and photon maps (e.g. 512MiB, 4GiB)")
+      ->capture_default_str();
+  app.add_option("--threads", options.threads, "tracing threads")->capture_default_str();
+  app.add_option("--name", options.name, "name shown in status");
+  app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str();
+  app.add_option("--liveness-ms", options.livenessMs)->capture_default_str();
+  app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit after N leases");
+  app.add_option("--log-level", logLevel)->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(logLevel));
+  spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [worker {}] [%l] %v", options.name));
+  try {
+    options.memoryBytes = portico::parseByteSize(memory);
+    portico::WorkerSession session(options);
+    running = &session;
+    std::signal(SIGINT, onSignal);
+    std::signal(SIGTERM, onSignal);
+    const int code = session.run();
+    running = nullptr;
+    return code;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,198 @@
+#include "worker/worker_session.h"
+
+#include <capnp/message.h>
+#include <fmt/format.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <future>
+#include <optional>
+#include <thread>
+#include <xmmintrin.h>
+#include <pmmintrin.h>
+#include <zmq.hpp>
+
+#include "common/net/message.h"
+#include "worker/lease_runner.h"
+
+namespace portico {
+
+namespace {
+int64_t steadyMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+void send(zmq::socket_t& socket, capnp::MallocMessageBuilder& message) {
+  socket.send(net::encode(message), zmq::send_flags::none);
+}
+
+void sendSimple(zmq::socket_t& socket, void (*fill)(wire::Envelope::Builder)) {
+  capnp::MallocMessageBuilder message;
+  fill(message.initRoot<wire::Envelope>());
+  send(socket, message);
+}
+
+// A lease in progress: the decoded Assign (owning its bytes) and the tracing thread.
+struct ActiveLease {
+  std::unique_ptr<net::Decoded> assign;
+  bool waitingForPhotons = false;
+  std::future<std::unique_ptr<capnp::MallocMessageBuilder>> result;
+};
+}  // namespace
+
+WorkerSession::WorkerSession(WorkerOptions options) : options_(std::move(options)), cache_(options_.memoryBytes) {}
+
+int WorkerSession::run() {
+  zmq::context_t context(1);
+  int leasesDone = 0;
+  int backoffMs = 250;
+  while (!stopping_) {
+    zmq::socket_t socket(context, zmq::socket_type::dealer);
+    socket.set(zmq::sockopt::linger, 0);
+    socket.set(zmq::sockopt::maxmsgsize, int64_t(net::kMaxFrameBytes));
+    socket.connect(options_.connect);
+    {
+      capnp::MallocMessageBuilder message;
+      auto hello = message.initRoot<wire::Envelope>().initHello();
+      hello.setVersion(wire::PROTOCOL_VERSION);
+      hello.setName(options_.name);
+      hello.setCores(options_.threads);
+      hello.setMemoryBytes(options_.memoryBytes);
+      send(socket, message);
+    }
+    int64_t lastHeard = steadyMs(), lastSent = steadyMs();
+    bool welcomed = false;
+    std::optional<ActiveLease> lease;
+    bool reconnect = false;
+
+    while (!stopping_ && !reconnect) {
+      zmq::pollitem_t items[] = {{socket.handle(), 0, ZMQ_POLLIN, 0}};
+      zmq::poll(items, 1, std::chrono::milliseconds(50));
+      const int64_t now = steadyMs();
+      if (items[0].revents & ZMQ_POLLIN) {
+        zmq::message_t frame;
+        while (socket.recv(frame, zmq::recv_flags::dontwait)) {
+          lastHeard = steadyMs();
+          try {
+            net::Decoded decoded(frame);
+            auto envelope = decoded.envelope();
+            switch (envelope.which()) {
+              case wire::Envelope::WELCOME:
+                welcomed = true;
+                backoffMs = 250;
+                spdlog::info("connected to {}", options_.connect);
+                sendSimple(socket, [](wire::Envelope::Builder e) { e.setReady(); });
+                lastSent = steadyMs();
+                break;
+              case wire::Envelope::HEARTBEAT: break;
+              case wire::Envelope::ASSIGN: {
+                if (lease) {
+                  spdlog::warn("coordinator assigned lease {} while {} is running; refusing",
+                               envelope.getAssign().getLease(), lease->assign->envelope().getAssign().getLease());
+                  capnp::MallocMessageBuilder message;
+                  auto failure = message.initRoot<wire::Envelope>().initFailure();
+                  failure.setLease(envelope.getAssign().getLease());
+                  failure.setMessage("worker busy");
+                  send(socket, message);
+                  break;
+                }
+                lease.emplace();
+                lease->assign = std::make_unique<net::Decoded>(frame);
+                auto assign = lease->assign->envelope().getAssign();
+                if (assign.getPhase() == wire::Phase::RENDER && !cache_.photonMap(assign.getJob(), assign.getCell())) {
+                  capnp::MallocMessageBuilder message;
+                  auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
+                  fetch.setJob(assign.getJob());
+                  fetch.setCell(assign.getCell());
+                  send(socket, message);
+                  lease->waitingForPhotons = true;
+                } else {
+                  lease->result = std::async(std::launch::async, [this, assign] {
+                    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+                    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+                    return runLease(cache_, assign, std::nullopt);
+                  });
+                }
+                break;
+              }
+              case wire::Envelope::PHOTONS: {
+                if (!lease || !lease->waitingForPhotons) break;
+                auto assign = lease->assign->envelope().getAssign();
+                auto reply = envelope.getPhotons();
+                if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) break;
+                auto photons = decodeIndirectPhotons(reply);
+                lease->waitingForPhotons = false;
+                lease->result = std::async(std::launch::async, [this, assign, p = std::move(photons)]() mutable {
+                  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+                  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+                  return runLease(cache_, assign, std::move(p));
+                });
+                break;
+              }
+              case wire::Envelope::ERROR:
+                spdlog::error("coordinator refused: {}", envelope.getError().cStr());
+                if (!welcomed) return 2;
+                break;
+              case wire::Envelope::SHUTDOWN: stopping_ = true; break;
+              default: spdlog::warn("ignored message type {}", int(envelope.which()));
+            }
+          } catch (const kj::Exception& e) {
+            spdlog::warn("dropped a malformed message: {}", e.getDescription().cStr());
+          } catch (const std::exception& e) {
+            spdlog::warn("dropped a message: {}", e.what());
+          }
+        }
+      }
+
+      if (lease && lease->result.valid() &&
+          lease->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+        const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
+        try {
+          auto message = lease->result.get();
+          send(socket, *message);
+          ++leasesDone;
+        } catch (const std::exception& e) {
+          spdlog::error("lease {} failed: {}", leaseId, e.what());
+          capnp::MallocMessageBuilder message;
+          auto failure = message.initRoot<wire::Envelope>().initFailure();
+          failure.setLease(leaseId);
+          failure.setMessage(e.what());
+          send(socket, message);
+        } catch (const kj::Exception& e) {
+          capnp::MallocMessageBuilder message;
+          auto failure = message.initRoot<wire::Envelope>().initFailure();
+          failure.setLease(leaseId);
+          failure.setMessage(fmt::format("malformed lease: {}", e.getDescription().cStr()));
+          send(socket, message);
+        }
+        lastSent = steadyMs();
+        lease.reset();
+        if (options_.crashAfterLeases > 0 && leasesDone >= options_.crashAfterLeases) {
+          spdlog::warn("fault injection: exiting after {} leases", leasesDone);
+          std::_Exit(3);
+        }
+      }
+
+      if (now - lastSent >= options_.heartbeatMs) {
+        sendSimple(socket, [](wire::Envelope::Builder e) { e.setHeartbeat(); });
+        lastSent = now;
+      }
+      if (now - lastHeard > options_.livenessMs) {
+        spdlog::warn("coordinator silent for {} ms; reconnecting in {} ms", now - lastHeard, backoffMs);
+        // A lease in flight is abandoned: the coordinator requeues it.
+        if (lease && lease->result.valid()) lease->result.wait();
+        std::this_thread::sleep_for(std::chrono::milliseconds(backoffMs));
+        backoffMs = std::min(backoffMs * 2, 30000);
+        reconnect = true;
+      }
+    }
+    if (!reconnect) {
+      if (lease && lease->result.valid()) lease->result.wait();
+      sendSimple(socket, [](wire::Envelope::Builder e) { e.setGoodbye(); });
+    }
+  }
+  return 0;
+}
+
+}  // namespace portico

@@ -1,0 +1,39 @@
+// The worker's conversation with the coordinator (a DEALER socket): Hello,
+// heartbeats both ways, leases in, results out, reconnect when the
+// coordinator goes silent. Tracing runs on a second thread so heartbeats
+// keep flowing during a long lease.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+
+#include "worker/cell_cache.h"
+
+namespace portico {
+
+struct WorkerOptions {
+  std::string connect = "tcp://127.0.0.1:5555";
+  std::string name;
+  uint64_t memoryBytes = uint64_t(2) << 30;
+  uint32_t threads = 1;
+  int heartbeatMs = 1000;
+  int livenessMs = 10000;      // coordinator silence before reconnecting
+  // Fault injection for recovery tests: exit abruptly after this many leases (0: never).
+  int crashAfterLeases = 0;
+};
+
+class WorkerSession {
+ public:
+  explicit WorkerSession(WorkerOptions options);
+  // Serves until stop(), a Shutdown message, or a refused Hello. Returns the exit code.
+  int run();
+  void stop() { stopping_ = true; }
+
+ private:
+  WorkerOptions options_;
+  CellCache cache_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace portico
