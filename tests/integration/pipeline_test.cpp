@@ -1,0 +1,203 @@
+// End to end through real processes: a coordinator and real workers over
+// loopback TCP, a generated building, a finished job, an image on disk.
+#include <capnp/message.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <thread>
+
+#include "common/image/image_writer.h"
+#include "common/net/client.h"
+#include "common/util/child_process.h"
+
+namespace portico {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kBin = std::string(PORTICO_BINARY_DIR) + "/bin/";
+
+fs::path makeTempDirectory(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("portico-test-" + name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+int runCommand(const std::vector<std::string>& argv, const fs::path& log) {
+  ChildProcess process(argv, log.string());
+  return process.wait();
+}
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A coordinator and N workers started by hand, as a user would.
+class LocalCluster {
+ public:
+  LocalCluster(const fs::path& dir, int workers, const std::vector<std::string>& workerExtra = {}) : dir_(dir) {
+    fs::create_directories(dir);
+    coordinator_ = std::make_unique<ChildProcess>(
+        std::vector<std::string>{kBin + "portico-coordinator", "--listen", "tcp://127.0.0.1:*", "--db",
+                                 (dir / "jobs.db").string(), "--endpoint-file", (dir / "endpoint").string()},
+        (dir / "coordinator.log").string());
+    for (int i = 0; i < 200 && endpoint_.empty(); ++i) {
+      std::ifstream in(dir / "endpoint");
+      in >> endpoint_;
+      if (endpoint_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir / "coordinator.log"));
+    for (int i = 0; i < workers; ++i) {
+      std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + std::to_string(i)};
+      argv.insert(argv.end(), workerExtra.begin(), workerExtra.end());
+      workers_.emplace_back(argv, (dir / ("worker-" + std::to_string(i) + ".log")).string());
+    }
+  }
+  ~LocalCluster() {
+    for (auto& w : workers_) w.stop();
+    coordinator_->stop();
+  }
+  const std::string& endpoint() const { return endpoint_; }
+
+  // Submits and waits; returns the final status.
+  nlohmann::json render(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+    net::CoordinatorClient client(endpoint_);
+    capnp::MallocMessageBuilder message;
+    auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
+    spec.setStore(store.string());
+    spec.setOutput(output.string());
+    spec.setAccel("grid");
+    spec.setPhotons(photons);
+    spec.setSpp(spp);
+    spec.setSeed(7);
+    spec.setWidth(96);
+    spec.setHeight(64);
+    spec.setLightSamples(1);
+    spec.setPhotonK(32);
+    spec.setPhotonRadius(0.5f);
+    spec.setExposure(1);
+    const uint64_t job = client.submit(message);
+    for (int i = 0; i < 1200; ++i) {
+      auto status = nlohmann::json::parse(client.statusJson(job));
+      const std::string state = status.value("state", "");
+      if (state != "photons" && state != "render") return status;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    throw std::runtime_error("job did not finish within 120 s");
+  }
+
+ private:
+  fs::path dir_;
+  std::unique_ptr<ChildProcess> coordinator_;
+  std::vector<ChildProcess> workers_;
+  std::string endpoint_;
+};
+
+class Pipeline : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = makeTempDirectory("pipeline");
+    store_ = dir_ / "demo";
+    ASSERT_EQ(runCommand({kBin + "portico", "scene", "generate", "--preset", "demo", "--seed", "3", store_.string()},
+                         dir_ / "generate.log"),
+              0)
+        << readFile(dir_ / "generate.log");
+  }
+  static fs::path dir_, store_;
+};
+fs::path Pipeline::dir_, Pipeline::store_;
+
+void expectConservation(const nlohmann::json& stats) {
+  const auto& photons = stats["photons"];
+  EXPECT_GT(photons["emitted"].get<int64_t>(), 0);
+  EXPECT_EQ(photons["emitted"].get<int64_t>(),
+            photons["absorbed"].get<int64_t>() + photons["escaped"].get<int64_t>());
+  EXPECT_EQ(photons["queued"].get<int64_t>(), 0);
+  EXPECT_GT(photons["deposits"].get<int64_t>(), photons["emitted"].get<int64_t>() / 2);
+  EXPECT_EQ(stats["rays"]["queued"].get<int64_t>(), 0);
+  EXPECT_EQ(stats["rays"]["invalid"].get<int64_t>(), 0);
+  // Every shadow ray ends exactly once: blocked, reached, or escaped.
+  EXPECT_GE(stats["rays"]["shadow"].get<int64_t>(),
+            stats["rays"]["shadow_blocked"].get<int64_t>() + stats["rays"]["shadow_reached"].get<int64_t>());
+}
+
+TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitForBit) {
+  const uint64_t photons = 60000;
+  nlohmann::json twoStatus, oneStatus;
+  {
+    LocalCluster cluster(dir_ / "two", 2);
+    twoStatus = cluster.render(store_, dir_ / "two.exr", photons, 2);
+  }
+  ASSERT_EQ(twoStatus.value("state", ""), "done") << twoStatus.dump(2);
+  {
+    LocalCluster cluster(dir_ / "one", 1);
+    oneStatus = cluster.render(store_, dir_ / "one.exr", photons, 2);
+  }
+  ASSERT_EQ(oneStatus.value("state", ""), "done") << oneStatus.dump(2);
+
+  const auto twoStats = nlohmann::json::parse(readFile(dir_ / "two.exr.json"));
+  const auto oneStats = nlohmann::json::parse(readFile(dir_ / "one.exr.json"));
+  expectConservation(twoStats);
+  expectConservation(oneStats);
+  EXPECT_EQ(twoStats["photons"], oneStats["photons"]);
+  EXPECT_GT(twoStats["photons"]["crossings"].get<int64_t>(), 0);   // light went through doors
+  EXPECT_GT(twoStats["rays"]["crossings"].get<int64_t>(), 0);
+
+  const LinearImage two = readImage((dir_ / "two.exr").string());
+  const LinearImage one = readImage((dir_ / "one.exr").string());
+  ASSERT_EQ(two.rgb.size(), size_t(96 * 64 * 3));
+  ASSERT_EQ(two.rgb.size(), one.rgb.size());
+  size_t differing = 0, nonFinite = 0, lit = 0;
+  for (size_t i = 0; i < two.rgb.size(); ++i) {
+    differing += std::memcmp(&two.rgb[i], &one.rgb[i], sizeof(float)) != 0;
+    nonFinite += !std::isfinite(two.rgb[i]);
+    lit += two.rgb[i] > 0;
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_EQ(nonFinite, 0u);
+  EXPECT_GT(lit, two.rgb.size() / 3);
+}
+
+TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
+  const fs::path output = dir_ / "render.png";
+  ASSERT_EQ(runCommand({kBin + "portico", "render", store_.string(), "-o", output.string(), "--workers", "2",
+                        "--photons", "20000", "--spp", "1", "--width", "48", "--height", "32"},
+                       dir_ / "render.log"),
+            0)
+      << readFile(dir_ / "render.log");
+  const LinearImage image = readImage(output.string());
+  EXPECT_EQ(image.width, 48u);
+  EXPECT_EQ(image.height, 32u);
+  const auto stats = nlohmann::json::parse(readFile(fs::path(output.string() + ".json")));
+  expectConservation(stats);
+  for (const char* key : {"emitted", "deposits", "absorbed", "escaped", "queued"})
+    EXPECT_TRUE(stats["photons"].contains(key)) << key;
+  EXPECT_TRUE(stats["time_ms"].contains("photons"));
+  EXPECT_TRUE(stats["time_ms"].contains("render"));
+  EXPECT_GT(stats["cells"]["loaded"].get<int64_t>(), 0);
+}
+
+TEST_F(Pipeline, RefusesAJobForAMissingStoreWithAClearMessage) {
+  LocalCluster cluster(dir_ / "refuse", 0);
+  net::CoordinatorClient client(cluster.endpoint());
+  capnp::MallocMessageBuilder message;
+  auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
+  spec.setStore((dir_ / "no-such-store").string());
+  spec.setOutput((dir_ / "x.png").string());
+  spec.setPhotons(10);
+  spec.setSpp(1);
+  spec.setPhotonRadius(0.5f);
+  try {
+    client.submit(message);
+    FAIL() << "submit should have been refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-store"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace portico
