@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
   app.add_option("--name", options.name, "name shown in status");
   app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str();
   app.add_option("--liveness-ms", options.livenessMs)->capture_default_str();
-  app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit after N leases");
+  app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease");
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

@@ -150,6 +150,12 @@ int WorkerSession::run() {
         const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
         try {
           auto message = lease->result.get();
+          if (options_.crashAfterLeases > 0 && leasesDone + 1 >= options_.crashAfterLeases) {
+            // Fault injection: die holding a finished lease, as a crash
+            // mid-lease would; the coordinator must requeue it.
+            spdlog::warn("fault injection: exiting with lease {} unreported", leaseId);
+            std::_Exit(3);
+          }
           send(socket, *message);
           ++leasesDone;
         } catch (const std::exception& e) {
@@ -168,10 +174,6 @@ int WorkerSession::run() {
         }
         lastSent = steadyMs();
         lease.reset();
-        if (options_.crashAfterLeases > 0 && leasesDone >= options_.crashAfterLeases) {
-          spdlog::warn("fault injection: exiting after {} leases", leasesDone);
-          std::_Exit(3);
-        }
       }
 
       if (now - lastSent >= options_.heartbeatMs) {

@@ -19,7 +19,8 @@ struct WorkerOptions {
   uint32_t threads = 1;
   int heartbeatMs = 1000;
   int livenessMs = 10000;      // coordinator silence before reconnecting
-  // Fault injection for recovery tests: exit abruptly after this many leases (0: never).
+  // Fault injection for recovery tests: exit abruptly, without reporting it,
+  // when the Nth lease is finished (0: never).
   int crashAfterLeases = 0;
 };
 

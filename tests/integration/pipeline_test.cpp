@@ -39,11 +39,14 @@ std::string readFile(const fs::path& path) {
 // A coordinator and N workers started by hand, as a user would.
 class LocalCluster {
  public:
-  LocalCluster(const fs::path& dir, int workers, const std::vector<std::string>& workerExtra = {}) : dir_(dir) {
+  // workerExtra[i] are extra arguments of worker i (fault injection).
+  LocalCluster(const fs::path& dir, int workers, const std::vector<std::vector<std::string>>& workerExtra = {})
+      : dir_(dir) {
     fs::create_directories(dir);
     coordinator_ = std::make_unique<ChildProcess>(
         std::vector<std::string>{kBin + "portico-coordinator", "--listen", "tcp://127.0.0.1:*", "--db",
-                                 (dir / "jobs.db").string(), "--endpoint-file", (dir / "endpoint").string()},
+                                 (dir / "jobs.db").string(), "--endpoint-file", (dir / "endpoint").string(),
+                                 "--liveness-ms", "2000", "--heartbeat-ms", "250"},
         (dir / "coordinator.log").string());
     for (int i = 0; i < 200 && endpoint_.empty(); ++i) {
       std::ifstream in(dir / "endpoint");
@@ -52,8 +55,9 @@ class LocalCluster {
     }
     if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir / "coordinator.log"));
     for (int i = 0; i < workers; ++i) {
-      std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + std::to_string(i)};
-      argv.insert(argv.end(), workerExtra.begin(), workerExtra.end());
+      std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + std::to_string(i),
+                                    "--heartbeat-ms", "250"};
+      if (size_t(i) < workerExtra.size()) argv.insert(argv.end(), workerExtra[i].begin(), workerExtra[i].end());
       workers_.emplace_back(argv, (dir / ("worker-" + std::to_string(i) + ".log")).string());
     }
   }
@@ -160,6 +164,36 @@ TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitFor
   EXPECT_EQ(differing, 0u);
   EXPECT_EQ(nonFinite, 0u);
   EXPECT_GT(lit, two.rgb.size() / 3);
+}
+
+// Reads an EXR and counts the floats whose bits differ from another.
+size_t differingFloats(const fs::path& a, const fs::path& b) {
+  const LinearImage x = readImage(a.string()), y = readImage(b.string());
+  if (x.rgb.size() != y.rgb.size()) return SIZE_MAX;
+  size_t differing = 0;
+  for (size_t i = 0; i < x.rgb.size(); ++i) differing += std::memcmp(&x.rgb[i], &y.rgb[i], sizeof(float)) != 0;
+  return differing;
+}
+
+TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
+  const uint64_t photons = 60000;
+  nlohmann::json reference, crashed;
+  {
+    LocalCluster cluster(dir_ / "reference", 1);
+    reference = cluster.render(store_, dir_ / "reference.exr", photons, 1);
+  }
+  {
+    // Two of three workers die holding a finished lease (their 2nd and 5th).
+    LocalCluster cluster(dir_ / "crash", 3, {{"--crash-after-leases", "2"}, {"--crash-after-leases", "5"}, {}});
+    crashed = cluster.render(store_, dir_ / "crash.exr", photons, 1);
+  }
+  ASSERT_EQ(reference.value("state", ""), "done") << reference.dump(2);
+  ASSERT_EQ(crashed.value("state", ""), "done") << crashed.dump(2);
+  EXPECT_NE(readFile(dir_ / "crash" / "coordinator.log").find("requeued"), std::string::npos);
+  const auto stats = nlohmann::json::parse(readFile(dir_ / "crash.exr.json"));
+  expectConservation(stats);
+  EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
+  EXPECT_EQ(differingFloats(dir_ / "crash.exr", dir_ / "reference.exr"), 0u);
 }
 
 TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
