@@ -1,0 +1,107 @@
+#include "coordinator/job_store.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+
+namespace portico {
+namespace {
+
+class JobStoreTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    path_ = std::filesystem::temp_directory_path() /
+            ("portico-jobstore-" + std::to_string(getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".db");
+    std::filesystem::remove(path_);
+  }
+  void TearDown() override {
+    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path_.string() + suffix);
+  }
+  std::filesystem::path path_;
+};
+
+TEST_F(JobStoreTest, CreatesSchemaAtCurrentVersionInWalMode) {
+  JobStore store(path_.string());
+  EXPECT_EQ(store.database().userVersion(), JobStore::kSchemaVersion);
+  auto& s = store.database().prepare("PRAGMA journal_mode");
+  ASSERT_TRUE(s.step());
+  EXPECT_EQ(s.columnText(0), "wal");
+  s.reset();
+}
+
+TEST_F(JobStoreTest, RefusesANewerSchema) {
+  { JobStore store(path_.string()); store.database().setUserVersion(JobStore::kSchemaVersion + 1); }
+  EXPECT_THROW(JobStore{path_.string()}, std::runtime_error);
+}
+
+TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  for (int i = 0; i < 5; ++i) store.addBatch(job, 3, 0, BatchKind::Rays, 100, "payload" + std::to_string(i));
+  store.addBatch(job, 4, 0, BatchKind::Rays, 50, "other");
+  auto pending = store.pendingCells(10);
+  ASSERT_EQ(pending.size(), 2u);
+  EXPECT_EQ(pending[0].cell, 3u);   // most work first
+  EXPECT_EQ(pending[0].work, 500);
+
+  std::vector<QueuedBatch> batches;
+  const uint64_t lease = store.openLease(pending[0], "worker-a", 250, 2, batches);
+  ASSERT_NE(lease, 0u);
+  ASSERT_EQ(batches.size(), 2u);
+  EXPECT_EQ(batches[0].payload, "payload0");
+  EXPECT_EQ(store.openLeaseCount(job), 1);
+  EXPECT_EQ(store.pendingCells(10)[0].work, 300);   // leased batches are not pending
+
+  store.requeueLease(lease);
+  EXPECT_EQ(store.lease(lease)->state, "requeued");
+  EXPECT_EQ(store.pendingCells(10)[0].work, 500);
+
+  const uint64_t second = store.openLease(store.pendingCells(10)[0], "worker-b", 1000, 3, batches);
+  EXPECT_EQ(batches.size(), 5u);
+  store.completeLease(second);
+  EXPECT_EQ(store.lease(second)->state, "done");
+  EXPECT_EQ(store.remainingWork(job, 0), 1);   // cell 4's batch
+  EXPECT_EQ(store.queuedRays(job, 0), 50);
+}
+
+TEST_F(JobStoreTest, RestartRequeuesOpenLeases) {
+  uint64_t lease;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    store.addBatch(job, 1, 0, BatchKind::Emit, 10, "x");
+    std::vector<QueuedBatch> batches;
+    lease = store.openLease(store.pendingCells(1)[0], "gone", 100, 1, batches);
+  }
+  JobStore reopened(path_.string());
+  EXPECT_EQ(reopened.requeueAllOpenLeases(), 1);
+  EXPECT_EQ(reopened.lease(lease)->state, "requeued");
+  EXPECT_EQ(reopened.pendingCells(1).size(), 1u);
+}
+
+TEST_F(JobStoreTest, FilmChunksAccumulate) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  const uint64_t pixels = JobStore::kFilmChunkPixels * 2 + 10;
+  store.addFilm(job, {{0, {1, 2, 3}}, {pixels - 1, {5, 5, 5}}}, pixels);
+  store.addFilm(job, {{0, {10, 20, 30}}}, pixels);
+  const auto film = store.film(job, pixels);
+  EXPECT_EQ(film[0].r, 11);
+  EXPECT_EQ(film[0].b, 33);
+  EXPECT_EQ(film[pixels - 1].g, 5);
+  EXPECT_EQ(film[1].r, 0);
+  EXPECT_THROW(store.addFilm(job, {{uint32_t(pixels), {1, 1, 1}}}, pixels), std::runtime_error);
+}
+
+TEST_F(JobStoreTest, CountersAdd) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  store.addCounter(job, "photons.emitted", 5);
+  store.addCounter(job, "photons.emitted", 7);
+  EXPECT_EQ(store.counters(job).at("photons.emitted"), 12);
+}
+
+}  // namespace
+}  // namespace portico
