@@ -58,7 +58,11 @@ Coordinator::~Coordinator() = default;
 void Coordinator::run() {
   while (!stopping_) {
     zmq::pollitem_t items[] = {{router_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 1, std::chrono::milliseconds(100));
+    try {
+      zmq::poll(items, 1, std::chrono::milliseconds(100));
+    } catch (const zmq::error_t& e) {
+      if (e.num() != EINTR) throw;   // a signal: the loop condition decides
+    }
     // Drain what arrived, then schedule once.
     for (int drained = 0; drained < 256; ++drained) {
       zmq::message_t identity, frame;
@@ -98,6 +102,14 @@ void Coordinator::run() {
 }
 
 void Coordinator::handle(const std::string& identity, const zmq::message_t& frame) {
+  const int64_t started = nowMs();
+  struct SlowLog {
+    int64_t started;
+    size_t bytes;
+    ~SlowLog() {
+      if (nowMs() - started > 20) spdlog::debug("handling a {} byte message took {} ms", bytes, nowMs() - started);
+    }
+  } slowLog{started, frame.size()};
   try {
     net::Decoded decoded(frame);
     auto envelope = decoded.envelope();

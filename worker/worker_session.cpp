@@ -11,6 +11,8 @@
 #include <xmmintrin.h>
 #include <pmmintrin.h>
 #include <zmq.hpp>
+#include <sys/eventfd.h>
+#include <unistd.h>
 
 #include "common/net/message.h"
 #include "worker/lease_runner.h"
@@ -41,7 +43,29 @@ struct ActiveLease {
 };
 }  // namespace
 
-WorkerSession::WorkerSession(WorkerOptions options) : options_(std::move(options)), cache_(options_.memoryBytes) {}
+WorkerSession::WorkerSession(WorkerOptions options)
+    : options_(std::move(options)), cache_(options_.memoryBytes), leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
+  if (leaseDone_ < 0) throw std::runtime_error("cannot create an eventfd");
+}
+
+WorkerSession::~WorkerSession() { ::close(leaseDone_); }
+
+std::future<std::unique_ptr<capnp::MallocMessageBuilder>> WorkerSession::startLease(
+    wire::Assign::Reader assign, std::optional<std::vector<StoredPhoton>> photons) {
+  return std::async(std::launch::async, [this, assign, p = std::move(photons)]() mutable {
+    // Denormals cost ~100x per operation and never matter to a picture.
+    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+    struct Notify {
+      int fd;
+      ~Notify() {
+        const uint64_t one = 1;
+        (void)!::write(fd, &one, sizeof one);
+      }
+    } notify{leaseDone_};
+    return runLease(cache_, assign, std::move(p));
+  });
+}
 
 int WorkerSession::run() {
   zmq::context_t context(1);
@@ -67,8 +91,22 @@ int WorkerSession::run() {
     bool reconnect = false;
 
     while (!stopping_ && !reconnect) {
-      zmq::pollitem_t items[] = {{socket.handle(), 0, ZMQ_POLLIN, 0}};
-      zmq::poll(items, 1, std::chrono::milliseconds(50));
+      // The eventfd wakes the loop the moment a lease finishes.
+      zmq::pollitem_t items[] = {{socket.handle(), 0, ZMQ_POLLIN, 0}, {nullptr, leaseDone_, ZMQ_POLLIN, 0}};
+      try {
+        zmq::poll(items, 2, std::chrono::milliseconds(100));
+      } catch (const zmq::error_t& e) {
+        if (e.num() == EINTR) continue;   // a signal: the loop condition decides
+        throw;
+      }
+      // The eventfd is written as the lease's function returns, a moment
+      // before its future is ready: then wait for the future, don't poll again.
+      bool leaseFinished = false;
+      if (items[1].revents & ZMQ_POLLIN) {
+        uint64_t count;
+        (void)!::read(leaseDone_, &count, sizeof count);
+        leaseFinished = true;
+      }
       const int64_t now = steadyMs();
       if (items[0].revents & ZMQ_POLLIN) {
         zmq::message_t frame;
@@ -108,11 +146,7 @@ int WorkerSession::run() {
                   send(socket, message);
                   lease->waitingForPhotons = true;
                 } else {
-                  lease->result = std::async(std::launch::async, [this, assign] {
-                    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-                    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-                    return runLease(cache_, assign, std::nullopt);
-                  });
+                  lease->result = startLease(assign, std::nullopt);
                 }
                 break;
               }
@@ -123,11 +157,7 @@ int WorkerSession::run() {
                 if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) break;
                 auto photons = decodeIndirectPhotons(reply);
                 lease->waitingForPhotons = false;
-                lease->result = std::async(std::launch::async, [this, assign, p = std::move(photons)]() mutable {
-                  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-                  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-                  return runLease(cache_, assign, std::move(p));
-                });
+                lease->result = startLease(assign, std::move(photons));
                 break;
               }
               case wire::Envelope::ERROR:
@@ -146,7 +176,7 @@ int WorkerSession::run() {
       }
 
       if (lease && lease->result.valid() &&
-          lease->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+          (leaseFinished || lease->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready)) {
         const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
         try {
           auto message = lease->result.get();

@@ -4,9 +4,17 @@
 // keep flowing during a long lease.
 #pragma once
 
+#include <capnp/message.h>
+
 #include <atomic>
 #include <cstdint>
+#include <future>
+#include <memory>
+#include <optional>
 #include <string>
+#include <vector>
+
+#include "proto/wire.capnp.h"
 
 #include "worker/cell_cache.h"
 
@@ -27,13 +35,19 @@ struct WorkerOptions {
 class WorkerSession {
  public:
   explicit WorkerSession(WorkerOptions options);
+  ~WorkerSession();
   // Serves until stop(), a Shutdown message, or a refused Hello. Returns the exit code.
   int run();
   void stop() { stopping_ = true; }
 
  private:
+  // Traces the lease on its own thread and signals leaseDone_ when finished.
+  std::future<std::unique_ptr<capnp::MallocMessageBuilder>> startLease(
+      wire::Assign::Reader assign, std::optional<std::vector<StoredPhoton>> photons);
+
   WorkerOptions options_;
   CellCache cache_;
+  int leaseDone_;   // eventfd
   std::atomic<bool> stopping_{false};
 };
 
