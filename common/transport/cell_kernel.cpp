@@ -137,15 +137,25 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
 }
 
 void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
-  ++out.counters.raySegments;
-  const CellEvent event = tracer_.trace(toRay(ray));
-  switch (event.kind) {
-    case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
-    case CellEvent::Kind::Portal:
-      ++out.counters.rayCrossings;
-      cross(ray, event, out);
-      return;
-    case CellEvent::Kind::Surface: shade(ray, event, out); return;
+  RayState current = ray;
+  for (;;) {
+    ++out.counters.raySegments;
+    const CellEvent event = tracer_.trace(toRay(current));
+    switch (event.kind) {
+      case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
+      case CellEvent::Kind::Portal:
+        ++out.counters.rayCrossings;
+        cross(current, event, out);
+        return;
+      case CellEvent::Kind::Surface:
+        // Cut-away surfaces are invisible to the camera: look past them.
+        if (scene_.materials()[tracer_.cell().material(event.primitive)].hiddenFromCamera) {
+          current.tMin = event.t;
+          continue;
+        }
+        shade(current, event, out);
+        return;
+    }
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <thread>
 
 #include "common/image/image_writer.h"
@@ -213,6 +214,74 @@ TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
   EXPECT_TRUE(stats["time_ms"].contains("photons"));
   EXPECT_TRUE(stats["time_ms"].contains("render"));
   EXPECT_GT(stats["cells"]["loaded"].get<int64_t>(), 0);
+}
+
+// Runs a command and returns its standard output (stderr goes to the log).
+std::string captureOutput(const std::vector<std::string>& argv, const fs::path& dir, const std::string& name,
+                          int* exitCode) {
+  const fs::path out = dir / (name + ".out");
+  std::vector<std::string> shell{"/bin/sh", "-c", ""};
+  std::string command;
+  for (const std::string& a : argv) command += "'" + a + "' ";
+  shell[2] = command + "> '" + out.string() + "'";
+  *exitCode = runCommand(shell, dir / (name + ".log"));
+  return readFile(out);
+}
+
+TEST_F(Pipeline, SubmitStatusAndWaitWorkAgainstServicesStartedByHand) {
+  const fs::path dir = dir_ / "cli";
+  LocalCluster cluster(dir, 2);
+  int code = -1;
+  const std::string id =
+      captureOutput({kBin + "portico", "submit", "--coordinator", cluster.endpoint(), store_.string(), "-o",
+                     (dir / "cli.png").string(), "--photons", "20000", "--spp", "1", "--width", "40", "--height", "30"},
+                    dir, "submit", &code);
+  ASSERT_EQ(code, 0) << readFile(dir / "submit.log");
+  const uint64_t job = std::stoull(id);
+  EXPECT_GT(job, 0u);
+  EXPECT_EQ(runCommand({kBin + "portico", "wait", "--coordinator", cluster.endpoint(), std::to_string(job)},
+                       dir / "wait.log"),
+            0)
+      << readFile(dir / "wait.log");
+  const std::string json = captureOutput(
+      {kBin + "portico", "status", "--coordinator", cluster.endpoint(), std::to_string(job), "--json"}, dir, "status",
+      &code);
+  ASSERT_EQ(code, 0);
+  const auto status = nlohmann::json::parse(json);
+  EXPECT_EQ(status.value("state", ""), "done");
+  EXPECT_EQ(status["progress"].value("fraction", 0.0), 1.0);
+  EXPECT_EQ(status["workers"].size(), 2u);
+  EXPECT_TRUE(fs::exists(dir / "cli.png"));
+  // Waiting on a job that does not exist fails with a message naming it.
+  EXPECT_NE(runCommand({kBin + "portico", "wait", "--coordinator", cluster.endpoint(), "999"}, dir / "wait999.log"), 0);
+  EXPECT_NE(readFile(dir / "wait999.log").find("999"), std::string::npos);
+}
+
+TEST_F(Pipeline, GarbageOnTheSocketIsDroppedAndTheCoordinatorKeepsServing) {
+  const fs::path dir = dir_ / "garbage";
+  LocalCluster cluster(dir, 1);
+  zmq::context_t context(1);
+  zmq::socket_t rogue(context, zmq::socket_type::dealer);
+  rogue.set(zmq::sockopt::linger, 0);
+  rogue.connect(cluster.endpoint());
+  std::mt19937 random(99);
+  for (int i = 0; i < 300; ++i) {
+    std::string bytes(1 + random() % 300, '\0');
+    for (char& c : bytes) c = static_cast<char>(random());
+    rogue.send(zmq::buffer(bytes), zmq::send_flags::none);
+  }
+  // Multi-frame garbage, and a Result for a lease that was never given.
+  rogue.send(zmq::str_buffer("a"), zmq::send_flags::sndmore);
+  rogue.send(zmq::str_buffer("b"), zmq::send_flags::none);
+  {
+    capnp::MallocMessageBuilder message;
+    message.initRoot<wire::Envelope>().initResult().setLease(424242);
+    rogue.send(net::encode(message), zmq::send_flags::none);
+  }
+  const auto status = cluster.render(store_, dir / "after.png", 5000, 1);
+  EXPECT_EQ(status.value("state", ""), "done") << status.dump(2);
+  const std::string log = readFile(dir / "coordinator.log");
+  EXPECT_NE(log.find("dropped"), std::string::npos);
 }
 
 TEST_F(Pipeline, RefusesAJobForAMissingStoreWithAClearMessage) {
