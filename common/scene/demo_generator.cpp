@@ -19,13 +19,19 @@ using demo::DemoMaterials;
 using demo::DemoRandom;
 using demo::RoomFrame;
 
-constexpr float kWallHeight = 2.8f;
+constexpr float kWallHeight = 2.8f;   // the ceiling's height
+// Cut-away: each room's cell box reaches kCutawayGap above its ceiling, and
+// its top face there is the portal to the sky. Photons going up hit the
+// ceiling well before the portal; camera rays come in through the portal and
+// pass the ceiling (a material hidden from the camera) into the room.
+constexpr float kCutawayGap = 0.1f;
+constexpr float kCellTop = kWallHeight + kCutawayGap;
 constexpr float kDoorWidth = 0.9f;
 constexpr float kDoorHeight = 2.1f;
 constexpr float kCorridorLength = 14.0f;
 constexpr float kCorridorHalfWidth = 1.0f;
 constexpr float kRoomDepth = 4.0f;
-constexpr float kLightY = kWallHeight - 0.05f;   // hangs just under the cut
+constexpr float kLightY = kWallHeight - 0.001f;   // a flush panel 1 mm under the ceiling
 constexpr float kCorridorLightSize = 0.8f;
 constexpr float kSkyHeight = 50.0f;
 constexpr float kSkyMargin = 2.0f;
@@ -64,8 +70,13 @@ struct Room {
   float lightSize = 0;        // 0 for the dark room
 };
 
-DemoMaterials addMaterials(SceneStoreWriter& writer) {
-  DemoMaterials m{};
+// The furniture's materials plus the generator's own.
+struct Materials : DemoMaterials {
+  uint32_t ceiling = 0;   // hidden from the camera, like the lights
+};
+
+Materials addMaterials(SceneStoreWriter& writer) {
+  Materials m{};
   m.roomFloor = writer.addMaterial("floor-wood", Vec3(0.55f, 0.42f, 0.30f));
   m.corridorFloor = writer.addMaterial("floor-tiles", Vec3(0.45f, 0.45f, 0.43f));
   m.wall = writer.addMaterial("wall-white", Vec3(0.75f, 0.74f, 0.70f));
@@ -82,7 +93,10 @@ DemoMaterials addMaterials(SceneStoreWriter& writer) {
   m.books[0] = writer.addMaterial("book-green", Vec3(0.20f, 0.45f, 0.25f));
   m.books[1] = writer.addMaterial("book-yellow", Vec3(0.80f, 0.65f, 0.20f));
   m.books[2] = writer.addMaterial("book-red", Vec3(0.55f, 0.12f, 0.10f));
-  m.light = writer.addMaterial("light", Vec3(0.0f), kLightRadiance);
+  // Hidden from the camera: the view from above looks through the ceilings
+  // and their lamps into the rooms, which they still light.
+  m.light = writer.addMaterial("light", Vec3(0.0f), kLightRadiance, /*hiddenFromCamera=*/true);
+  m.ceiling = writer.addMaterial("ceiling", Vec3(0.80f, 0.80f, 0.80f), Vec3(0.0f), /*hiddenFromCamera=*/true);
   return m;
 }
 
@@ -96,7 +110,7 @@ std::vector<Room> planRooms(const DemoMaterials& materials, DemoRandom& random) 
     room.corridorWallZ = side * kCorridorHalfWidth;
     room.farWallZ = side * (kCorridorHalfWidth + kRoomDepth);
     room.bounds = Bounds3(Vec3(room.plan.x0, 0.0f, std::min(room.corridorWallZ, room.farWallZ)),
-                          Vec3(room.plan.x1, kWallHeight, std::max(room.corridorWallZ, room.farWallZ)));
+                          Vec3(room.plan.x1, kCellTop, std::max(room.corridorWallZ, room.farWallZ)));
     room.doorX0 = room.plan.lit ? random.centimetres(room.plan.x0 + 0.4f, room.plan.x1 - 0.4f - kDoorWidth)
                                 : kDarkDoorCenter - 0.5f * kDoorWidth;
     room.doorX1 = room.doorX0 + kDoorWidth;
@@ -108,7 +122,7 @@ std::vector<Room> planRooms(const DemoMaterials& materials, DemoRandom& random) 
   return rooms;
 }
 
-// A light hanging face down (cross(edge1, edge2) = -y) centred at (x, z).
+// A flush ceiling panel facing down (cross(edge1, edge2) = -y) centred at (x, z).
 AreaLight ceilingLight(uint32_t cell, float x, float z, float size) {
   AreaLight light;
   light.cell = cell;
@@ -119,10 +133,10 @@ AreaLight ceilingLight(uint32_t cell, float x, float z, float size) {
   return light;
 }
 
-// The rectangle a cell shows to the sky, at the height where the walls stop.
+// The rectangle a cell shows to the sky: the top face of its box, above the ceiling.
 std::vector<Vec3> topRectangle(const Bounds3& box) {
-  return {Vec3(box.lo.x, kWallHeight, box.lo.z), Vec3(box.hi.x, kWallHeight, box.lo.z),
-          Vec3(box.hi.x, kWallHeight, box.hi.z), Vec3(box.lo.x, kWallHeight, box.hi.z)};
+  return {Vec3(box.lo.x, kCellTop, box.lo.z), Vec3(box.hi.x, kCellTop, box.lo.z),
+          Vec3(box.hi.x, kCellTop, box.hi.z), Vec3(box.lo.x, kCellTop, box.hi.z)};
 }
 
 std::vector<Vec3> doorRectangle(const Room& room) {
@@ -134,37 +148,42 @@ std::vector<Vec3> doorRectangle(const Room& room) {
 // The door opening in a z = const wall, in that wall's (u = x, v = y) plane.
 PlaneRect doorHole(const Room& room) { return PlaneRect{room.doorX0, room.doorX1, 0.0f, kDoorHeight}; }
 
-// Floor and four walls facing into the box; walls at z = const may have doors.
+// Floor, ceiling and four walls facing into the box; walls at z = const may
+// have doors. The walls run up to the top of the cell's box (kCutawayGap above
+// the ceiling), so the box stays closed but for its portals; the strip above
+// the ceiling is only ever seen by camera rays, as the walls' continuation.
 void addShell(MeshBuilder& mesh, const Bounds3& box, uint32_t floorMaterial, uint32_t wallMaterial,
-              const std::vector<PlaneRect>& holesAtLowZ, const std::vector<PlaneRect>& holesAtHighZ,
-              uint32_t lowZMaterial, uint32_t highZMaterial) {
-  mesh.addAxisRectangle(1, 0.0f, true, PlaneRect{box.lo.z, box.hi.z, box.lo.x, box.hi.x}, floorMaterial);
-  const PlaneRect zWall{box.lo.x, box.hi.x, 0.0f, kWallHeight};
+              uint32_t ceilingMaterial, const std::vector<PlaneRect>& holesAtLowZ,
+              const std::vector<PlaneRect>& holesAtHighZ, uint32_t lowZMaterial, uint32_t highZMaterial) {
+  const PlaneRect footprint{box.lo.z, box.hi.z, box.lo.x, box.hi.x};
+  mesh.addAxisRectangle(1, 0.0f, true, footprint, floorMaterial);
+  mesh.addAxisRectangle(1, kWallHeight, false, footprint, ceilingMaterial);
+  const PlaneRect zWall{box.lo.x, box.hi.x, 0.0f, box.hi.y};
   mesh.addAxisRectangle(2, box.lo.z, true, zWall, lowZMaterial, holesAtLowZ);
   mesh.addAxisRectangle(2, box.hi.z, false, zWall, highZMaterial, holesAtHighZ);
-  const PlaneRect xWall{0.0f, kWallHeight, box.lo.z, box.hi.z};
+  const PlaneRect xWall{0.0f, box.hi.y, box.lo.z, box.hi.z};
   mesh.addAxisRectangle(0, box.lo.x, true, xWall, wallMaterial);
   mesh.addAxisRectangle(0, box.hi.x, false, xWall, wallMaterial);
 }
 
-CellContent corridorCell(const std::vector<Room>& rooms, const std::vector<AreaLight>& lights,
-                         const DemoMaterials& materials) {
+CellContent corridorCell(const Bounds3& box, const std::vector<Room>& rooms, const std::vector<AreaLight>& lights,
+                         const Materials& materials) {
   CellContent cell;
   cell.id = kDemoCorridorCell;
   cell.name = "corridor";
-  cell.bounds = Bounds3(Vec3(0.0f, 0.0f, -kCorridorHalfWidth), Vec3(kCorridorLength, kWallHeight, kCorridorHalfWidth));
+  cell.bounds = box;
   std::vector<PlaneRect> southDoors, northDoors;
   for (const Room& room : rooms) (room.plan.north ? northDoors : southDoors).push_back(doorHole(room));
   MeshBuilder mesh;
-  addShell(mesh, cell.bounds, materials.corridorFloor, materials.wall, southDoors, northDoors, materials.wall,
-           materials.wall);
+  addShell(mesh, cell.bounds, materials.corridorFloor, materials.wall, materials.ceiling, southDoors, northDoors,
+           materials.wall, materials.wall);
   for (const AreaLight& light : lights)
     if (light.cell == cell.id) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
   mesh.moveInto(cell);
   return cell;
 }
 
-CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, const DemoMaterials& materials,
+CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, const Materials& materials,
                      DemoRandom& random) {
   CellContent cell;
   cell.id = room.cell;
@@ -174,11 +193,11 @@ CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, con
   MeshBuilder mesh;
   // The corridor wall is at low z for north rooms, at high z for south ones.
   if (room.plan.north)
-    addShell(mesh, cell.bounds, materials.roomFloor, materials.wall, door, {}, materials.wall,
+    addShell(mesh, cell.bounds, materials.roomFloor, materials.wall, materials.ceiling, door, {}, materials.wall,
              room.backWallMaterial);
   else
-    addShell(mesh, cell.bounds, materials.roomFloor, materials.wall, {}, door, room.backWallMaterial,
-             materials.wall);
+    addShell(mesh, cell.bounds, materials.roomFloor, materials.wall, materials.ceiling, {}, door,
+             room.backWallMaterial, materials.wall);
   for (const AreaLight& light : lights)
     if (light.cell == cell.id) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
 
@@ -207,11 +226,12 @@ Camera overviewCamera() {
   return camera;
 }
 
-// The sky: above the whole floor, grown to hold the camera.
+// The sky: above the whole floor (from the top of the cells' boxes), grown to
+// hold the camera.
 Bounds3 skyBounds(const Camera& camera) {
   const float outerZ = kCorridorHalfWidth + kRoomDepth;
-  Bounds3 sky(Vec3(-kSkyMargin, kWallHeight, -outerZ - kSkyMargin),
-              Vec3(kCorridorLength + kSkyMargin, kWallHeight + kSkyHeight, outerZ + kSkyMargin));
+  Bounds3 sky(Vec3(-kSkyMargin, kCellTop, -outerZ - kSkyMargin),
+              Vec3(kCorridorLength + kSkyMargin, kCellTop + kSkyHeight, outerZ + kSkyMargin));
   sky.lo.x = std::min(sky.lo.x, camera.origin.x - 1.0f);
   sky.hi.x = std::max(sky.hi.x, camera.origin.x + 1.0f);
   sky.lo.z = std::min(sky.lo.z, camera.origin.z - 1.0f);
@@ -226,10 +246,9 @@ void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed) {
   SceneStoreWriter writer(storeDirectory);
   writer.setMeta("generator", "demo");
   writer.setMeta("seed", std::to_string(seed));
-  const DemoMaterials materials = addMaterials(writer);
+  const Materials materials = addMaterials(writer);
   const std::vector<Room> rooms = planRooms(materials, random);
-  const Bounds3 corridor(Vec3(0.0f, 0.0f, -kCorridorHalfWidth),
-                         Vec3(kCorridorLength, kWallHeight, kCorridorHalfWidth));
+  const Bounds3 corridor(Vec3(0.0f, 0.0f, -kCorridorHalfWidth), Vec3(kCorridorLength, kCellTop, kCorridorHalfWidth));
 
   // Portals first: a cell file lists the portals touching it.
   for (const Room& room : rooms) writer.addPortal(kDemoCorridorCell, room.cell, doorRectangle(room));
@@ -245,7 +264,7 @@ void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed) {
   for (AreaLight& light : lights) light.id = writer.addLight(light);
 
   // One cell in memory at a time, as a large building would be written.
-  writer.writeCell(corridorCell(rooms, lights, materials));
+  writer.writeCell(corridorCell(corridor, rooms, lights, materials));
   for (const Room& room : rooms) writer.writeCell(roomCell(room, lights, materials, random));
   const Camera camera = overviewCamera();
   CellContent sky;

@@ -93,15 +93,19 @@ class CatalogueReader {
     return portals;
   }
 
-  std::vector<Material> materials() {
+  // Version 1 stores have no hidden_from_camera column: nothing is hidden.
+  std::vector<Material> materials(int version) {
     std::vector<Material> materials;
-    sql::Statement& row = db_.prepare(
-        "SELECT id, name, albedo_r, albedo_g, albedo_b, emission_r, emission_g, emission_b "
-        "FROM materials ORDER BY id");
+    sql::Statement& row = db_.prepare(fmt::format(
+        "SELECT id, name, albedo_r, albedo_g, albedo_b, emission_r, emission_g, emission_b, {} "
+        "FROM materials ORDER BY id",
+        version >= 2 ? "hidden_from_camera" : "0"));
     while (row.step()) {
       requireDenseId("materials", row.columnInt(0), materials.size());
-      materials.push_back(Material{static_cast<uint32_t>(row.columnInt(0)), row.columnText(1), columnVec3(row, 2),
-                                   columnVec3(row, 5)});
+      Material material{static_cast<uint32_t>(row.columnInt(0)), row.columnText(1), columnVec3(row, 2),
+                        columnVec3(row, 5)};
+      material.hiddenFromCamera = row.columnInt(8) != 0;
+      materials.push_back(std::move(material));
     }
     return materials;
   }
@@ -169,13 +173,14 @@ SceneStore SceneStore::open(const std::string& directory) {
     sql::Database db(databasePath.string(), sql::Database::Mode::ReadOnly);
     const int version = db.userVersion();
     CatalogueReader reader(db, path);
-    if (version != scene_schema::kVersion)
-      reader.fail(fmt::format("scene.db has schema version {}, this build reads version {}; regenerate or re-import it",
-                              version, scene_schema::kVersion));
+    if (version < scene_schema::kOldestReadableVersion || version > scene_schema::kVersion)
+      reader.fail(fmt::format(
+          "scene.db has schema version {}, this build reads versions {} to {}; regenerate or re-import it", version,
+          scene_schema::kOldestReadableVersion, scene_schema::kVersion));
     store.meta_ = reader.meta();
     store.cells_ = reader.cells();
     store.portals_ = reader.portals(store.cells_.size());
-    store.materials_ = reader.materials();
+    store.materials_ = reader.materials(version);
     store.lights_ = reader.lights(store.cells_.size());
     store.camera_ = reader.camera(store.cells_.size());
   } catch (const CatalogueError&) {

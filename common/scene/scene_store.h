@@ -66,7 +66,9 @@ class SceneStoreWriter {
   // chunk). Smaller values exist so tests can exercise multi-chunk cells.
   void setMaxChunkElements(uint64_t elements);
 
-  uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0));
+  // hiddenFromCamera: see Material (cut-away ceilings and their lamps).
+  uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0),
+                       bool hiddenFromCamera = false);
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned

@@ -11,7 +11,11 @@ namespace portico::scene_schema {
 // PRAGMA user_version of scene.db. A reader refuses any other value: bump it
 // (and teach SceneStore::open to read the old one, or say how to regenerate)
 // whenever a table changes.
-constexpr int kVersion = 1;
+//   1: first version.
+//   2: materials.hidden_from_camera (cut-away surfaces). Version 1 is still
+//      read, as if every material had hidden_from_camera = 0.
+constexpr int kVersion = 2;
+constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
 constexpr std::string_view kCellDirectory = "cells";
@@ -42,7 +46,8 @@ CREATE TABLE materials(
   id INTEGER PRIMARY KEY,
   name TEXT NOT NULL,
   albedo_r REAL NOT NULL, albedo_g REAL NOT NULL, albedo_b REAL NOT NULL,
-  emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL);
+  emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL,
+  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)));
 CREATE TABLE lights(
   id INTEGER PRIMARY KEY,
   cell INTEGER NOT NULL REFERENCES cells(id),

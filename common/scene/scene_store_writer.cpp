@@ -158,7 +158,8 @@ void SceneStoreWriter::setMaxChunkElements(uint64_t elements) {
   impl_->maxChunkElements = elements;
 }
 
-uint32_t SceneStoreWriter::addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission) {
+uint32_t SceneStoreWriter::addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission,
+                                       bool hiddenFromCamera) {
   impl_->requireUncommitted();
   const auto id = static_cast<uint32_t>(impl_->materials.size());
   const std::string what = fmt::format("material {} ('{}')", id, name);
@@ -166,7 +167,9 @@ uint32_t SceneStoreWriter::addMaterial(const std::string& name, const Vec3& albe
     impl_->fail(fmt::format("{}: albedo {} must be finite and within [0, 1]", what, formatVec(albedo)));
   if (!isFinite(emission) || std::min({emission.x, emission.y, emission.z}) < 0.0f)
     impl_->fail(fmt::format("{}: emission {} must be finite and non-negative", what, formatVec(emission)));
-  impl_->materials.push_back(Material{id, name, albedo, emission});
+  Material material{id, name, albedo, emission};
+  material.hiddenFromCamera = hiddenFromCamera;
+  impl_->materials.push_back(std::move(material));
   return id;
 }
 
@@ -326,12 +329,13 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
         .run();
   }
   for (const Material& material : materials) {
-    sql::Statement& insert = db.prepare("INSERT INTO materials VALUES (?, ?, ?, ?, ?, ?, ?, ?)");
+    sql::Statement& insert = db.prepare("INSERT INTO materials VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
     insert.bind(1, int64_t{material.id}).bind(2, material.name);
     for (int c = 0; c < 3; ++c) {
       insert.bind(3 + c, double{material.albedo[c]});
       insert.bind(6 + c, double{material.emission[c]});
     }
+    insert.bind(9, int64_t{material.hiddenFromCamera ? 1 : 0});
     insert.run();
   }
   for (const AreaLight& light : lights) {

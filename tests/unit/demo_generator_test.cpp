@@ -1,6 +1,7 @@
 // The demo building: deterministic, and a well-formed cells-and-portals
-// scene (portals on cell boundaries, walls closed around doors, lights where
-// the description says).
+// scene (portals on cell boundaries, walls closed around doors, ceilings and
+// lights hidden from the camera for the cut-away view, lights where the
+// description says).
 #include "common/scene/demo_generator.h"
 
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,25 @@ class DemoBuilding : public ::testing::Test {
     for (const Portal& portal : store().portals())
       if ((portal.cellA == a && portal.cellB == b) || (portal.cellA == b && portal.cellB == a)) return &portal;
     return nullptr;
+  }
+  const Material& materialOf(uint32_t cell, uint32_t triangle) const {
+    return store().materials()[geometry(cell).material(triangle)];
+  }
+  // The height of the cell's ceiling: the plane of its "ceiling" triangles
+  // (nullopt if it has none, or if they do not share one plane y = c).
+  std::optional<float> ceilingHeight(uint32_t cell) const {
+    const MeshView& mesh = geometry(cell).mesh();
+    std::optional<float> height;
+    for (uint32_t t = 0; t < mesh.triangleCount; ++t) {
+      if (materialOf(cell, t).name != "ceiling") continue;
+      Vec3 a, b, c;
+      mesh.triangle(t, a, b, c);
+      for (const Vec3& v : {a, b, c}) {
+        if (height && std::abs(v.y - *height) > kTolerance) return std::nullopt;
+        height = v.y;
+      }
+    }
+    return height;
   }
 
   TempDirectory temp_;
@@ -139,11 +160,43 @@ TEST_F(DemoBuilding, EveryRoomButTheDarkOneHasADownwardLight) {
     }
     EXPECT_EQ(emissiveTriangles, 2 * lights.size()) << cell.name;
   }
+  // Flush ceiling panels: within 2 mm below their cell's ceiling, inside the cell.
   for (const AreaLight& light : store().lights()) {
     EXPECT_NEAR(light.normal().y, -1.0f, 1e-6f);
     EXPECT_GE(light.area(), 0.6f * 0.6f - kTolerance);
     EXPECT_LE(light.area(), 1.0f + kTolerance);
-    EXPECT_NEAR(light.center().y, store().cells()[light.cell].bounds.hi.y - 0.05f, kTolerance);
+    const std::optional<float> ceiling = ceilingHeight(light.cell);
+    ASSERT_TRUE(ceiling.has_value()) << "light " << light.id << ": its cell has no flat ceiling";
+    EXPECT_LT(light.center().y, *ceiling) << "light " << light.id;
+    EXPECT_GE(light.center().y, *ceiling - 0.002f) << "light " << light.id;
+    const Bounds3& box = store().cells()[light.cell].bounds;
+    for (const Vec3& corner : {light.corner, light.corner + light.edge1, light.corner + light.edge2,
+                               light.corner + light.edge1 + light.edge2})
+      EXPECT_TRUE(box.contains(corner)) << "light " << light.id << " sticks out of cell " << light.cell;
+  }
+}
+
+// The cut-away view: the camera looks through ceilings and lamps (materials
+// hidden from it) and sees everything else.
+TEST_F(DemoBuilding, OnlyCeilingsAndLightsAreHiddenFromTheCamera) {
+  bool hasCeiling = false;
+  for (const Material& material : store().materials()) {
+    const bool shouldHide = material.name == "ceiling" || material.name == "light";
+    EXPECT_EQ(material.hiddenFromCamera, shouldHide) << material.name;
+    if (material.emissive()) EXPECT_TRUE(material.hiddenFromCamera) << material.name;
+    if (material.name == "ceiling") {
+      hasCeiling = true;
+      EXPECT_FALSE(material.emissive());
+      EXPECT_GE(maxComponent(material.albedo), 0.7f);
+    }
+  }
+  EXPECT_TRUE(hasCeiling);
+  // Hidden triangles are ceilings or lamps, all facing down.
+  for (const CellInfo& cell : store().cells()) {
+    const MeshView& mesh = geometry(cell.id).mesh();
+    for (uint32_t t = 0; t < mesh.triangleCount; ++t)
+      if (materialOf(cell.id, t).hiddenFromCamera)
+        EXPECT_NEAR(normalize(mesh.geometricNormal(t)).y, -1.0f, 1e-6f) << cell.name << " triangle " << t;
   }
 }
 
@@ -202,38 +255,95 @@ TEST_F(DemoBuilding, CellFilesListTheCataloguePortals) {
   }
 }
 
-// Every face of a room's or the corridor's box is covered exactly once:
-// by inward-facing wall/floor triangles or by portals (doors, the open top).
-// A gap would let rays leak out of the cell; an overlap would double a wall.
+// The area of the part of a planar polygon with y <= yMax.
+double areaBelow(const std::vector<Vec3>& polygon, float yMax) {
+  std::vector<Vec3> clipped;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec3& a = polygon[i];
+    const Vec3& b = polygon[(i + 1) % polygon.size()];
+    if (a.y <= yMax) clipped.push_back(a);
+    if ((a.y < yMax) != (b.y < yMax) && a.y != b.y && a.y != yMax && b.y != yMax)
+      clipped.push_back(a + (b - a) * ((yMax - a.y) / (b.y - a.y)));
+  }
+  return clipped.size() < 3 ? 0.0 : polygonArea(clipped);
+}
+
+// A room or the corridor as a closed box: every face of `box` is covered
+// exactly once, by inward-facing triangles or by the cell's portals, each
+// counted only below yMax (for the box under the ceiling). A gap would let
+// rays leak out of the cell; an overlap would double a wall.
+void expectClosedBox(const SceneStore& store, const CellGeometry& geometry, const std::string& name, uint32_t cellId,
+                     const Bounds3& box, const std::string& what) {
+  const MeshView& mesh = geometry.mesh();
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const float plane = side ? box.hi[axis] : box.lo[axis];
+      const Vec3 inward = [&] { Vec3 n(0); n[axis] = side ? -1.0f : 1.0f; return n; }();
+      const auto onPlane = [&](const Vec3& v) { return std::abs(v[axis] - plane) <= kTolerance; };
+      double covered = 0;
+      for (uint32_t t = 0; t < mesh.triangleCount; ++t) {
+        Vec3 a, b, c;
+        mesh.triangle(t, a, b, c);
+        if (!onPlane(a) || !onPlane(b) || !onPlane(c)) continue;
+        const double area = areaBelow({a, b, c}, box.hi.y);
+        if (area == 0) continue;
+        EXPECT_GT(dot(mesh.geometricNormal(t), inward), 0.0f)
+            << name << " " << what << ": triangle " << t << " faces out of the box";
+        covered += area;
+      }
+      for (const Portal& portal : store.portals()) {
+        if (portal.cellA != cellId && portal.cellB != cellId) continue;
+        bool all = true;
+        for (const Vec3& v : portal.polygon) all &= onPlane(v);
+        if (all) covered += areaBelow(portal.polygon, box.hi.y);
+      }
+      const Vec3 d = box.diagonal();
+      const double faceArea = double(d[(axis + 1) % 3]) * double(d[(axis + 2) % 3]);
+      EXPECT_NEAR(covered, faceArea, 1e-3) << name << " " << what << ": face axis " << axis << " side " << side;
+    }
+}
+
+// Cut-away: each room and the corridor is closed under its ceiling (walls,
+// floor, ceiling, doors), and its cell box, which reaches above the ceiling,
+// is closed too, its top face being exactly the portal to the sky. Photons
+// going up hit the ceiling well before the portal; camera rays from the sky
+// come in through the portal and pass the hidden ceiling.
 TEST_F(DemoBuilding, WallsCloseEachCellExceptThroughItsPortals) {
   for (const CellInfo& cell : store().cells()) {
     if (cell.id == kDemoSkyCell) continue;
     const Bounds3& box = cell.bounds;
+    const std::optional<float> ceiling = ceilingHeight(cell.id);
+    ASSERT_TRUE(ceiling.has_value()) << cell.name << " has no flat ceiling";
+    EXPECT_GE(box.hi.y - *ceiling, 0.05f) << cell.name << ": the ceiling is too close to the sky portal";
+    EXPECT_GT(*ceiling, 2.0f) << cell.name;
+
+    // The room under its ceiling.
+    Bounds3 room = box;
+    room.hi.y = *ceiling;
+    expectClosedBox(store(), geometry(cell.id), cell.name, cell.id, room, "under the ceiling");
+    // The whole cell box.
+    expectClosedBox(store(), geometry(cell.id), cell.name, cell.id, box, "cell box");
+
+    // The ceiling plane holds only downward ceiling triangles and lamps.
     const MeshView& mesh = geometry(cell.id).mesh();
-    for (int axis = 0; axis < 3; ++axis)
-      for (int side = 0; side < 2; ++side) {
-        const float plane = side ? box.hi[axis] : box.lo[axis];
-        const Vec3 inward = [&] { Vec3 n(0); n[axis] = side ? -1.0f : 1.0f; return n; }();
-        const auto onPlane = [&](const Vec3& v) { return std::abs(v[axis] - plane) <= kTolerance; };
-        double covered = 0;
-        for (uint32_t t = 0; t < mesh.triangleCount; ++t) {
-          Vec3 a, b, c;
-          mesh.triangle(t, a, b, c);
-          if (!onPlane(a) || !onPlane(b) || !onPlane(c)) continue;
-          const Vec3 normal = mesh.geometricNormal(t);
-          EXPECT_GT(dot(normal, inward), 0.0f) << cell.name << " triangle " << t << " faces out of the cell";
-          covered += 0.5 * length(normal);
-        }
-        for (const Portal& portal : store().portals()) {
-          if (portal.cellA != cell.id && portal.cellB != cell.id) continue;
-          bool all = true;
-          for (const Vec3& v : portal.polygon) all &= onPlane(v);
-          if (all) covered += polygonArea(portal.polygon);
-        }
-        const Vec3 d = box.diagonal();
-        const double faceArea = double(d[(axis + 1) % 3]) * double(d[(axis + 2) % 3]);
-        EXPECT_NEAR(covered, faceArea, 1e-3) << cell.name << " face axis " << axis << " side " << side;
-      }
+    for (uint32_t t = 0; t < mesh.triangleCount; ++t) {
+      Vec3 a, b, c;
+      mesh.triangle(t, a, b, c);
+      const bool onCeiling = std::abs(a.y - *ceiling) <= kTolerance && std::abs(b.y - *ceiling) <= kTolerance &&
+                             std::abs(c.y - *ceiling) <= kTolerance;
+      if (onCeiling) EXPECT_EQ(materialOf(cell.id, t).name, "ceiling") << cell.name << " triangle " << t;
+      // Nothing but walls reaches above the ceiling.
+      if (std::max({a.y, b.y, c.y}) > *ceiling + kTolerance)
+        EXPECT_TRUE(std::abs(a.y - b.y) > kTolerance || std::abs(a.y - c.y) > kTolerance)
+            << cell.name << " triangle " << t << " is a horizontal surface above the ceiling";
+    }
+
+    // The top face of the cell box: exactly one portal, to the sky, and no triangle.
+    const Portal* top = portalBetween(cell.id, kDemoSkyCell);
+    ASSERT_NE(top, nullptr) << cell.name;
+    for (const Vec3& v : top->polygon) EXPECT_NEAR(v.y, box.hi.y, kTolerance) << cell.name;
+    EXPECT_NEAR(polygonArea(top->polygon), (box.hi.x - box.lo.x) * (box.hi.z - box.lo.z), 1e-3) << cell.name;
+    EXPECT_NEAR(store().cells()[kDemoSkyCell].bounds.lo.y, box.hi.y, kTolerance) << cell.name;
   }
 }
 

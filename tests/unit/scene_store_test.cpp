@@ -93,7 +93,7 @@ struct TinyScene {
     if (maxChunkElements) writer.setMaxChunkElements(maxChunkElements);
     writer.setMeta("generator", "tiny-test");
     writer.addMaterial("white", Vec3(0.8f, 0.8f, 0.8f));
-    writer.addMaterial("lamp", Vec3(0), Vec3(12, 11, 9.5f));
+    writer.addMaterial("lamp", Vec3(0), Vec3(12, 11, 9.5f), /*hiddenFromCamera=*/true);
     for (size_t i = 0; i < portalCells.size(); ++i)
       writer.addPortal(portalCells[i].first, portalCells[i].second, portalPolygons[i]);
     writer.addLight(light);
@@ -153,8 +153,10 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(store.materials()[0].name, "white");
   expectSameVec3(store.materials()[0].albedo, Vec3(0.8f));
   EXPECT_FALSE(store.materials()[0].emissive());
+  EXPECT_FALSE(store.materials()[0].hiddenFromCamera);
   EXPECT_EQ(store.materials()[1].name, "lamp");
   expectSameVec3(store.materials()[1].emission, Vec3(12, 11, 9.5f));
+  EXPECT_TRUE(store.materials()[1].hiddenFromCamera);
 
   ASSERT_EQ(store.lights().size(), 1u);
   const AreaLight& light = store.lights()[0];
@@ -175,7 +177,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "1");
+  EXPECT_EQ(store.meta().at("format_version"), "2");
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -430,6 +432,29 @@ TEST(SceneStore, OpenRejectsAnUnknownSchemaVersion) {
   const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
   EXPECT_NE(error.find(temp / "store"), std::string::npos) << error;
   EXPECT_NE(error.find("schema version 99"), std::string::npos) << error;
+}
+
+// Version 1 (before materials.hidden_from_camera) is still read: nothing hidden.
+TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
+  TempDirectory temp;
+  TinyScene().write(temp / "store");
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    EXPECT_EQ(db.userVersion(), 2);
+    db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
+    db.setUserVersion(1);
+  }
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.materials().size(), 2u);
+  EXPECT_EQ(store.materials()[1].name, "lamp");
+  expectSameVec3(store.materials()[1].emission, Vec3(12, 11, 9.5f));
+  for (const Material& material : store.materials()) EXPECT_FALSE(material.hiddenFromCamera) << material.name;
+  EXPECT_EQ(store.cells().size(), 3u);
+  EXPECT_EQ(store.lights().size(), 1u);
+
+  sql::Database(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate).setUserVersion(0);
+  const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
+  EXPECT_NE(error.find("schema version 0"), std::string::npos) << error;
 }
 
 TEST(SceneStore, OpenRejectsAFileThatIsNotADatabase) {
