@@ -283,11 +283,14 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
                         net::packToString(batch));
       }
-      auto deposits = result.getDeposits();
-      if (deposits.getPhotons().size() > 0) {
+      for (auto deposits : result.getDeposits()) {
+        if (deposits.getCell() >= cellCount)
+          throw std::runtime_error(fmt::format("result for lease {} deposits photons in cell {}, which does not exist",
+                                               leaseId, deposits.getCell()));
+        if (deposits.getPhotons().size() == 0) continue;
         capnp::MallocMessageBuilder batch;
-        batch.setRoot(deposits);
-        store_.addPhotons(lease->job, lease->cell, deposits.getPhotons().size(), net::packToString(batch));
+        batch.initRoot<wire::PhotonBatch>().setPhotons(deposits.getPhotons());
+        store_.addPhotons(lease->job, deposits.getCell(), deposits.getPhotons().size(), net::packToString(batch));
       }
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;

@@ -27,17 +27,19 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"seed", spec.getSeed()},            {"accel", spec.getAccel().cStr()},
                        {"width", spec.getWidth()},          {"height", spec.getHeight()},
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
-                       {"photon_radius", spec.getPhotonRadius()}};
+                       {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()}};
   stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
                       {"deposits", get(counters, "photons.deposits")},
                       {"absorbed", get(counters, "photons.absorbed")},
                       {"escaped", get(counters, "photons.escaped")},
                       {"crossings", get(counters, "photons.crossings")},
+                      {"portal_copies", get(counters, "photons.portal_copies")},
                       {"queued", store.queuedRays(job.id, 0)}};
   const int64_t camera = get(counters, "rays.camera");
   const int64_t crossings = get(counters, "rays.crossings");
   stats["rays"] = {{"camera", camera},
                    {"shadow", get(counters, "rays.shadow")},
+                   {"gather", get(counters, "rays.gather")},
                    {"shadow_blocked", get(counters, "rays.shadow_blocked")},
                    {"shadow_reached", get(counters, "rays.shadow_reached")},
                    {"escaped", get(counters, "rays.escaped")},

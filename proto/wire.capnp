@@ -15,6 +15,7 @@ enum RayKind {
   photon @0;   # carries power; deposits at diffuse hits
   camera @1;   # carries throughput; shades at its first hit
   shadow @2;   # carries the unoccluded contribution; adds it if it reaches tMax
+  gather @3;   # final gathering: carries throughput; adds the photon-map radiance where it lands
 }
 
 # Everything needed to finish a ray, so a ray never waits on anything else.
@@ -56,6 +57,14 @@ struct PhotonBatch {
   photons @0 :List(Photon);
 }
 
+# Photons for one cell's table: those that landed in it, and copies of those
+# that landed in a neighbour within the photon radius of their shared portal
+# (so density estimates near a doorway see both sides).
+struct CellPhotons {
+  cell @0 :UInt32;
+  photons @1 :List(Photon);
+}
+
 # Work generators: compact descriptions the worker expands itself, so a job
 # of a billion photons does not start as a billion queued rays.
 struct EmitRange {
@@ -91,6 +100,7 @@ struct JobSpec {
   lightSamples @9 :UInt32;
   photonK @10 :UInt32;     # photons per density estimate
   photonRadius @11 :Float32;  # largest density-estimate radius (metres)
+  gather @12 :UInt32;      # final-gather rays per camera hit (0: estimate at the hit)
 }
 
 struct Counter {
@@ -138,7 +148,7 @@ struct Result {
   lease @0 :UInt64;
   counters @1 :List(Counter);
   crossings @2 :List(CellRays);
-  deposits @3 :PhotonBatch;
+  deposits @3 :List(CellPhotons);
   film @4 :List(PixelSum);
 }
 

@@ -18,15 +18,16 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
   p.lightSamples = spec.getLightSamples();
   p.photonK = spec.getPhotonK();
   p.photonRadius = spec.getPhotonRadius();
+  p.gather = spec.getGather();
   return p;
 }
 
-std::vector<StoredPhoton> decodeIndirectPhotons(wire::PhotonsReply::Reader reply) {
+std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect) {
   std::vector<StoredPhoton> photons;
   for (auto blob : reply.getBatches()) {
     net::PackedReader reader(blob.begin(), blob.size());
     for (auto p : reader.root<wire::PhotonBatch>().getPhotons()) {
-      if (p.getBounce() == 0) continue;   // direct light is sampled with shadow rays instead
+      if (p.getBounce() == 0 && !includeDirect) continue;
       StoredPhoton photon{{p.getPx(), p.getPy(), p.getPz()},
                           {p.getDx(), p.getDy(), p.getDz()},
                           {p.getR(), p.getG(), p.getB()},
@@ -94,21 +95,27 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
     for (size_t i = 0; i < rays.size(); ++i) toWire(rays[i], list[static_cast<unsigned>(i)]);
     ++c;
   }
-  auto deposits = result.initDeposits().initPhotons(static_cast<unsigned>(out.deposits.size()));
-  for (size_t i = 0; i < out.deposits.size(); ++i) {
-    const StoredPhoton& p = out.deposits[i];
-    auto d = deposits[static_cast<unsigned>(i)];
-    d.setPathId(p.pathId);
-    d.setBounce(p.bounce);
-    d.setPx(p.position.x);
-    d.setPy(p.position.y);
-    d.setPz(p.position.z);
-    d.setDx(p.direction.x);
-    d.setDy(p.direction.y);
-    d.setDz(p.direction.z);
-    d.setR(p.power.x);
-    d.setG(p.power.y);
-    d.setB(p.power.z);
+  auto deposits = result.initDeposits(static_cast<unsigned>(out.deposits.size()));
+  unsigned cellIndex = 0;
+  for (const auto& [cell, photons] : out.deposits) {
+    deposits[cellIndex].setCell(cell);
+    auto list = deposits[cellIndex].initPhotons(static_cast<unsigned>(photons.size()));
+    for (size_t i = 0; i < photons.size(); ++i) {
+      const StoredPhoton& p = photons[i];
+      auto d = list[static_cast<unsigned>(i)];
+      d.setPathId(p.pathId);
+      d.setBounce(p.bounce);
+      d.setPx(p.position.x);
+      d.setPy(p.position.y);
+      d.setPz(p.position.z);
+      d.setDx(p.direction.x);
+      d.setDy(p.direction.y);
+      d.setDz(p.direction.z);
+      d.setR(p.power.x);
+      d.setG(p.power.y);
+      d.setB(p.power.z);
+    }
+    ++cellIndex;
   }
   auto film = result.initFilm(static_cast<unsigned>(out.film.sums().size()));
   unsigned f = 0;
@@ -132,7 +139,8 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
     counters[static_cast<unsigned>(i)].setValue(named[i].second);
   }
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
-                assign.getLease(), cellId, assign.getBatches().size(), out.deposits.size(), out.crossings.size(),
+                assign.getLease(), cellId, assign.getBatches().size(), out.counters.photonDeposits,
+                out.crossings.size(),
                 out.film.sums().size(),
                 std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count());
   return message;

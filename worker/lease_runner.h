@@ -16,9 +16,10 @@ namespace portico {
 
 JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
 
-// Photons that arrived in a PhotonsReply, decoded; only those that bounced
-// at least once feed the indirect map used at camera hits.
-std::vector<StoredPhoton> decodeIndirectPhotons(wire::PhotonsReply::Reader reply);
+// Photons that arrived in a PhotonsReply, decoded. Final gathering uses all
+// of them; the estimate at a camera hit only those that bounced at least
+// once (direct light is sampled with shadow rays instead).
+std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect);
 
 // Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,

@@ -155,7 +155,7 @@ int WorkerSession::run() {
                 auto assign = lease->assign->envelope().getAssign();
                 auto reply = envelope.getPhotons();
                 if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) break;
-                auto photons = decodeIndirectPhotons(reply);
+                auto photons = decodePhotons(reply, assign.getSpec().getGather() > 0);
                 lease->waitingForPhotons = false;
                 lease->result = startLease(assign, std::move(photons));
                 break;

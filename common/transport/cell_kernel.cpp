@@ -16,11 +16,11 @@ Ray toRay(const RayState& state) { return {state.origin, state.direction, state.
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
-                       const PhotonMap* indirectPhotons)
+                       const PhotonMap* photons)
     : scene_(scene),
       tracer_(tracer),
       parameters_(parameters),
-      indirectPhotons_(indirectPhotons),
+      photons_(photons),
       lightSampler_(scene.lights()) {
   if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
 }
@@ -79,6 +79,7 @@ void CellKernel::trace(const RayState& ray, KernelOutputs& out) {
     case RayKind::Photon: tracePhoton(ray, out); break;
     case RayKind::Camera: traceCameraRay(ray, out); break;
     case RayKind::Shadow: traceShadowRay(ray, out); break;
+    case RayKind::Gather: traceGatherRay(ray, out); break;
   }
 }
 
@@ -112,8 +113,7 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       return;
     }
     const Vec3 point = photon.origin + photon.direction * event.t;
-    out.deposits.push_back({point, photon.direction, photon.weight, photon.pathId, photon.depth});
-    ++out.counters.photonDeposits;
+    deposit({point, photon.direction, photon.weight, photon.pathId, photon.depth}, out);
     // Russian roulette on the albedo: survivors carry power * albedo / p, so
     // the expected power is unchanged.
     const float survival = std::min(1.0f, maxComponent(material.albedo));
@@ -165,15 +165,8 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   bool front;
   const Vec3 normal = hitNormalFacing(mesh, hit.primitive, ray.direction, front);
   const Vec3 point = ray.origin + ray.direction * hit.t;
-  auto addToFilm = [&](const Vec3& radiance) {
-    if (!isFinite(radiance)) {
-      ++out.counters.nonFiniteContributions;
-      return;
-    }
-    out.film.add(ray.pixel, radiance);
-  };
   // Emitters are one-sided: only their front shows their radiance.
-  if (material.emissive() && front) addToFilm(ray.weight * material.emission);
+  if (material.emissive() && front) addToFilm(ray.pixel, ray.weight * material.emission, out);
   if (!(maxComponent(material.albedo) > 0)) return;
   const Vec3 brdf = material.albedo * (1.0f / kPi);
 
@@ -212,12 +205,81 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
     traceShadowRay(shadow, out);
   }
 
-  // Indirect light: the density of photons that arrived after at least one bounce.
-  if (indirectPhotons_ && indirectPhotons_->size() > 0) {
-    const Vec3 indirect =
-        indirectPhotons_->radiance(point, normal, material.albedo, parameters_.photonK, parameters_.photonRadius);
-    addToFilm(ray.weight * indirect);
+  if (parameters_.gather > 0) {
+    // Final gathering: cosine-distributed rays whose landing points take a
+    // photon-map estimate, in whatever cell they land. With pdf cos/pi the
+    // Lambertian weight (albedo/pi) cos / pdf is just the albedo.
+    const uint32_t count = parameters_.gather;
+    const Vec3 weight = ray.weight * material.albedo / float(count);
+    const Vec3 origin = offsetAlongNormal(point, normal);
+    for (uint32_t i = 0; i < count; ++i) {
+      RayState gather;
+      gather.kind = RayKind::Gather;
+      gather.depth = static_cast<uint16_t>(ray.depth + 1);
+      gather.pathId = ray.pathId;
+      gather.pixel = ray.pixel;
+      gather.origin = origin;
+      gather.direction = sampleCosineHemisphere(
+          normal, randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 1 + i, dim::DirectionU),
+          randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 1 + i, dim::DirectionV));
+      gather.weight = weight;
+      ++out.counters.gatherRays;
+      traceGatherRay(gather, out);
+    }
+  } else if (photons_ && photons_->size() > 0) {
+    // Indirect light: the density of photons that arrived after at least one bounce.
+    addToFilm(ray.pixel,
+              ray.weight * photons_->radiance(point, normal, material.albedo, parameters_.photonK,
+                                              parameters_.photonRadius),
+              out);
   }
+}
+
+void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
+  ++out.counters.raySegments;
+  const CellEvent event = tracer_.trace(toRay(ray));
+  switch (event.kind) {
+    case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
+    case CellEvent::Kind::Portal:
+      ++out.counters.rayCrossings;
+      cross(ray, event, out);
+      return;
+    case CellEvent::Kind::Surface: {
+      // Emission is not gathered: direct light is sampled with shadow rays.
+      const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
+      if (!photons_ || photons_->size() == 0 || !(maxComponent(material.albedo) > 0)) return;
+      bool front;
+      const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
+      const Vec3 point = ray.origin + ray.direction * event.t;
+      addToFilm(ray.pixel,
+                ray.weight * photons_->radiance(point, normal, material.albedo, parameters_.photonK,
+                                                parameters_.photonRadius),
+                out);
+      return;
+    }
+  }
+}
+
+void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {
+  ++out.counters.photonDeposits;
+  const uint32_t cell = tracer_.cell().id();
+  out.deposits[cell].push_back(photon);
+  // Copies for neighbours across a nearby portal, so their estimates near
+  // the doorway see this side too (no seam at the threshold).
+  thread_local std::vector<uint32_t> neighbors;
+  tracer_.neighborsNear(photon.position, parameters_.photonRadius, neighbors);
+  for (uint32_t neighbor : neighbors) {
+    out.deposits[neighbor].push_back(photon);
+    ++out.counters.photonCopies;
+  }
+}
+
+void CellKernel::addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& out) {
+  if (!isFinite(radiance)) {
+    ++out.counters.nonFiniteContributions;
+    return;
+  }
+  out.film.add(pixel, radiance);
 }
 
 void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {
@@ -234,10 +296,7 @@ void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {
       // segment ends inside this cell; otherwise it left the building.
       if (ray.tMax < kInfinity && tracer_.cell().bounds().contains(ray.origin + ray.direction * ray.tMax)) {
         ++out.counters.shadowReached;
-        if (isFinite(ray.weight))
-          out.film.add(ray.pixel, ray.weight);
-        else
-          ++out.counters.nonFiniteContributions;
+        addToFilm(ray.pixel, ray.weight, out);
       } else {
         ++out.counters.raysEscaped;
       }

@@ -27,10 +27,13 @@ struct JobParameters {
   uint32_t photonK = 64;          // photons per density estimate
   float photonRadius = 0.5f;      // largest search radius, metres
   uint32_t maxPhotonBounces = 64;
+  uint32_t gather = 0;            // final-gather rays per camera hit (0: estimate at the hit)
 };
 
 struct KernelOutputs {
-  std::vector<StoredPhoton> deposits;
+  // By the cell whose table receives them: the cell traced, and neighbours
+  // for photons within the photon radius of their shared portal.
+  std::map<uint32_t, std::vector<StoredPhoton>> deposits;
   std::map<uint32_t, std::vector<RayState>> crossings;   // by destination cell
   FilmAccumulator film;
   TraceCounters counters;
@@ -38,9 +41,10 @@ struct KernelOutputs {
 
 class CellKernel {
  public:
-  // indirectPhotons may be null in the photon phase.
+  // photons: the cell's photon map in the render phase (null in the photon
+  // phase): every photon when final gathering, else only those that bounced.
   CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
-             const PhotonMap* indirectPhotons);
+             const PhotonMap* photons);
 
   void emitPhotons(uint32_t light, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight, KernelOutputs& out);
   void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
@@ -51,13 +55,16 @@ class CellKernel {
   void tracePhoton(RayState photon, KernelOutputs& out);
   void traceCameraRay(const RayState& ray, KernelOutputs& out);
   void traceShadowRay(const RayState& ray, KernelOutputs& out);
+  void traceGatherRay(const RayState& ray, KernelOutputs& out);
+  void deposit(const StoredPhoton& photon, KernelOutputs& out);
+  void addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& out);
   void shade(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
   void cross(RayState ray, const CellEvent& event, KernelOutputs& out);
 
   const SceneStore& scene_;
   const CellTracer& tracer_;
   const JobParameters& parameters_;
-  const PhotonMap* indirectPhotons_;
+  const PhotonMap* photons_;
   LightSampler lightSampler_;
   std::optional<CameraModel> camera_;
 };

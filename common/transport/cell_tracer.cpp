@@ -2,6 +2,8 @@
 
 #include "common/accel/triangle_intersect.h"
 
+#include <algorithm>
+
 namespace portico {
 
 CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
@@ -24,9 +26,48 @@ CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
     // Cells are convex regions (rooms, voxels): the outside of a portal is
     // the side away from the cell's centre.
     if (dot(normal, centroid - cellCenter) < 0) normal = -normal;
+    portalPolygons_.push_back({portal.polygon, normal, portal.neighborCell});
     for (size_t i = 1; i + 1 < portal.polygon.size(); ++i)
       portalTriangles_.push_back(
           {portal.polygon[0], portal.polygon[i], portal.polygon[i + 1], normal, portal.neighborCell});
+  }
+}
+
+namespace {
+float distanceToSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const float len2 = dot(ab, ab);
+  const float s = len2 > 0 ? std::clamp(dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+  return length(p - (a + ab * s));
+}
+
+// Distance from p to a planar convex polygon with unit normal n.
+float distanceToPolygon(const Vec3& p, const std::vector<Vec3>& polygon, const Vec3& n) {
+  const float height = dot(p - polygon[0], n);
+  const Vec3 projected = p - n * height;
+  bool anyPositive = false, anyNegative = false;
+  float edgeDistance = kInfinity;
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const Vec3& a = polygon[i];
+    const Vec3& b = polygon[(i + 1) % polygon.size()];
+    // Inside when the projected point is on the same side of every edge
+    // (whichever way the polygon winds).
+    const float side = dot(cross(b - a, projected - a), n);
+    anyPositive |= side > 0;
+    anyNegative |= side < 0;
+    edgeDistance = std::min(edgeDistance, distanceToSegment(p, a, b));
+  }
+  if (!(anyPositive && anyNegative)) return std::abs(height);
+  return edgeDistance;
+}
+}  // namespace
+
+void CellTracer::neighborsNear(const Vec3& p, float radius, std::vector<uint32_t>& neighbors) const {
+  neighbors.clear();
+  for (const PortalPolygon& portal : portalPolygons_) {
+    if (distanceToPolygon(p, portal.points, portal.normal) > radius) continue;
+    if (std::find(neighbors.begin(), neighbors.end(), portal.neighborCell) == neighbors.end())
+      neighbors.push_back(portal.neighborCell);
   }
 }
 

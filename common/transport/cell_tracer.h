@@ -23,6 +23,8 @@ class CellTracer {
   // Geometry wins ties with a portal: a wall flush with a portal's edge is hit.
   CellEvent trace(const Ray& ray) const;
   const CellGeometry& cell() const { return cell_; }
+  // Neighbour cells whose shared portal lies within `radius` of p (each once).
+  void neighborsNear(const Vec3& p, float radius, std::vector<uint32_t>& neighbors) const;
 
  private:
   struct PortalTriangle {
@@ -30,9 +32,15 @@ class CellTracer {
     Vec3 outward;            // unit normal pointing out of this cell
     uint32_t neighborCell;
   };
+  struct PortalPolygon {
+    std::vector<Vec3> points;
+    Vec3 normal;
+    uint32_t neighborCell;
+  };
   const CellGeometry& cell_;
   const Accelerator& accelerator_;
   std::vector<PortalTriangle> portalTriangles_;
+  std::vector<PortalPolygon> portalPolygons_;
 };
 
 }  // namespace portico

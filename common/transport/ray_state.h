@@ -8,7 +8,7 @@
 
 namespace portico {
 
-enum class RayKind : uint8_t { Photon, Camera, Shadow };
+enum class RayKind : uint8_t { Photon, Camera, Shadow, Gather };
 
 struct RayState {
   RayKind kind = RayKind::Photon;
@@ -17,7 +17,7 @@ struct RayState {
   uint32_t pixel = 0;
   Vec3 origin, direction;   // direction is unit length
   float tMin = 0, tMax = kInfinity;
-  Vec3 weight;              // photon power, camera throughput, or shadow contribution
+  Vec3 weight;              // photon power, camera/gather throughput, or shadow contribution
 };
 
 inline void toWire(const RayState& ray, wire::Ray::Builder out) {
@@ -55,7 +55,7 @@ inline RayState fromWire(wire::Ray::Reader in) {
 // A ray from the network is traced only if it is well formed.
 inline bool isValid(const RayState& ray) {
   const float len = length(ray.direction);
-  return ray.kind <= RayKind::Shadow && isFinite(ray.origin) && isFinite(ray.weight) && std::isfinite(len) &&
+  return ray.kind <= RayKind::Gather && isFinite(ray.origin) && isFinite(ray.weight) && std::isfinite(len) &&
          std::abs(len - 1.0f) < 1e-3f && !(ray.tMin < 0) && !(ray.tMax < ray.tMin);
 }
 

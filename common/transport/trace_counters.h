@@ -15,8 +15,10 @@ struct TraceCounters {
   int64_t photonsAbsorbed = 0;    // ended by Russian roulette, an emitter or the depth cap
   int64_t photonsEscaped = 0;     // left a cell where no portal was
   int64_t photonCrossings = 0;
+  int64_t photonCopies = 0;       // deposits copied to a neighbour near a portal
   int64_t cameraRays = 0;
   int64_t shadowRays = 0;
+  int64_t gatherRays = 0;
   int64_t shadowBlocked = 0;
   int64_t shadowReached = 0;
   int64_t rayCrossings = 0;       // camera and shadow rays handed to a neighbour cell
@@ -29,7 +31,8 @@ struct TraceCounters {
   std::vector<std::pair<std::string_view, int64_t>> named() const {
     return {{"photons.emitted", photonsEmitted},   {"photons.deposits", photonDeposits},
             {"photons.absorbed", photonsAbsorbed}, {"photons.escaped", photonsEscaped},
-            {"photons.crossings", photonCrossings}, {"rays.camera", cameraRays},
+            {"photons.crossings", photonCrossings}, {"photons.portal_copies", photonCopies},
+            {"rays.camera", cameraRays},           {"rays.gather", gatherRays},
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},

@@ -5,6 +5,9 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
+
+#include "common/scene/building_importer.h"
 
 namespace portico::cli {
 
@@ -27,6 +30,8 @@ struct RenderOptions {
 void addRenderOptions(CLI::App& command, RenderOptions& options);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
+// `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
+int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store);
 int runSceneInfo(const std::string& store, bool json);
 
 struct LocalRunOptions {

@@ -31,8 +31,6 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
 }
 
 void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
-  if (o.gather != 0)
-    throw std::invalid_argument("--gather > 0 (final gathering) is not implemented yet; use --gather 0");
   auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
   spec.setStore(std::filesystem::absolute(o.store).lexically_normal().string());
   spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
@@ -46,6 +44,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setPhotonK(o.photonK);
   spec.setPhotonRadius(o.photonRadius);
   spec.setExposure(o.exposure);
+  spec.setGather(o.gather);
 }
 
 int runSubmit(const std::string& endpoint, const RenderOptions& render) {

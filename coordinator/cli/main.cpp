@@ -4,6 +4,7 @@
 
 #include <iostream>
 
+#include "common/scene/building_importer.h"
 #include "coordinator/cli/commands.h"
 
 int main(int argc, char** argv) {
@@ -21,6 +22,17 @@ int main(int argc, char** argv) {
   generate->add_option("--seed", seed, "random seed of the furnishing")->capture_default_str();
   generate->add_option("--floors", floors, "floors (presets that have several)")->capture_default_str();
   generate->add_option("STORE", store, "scene store directory to write")->required();
+  std::vector<std::string> importInputs;
+  portico::ImportOptions importOptions;
+  auto* import = scene->add_subcommand("import", "import a building.json, or mesh files, into a scene store");
+  import->add_option("--grid", importOptions.gridResolution,
+                     "cut the scene into RGxRGxRG uniform voxel cells instead of its own cells (0: off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
+  import->add_option("--camera", importOptions.camera, "the building.json's camera of this name (default: the first)");
+  import->add_option("INPUT", importInputs, "building.json, or mesh files (OBJ, PLY, glTF/GLB, ...)")
+      ->required();
+  import->add_option("STORE", store, "scene store directory to write")->required();
   bool json = false;
   auto* info = scene->add_subcommand("info", "describe a scene store");
   info->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
@@ -56,6 +68,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
+    if (*import) return runSceneImport(importInputs, importOptions, store);
     if (*info) return runSceneInfo(store, json);
     if (*renderCommand) return runRender(render, local);
     if (*submit) return runSubmit(endpoint, render);

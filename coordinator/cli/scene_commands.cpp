@@ -3,6 +3,7 @@
 
 #include <iostream>
 
+#include "common/scene/building_importer.h"
 #include "common/scene/demo_generator.h"
 #include "common/scene/scene_store.h"
 #include "coordinator/cli/commands.h"
@@ -17,6 +18,11 @@ int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, 
     std::cerr << fmt::format("portico: unknown preset '{}' (known: demo)\n", preset);
     return 2;
   }
+  return runSceneInfo(store, false);
+}
+
+int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store) {
+  importBuilding(inputs, store, options);
   return runSceneInfo(store, false);
 }
 
