@@ -251,9 +251,10 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
       bool front;
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
-      addToFilm(ray.pixel,
-                ray.weight * photons_->radiance(point, normal, material.albedo, parameters_.photonK,
-                                                parameters_.photonRadius),
+      // Each gather lookup is one of many averaged per pixel, so it can use
+      // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
+      const uint32_t k = std::max(8u, parameters_.photonK / 4);
+      addToFilm(ray.pixel, ray.weight * photons_->radiance(point, normal, material.albedo, k, parameters_.photonRadius),
                 out);
       return;
     }
