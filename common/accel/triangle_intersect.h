@@ -13,9 +13,9 @@
 // triangles sharing an edge see it with exactly opposite signs.
 //
 // Floating-point contraction (fused multiply-add) would break that
-// antisymmetry; portico builds without -ffast-math and, on x86-64, without
-// FMA code generation. Targets with FMA in their base ISA (aarch64) must
-// compile with -ffp-contract=off.
+// antisymmetry, and could make two call sites of this function round
+// differently: portico compiles with -ffp-contract=off and without
+// -ffast-math (top-level CMakeLists.txt).
 #pragma once
 
 #include <cmath>

@@ -228,8 +228,12 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   for (uint32_t primitive = 0; primitive < triangleCount; ++primitive)
     forEachVoxelOf(primitive, [&](uint32_t voxel) { ++voxelStart_[voxel]; });
   uint64_t total = 0;
+  occupied_.assign((voxelCount + 63) / 64, 0);
   for (uint64_t voxel = 0; voxel < voxelCount; ++voxel) {
-    if (voxelStart_[voxel] > 0) ++stats_.leaves;
+    if (voxelStart_[voxel] > 0) {
+      ++stats_.leaves;
+      occupied_[voxel / 64] |= uint64_t(1) << (voxel % 64);
+    }
     total += voxelStart_[voxel];
     if (total > std::numeric_limits<uint32_t>::max())
       throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
@@ -250,7 +254,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   stats_.averageDepth = 1;
   stats_.maxDepth = 1;
   stats_.bytes = sizeof(*this) + voxelStart_.capacity() * sizeof(uint32_t) +
-                 references_.capacity() * sizeof(uint32_t);
+                 references_.capacity() * sizeof(uint32_t) + occupied_.capacity() * sizeof(uint64_t);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -318,7 +322,9 @@ bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
   for (;;) {
     const uint32_t index = uint32_t(voxel[0]) + strideY * uint32_t(voxel[1]) + strideZ * uint32_t(voxel[2]);
     const double tVoxelExit = std::min({tNext[0], tNext[1], tNext[2]});
-    for (uint32_t r = voxelStart_[index], end = voxelStart_[index + 1]; r < end; ++r) {
+    const bool occupied = (occupied_[index / 64] >> (index % 64)) & 1;
+    for (uint32_t r = occupied ? voxelStart_[index] : 0, end = occupied ? voxelStart_[index + 1] : 0;
+         r < end; ++r) {
       const uint32_t primitive = references[r];
       // A triangle spanning several voxels is tested once: its result does
       // not depend on the voxel, and was already folded into best.

@@ -70,6 +70,9 @@ class UniformGrid final : public Accelerator {
   // references_[voxelStart_[i] .. voxelStart_[i + 1]), in increasing order.
   std::vector<uint32_t> voxelStart_;
   std::vector<uint32_t> references_;
+  // One bit per voxel, set when it holds references: small enough to stay in
+  // cache, so traversal crosses empty voxels without touching voxelStart_.
+  std::vector<uint64_t> occupied_;
   AcceleratorStats stats_;
 };
 

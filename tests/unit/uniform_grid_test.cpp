@@ -452,8 +452,10 @@ TEST(AcceleratorSpec, BuildRejectsUnknownKindsParametersAndBadValues) {
   const auto buildError = [&](const char* text) {
     return errorOf([&] { buildAccelerator(parseAcceleratorSpec(text), mesh.view()); });
   };
-  EXPECT_EQ(buildError("octree"),
-            "accelerator spec 'octree': unknown accelerator kind 'octree' (known kinds: brute, grid)");
+  // Other kinds join the list as they are written: check only the start and ours.
+  const std::string unknownKind = buildError("octree");
+  EXPECT_EQ(unknownKind.rfind("accelerator spec 'octree': unknown accelerator kind 'octree' (known kinds: brute, grid", 0), 0u)
+      << unknownKind;
   EXPECT_EQ(buildError("grid:res=abc"),
             "accelerator spec 'grid:res=abc': parameter res must be a positive integer (got 'abc')");
   EXPECT_NE(buildError("grid:res=0").find("must be a positive integer"), std::string::npos);
@@ -473,13 +475,17 @@ TEST(AcceleratorSpec, BuildRejectsUnknownKindsParametersAndBadValues) {
 
   // validateAcceleratorSpec finds the same problems without building.
   EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("grid:res=abc")), std::invalid_argument);
-  EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah")), std::invalid_argument);
+  EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("octree:sah")), std::invalid_argument);
+  EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("grid:sah")), std::invalid_argument);
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("grid:res=64,density=2")));
 }
 
 TEST(AcceleratorSpec, BuildsEachKnownKind) {
   const TestMesh mesh = mixedScene(10);
-  EXPECT_EQ(acceleratorKinds(), (std::vector<std::string_view>{"brute", "grid"}));
+  const std::vector<std::string_view> kinds = acceleratorKinds();
+  ASSERT_GE(kinds.size(), 2u);
+  EXPECT_EQ(kinds[0], "brute");
+  EXPECT_EQ(kinds[1], "grid");
   const auto brute = buildAccelerator(parseAcceleratorSpec("brute"), mesh.view());
   const auto automatic = buildAccelerator(parseAcceleratorSpec("grid"), mesh.view());
   const auto explicitRes = buildAccelerator(parseAcceleratorSpec("grid:res=24"), mesh.view());

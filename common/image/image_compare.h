@@ -1,0 +1,37 @@
+// Compares a rendered image with a reference the way the reference scenes
+// ask (shared/reference/README.md): the image mean, and the means of square
+// blocks, where dim blocks are judged against the image mean.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "common/image/image_writer.h"
+
+namespace portico {
+
+struct BlockComparison {
+  int x = 0, y = 0, size = 0;
+  double reference = 0, image = 0;   // block means (average of R, G, B)
+  double relativeError = 0;
+  bool checked = false;              // reference mean above the threshold
+};
+
+struct ImageComparison {
+  double referenceMean = 0, imageMean = 0;   // average of R, G, B over the image
+  double meanRelativeError = 0;              // |image - reference| / reference of the means
+  std::vector<BlockComparison> blocks;
+  int blocksChecked = 0;
+  int blocksOverLimit = 0;
+  double worstBlockError = 0;
+};
+
+// Blocks of blockSize x blockSize pixels; a block is checked when its
+// reference mean exceeds `threshold` times the reference image mean, and is
+// over the limit when its relative error exceeds blockLimit.
+ImageComparison compareImages(const LinearImage& image, const LinearImage& reference, int blockSize = 16,
+                              double threshold = 0.05, double blockLimit = 0.10);
+
+std::string describe(const ImageComparison& comparison);
+
+}  // namespace portico
