@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   import->add_option("INPUT", importInputs, "building.json, or mesh files (OBJ, PLY, glTF/GLB, ...)")
       ->required();
   import->add_option("STORE", store, "scene store directory to write")->required();
+  import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
   bool json = false;
   auto* info = scene->add_subcommand("info", "describe a scene store");
   info->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);

@@ -1,0 +1,38 @@
+// Imports a building into a scene store: `portico scene import`.
+//
+// Inputs are either one building.json (docs/building-json.md: objects with a
+// mesh file, cell, albedo and emission; cells; portals; camera) or one or
+// more mesh files (OBJ, PLY, glTF/GLB, anything Assimp reads), which become
+// one cell around everything, materials from the files' colours and a
+// default camera. Emissive objects must be parallelograms of two triangles;
+// they become AreaLights (and stay geometry, so rays can hit them).
+//
+// With ImportOptions::gridResolution = RG > 0 the scene is cut into RG^3
+// voxel cells instead of its own cells (voxel_cells.h): the same building can
+// be rendered with topological or uniform cells.
+//
+// Everything is read and checked before the store is created, so a failed
+// import leaves no directory behind: every error is a std::runtime_error of
+// one line naming the file and the object at fault.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace portico {
+
+struct ImportOptions {
+  // 0: the building.json's cells (or one cell). RG in [1, 256]: RG^3 voxels.
+  uint32_t gridResolution = 0;
+  // The entry of the building.json's "cameras" to use, by "name"; empty: the first.
+  std::string camera;
+};
+
+// The largest gridResolution accepted (16.7 million cells).
+constexpr uint32_t kMaxImportGridResolution = 256;
+
+void importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
+                    const ImportOptions& options = {});
+
+}  // namespace portico
