@@ -359,6 +359,8 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     }
     JobContext context{std::move(spec), std::move(scene)};
     jobs_.emplace(job, std::move(context));
+    // A job with nothing to emit (a cell or portal picture) goes straight to rendering.
+    advanceIfPhaseDone(job);
     answer.setJob(job);
     spdlog::info("job {} submitted: {} photons, {} spp, {}x{}, scene {}", job, builder.getPhotons(), builder.getSpp(),
                  builder.getWidth(), builder.getHeight(), builder.getStore().cStr());

@@ -23,7 +23,8 @@ void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
     throw std::invalid_argument(fmt::format("image {}x{} is too large", spec.getWidth(), spec.getHeight()));
   if (spec.getSpp() == 0 || spec.getSpp() > 1u << 16)
     throw std::invalid_argument(fmt::format("spp {} must be between 1 and 65536", spec.getSpp()));
-  if (spec.getPhotons() == 0) throw std::invalid_argument("photons must be at least 1");
+  if (spec.getPhotons() == 0 && spec.getAov() == wire::Aov::RADIANCE)
+    throw std::invalid_argument("photons must be at least 1");
   if (spec.getPhotonK() == 0) spec.setPhotonK(64);
   if (!(spec.getPhotonRadius() > 0) || !std::isfinite(spec.getPhotonRadius()))
     throw std::invalid_argument(fmt::format("photon radius {} must be a positive number", spec.getPhotonRadius()));
@@ -33,6 +34,8 @@ void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
 }
 
 void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, const SceneStore& scene) {
+  // The cell and portal pictures need no light: the photon phase is empty.
+  if (spec.getAov() != wire::Aov::RADIANCE) return;
   const auto& lights = scene.lights();
   const uint64_t total = spec.getPhotons();
   std::vector<double> power(lights.size());

@@ -27,7 +27,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"seed", spec.getSeed()},            {"accel", spec.getAccel().cStr()},
                        {"width", spec.getWidth()},          {"height", spec.getHeight()},
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
-                       {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()}};
+                       {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
+                       {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
   stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
                       {"deposits", get(counters, "photons.deposits")},
                       {"absorbed", get(counters, "photons.absorbed")},

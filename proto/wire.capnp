@@ -101,6 +101,13 @@ struct JobSpec {
   photonK @10 :UInt32;     # photons per density estimate
   photonRadius @11 :Float32;  # largest density-estimate radius (metres)
   gather @12 :UInt32;      # final-gather rays per camera hit (0: estimate at the hit)
+  aov @13 :Aov;            # what the image shows
+}
+
+enum Aov {
+  radiance @0;             # the rendered image
+  cells @1;                # false colour: the cell of each camera ray's first visible hit
+  portals @2;              # how many portals each camera ray crossed before its first visible hit
 }
 
 struct Counter {

@@ -19,6 +19,7 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
   p.photonK = spec.getPhotonK();
   p.photonRadius = spec.getPhotonRadius();
   p.gather = spec.getGather();
+  p.aov = static_cast<JobParameters::Aov>(spec.getAov());
   return p;
 }
 

@@ -83,6 +83,34 @@ void CellKernel::trace(const RayState& ray, KernelOutputs& out) {
   }
 }
 
+Vec3 cellColour(uint32_t cell) {
+  // Golden-ratio hue steps keep neighbouring ids apart; value and saturation
+  // vary a little too, so that hundreds of cells stay distinguishable.
+  const float hue = std::fmod(0.13f + cell * 0.61803398875f, 1.0f);
+  const float saturation = 0.55f + 0.35f * ((cell * 7) % 3) / 2.0f;
+  const float value = 0.65f + 0.35f * ((cell * 5) % 4) / 3.0f;
+  const float h = hue * 6.0f;
+  const int sector = static_cast<int>(h) % 6;
+  const float f = h - std::floor(h);
+  const float p = value * (1 - saturation), q = value * (1 - saturation * f), t = value * (1 - saturation * (1 - f));
+  switch (sector) {
+    case 0: return {value, t, p};
+    case 1: return {q, value, p};
+    case 2: return {p, value, t};
+    case 3: return {p, q, value};
+    case 4: return {t, p, value};
+    default: return {value, p, q};
+  }
+}
+
+Vec3 portalCountColour(uint32_t crossings) {
+  // 0 dark blue, then through cyan, green, yellow to red at 8 and more.
+  static const Vec3 ramp[] = {{0.05f, 0.05f, 0.35f}, {0.0f, 0.35f, 0.9f}, {0.0f, 0.75f, 0.75f},
+                              {0.1f, 0.8f, 0.2f},    {0.7f, 0.85f, 0.1f}, {0.95f, 0.65f, 0.05f},
+                              {0.95f, 0.35f, 0.05f}, {0.85f, 0.1f, 0.1f}, {1.0f, 1.0f, 1.0f}};
+  return ramp[std::min<uint32_t>(crossings, 8)];
+}
+
 void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out) {
   // Restart exactly on the portal; the neighbour ignores the portal it came
   // through because rays only leave a cell through outward-facing portals.
@@ -145,6 +173,8 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
       case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
+        // A camera ray never bounces: its depth counts the portals it crossed.
+        ++current.depth;
         cross(current, event, out);
         return;
       case CellEvent::Kind::Surface:
@@ -153,7 +183,12 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           current.tMin = event.t;
           continue;
         }
-        shade(current, event, out);
+        if (parameters_.aov == JobParameters::Aov::Cells)
+          addToFilm(current.pixel, current.weight * cellColour(tracer_.cell().id()), out);
+        else if (parameters_.aov == JobParameters::Aov::Portals)
+          addToFilm(current.pixel, current.weight * portalCountColour(current.depth), out);
+        else
+          shade(current, event, out);
         return;
     }
   }

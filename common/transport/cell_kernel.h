@@ -28,7 +28,12 @@ struct JobParameters {
   float photonRadius = 0.5f;      // largest search radius, metres
   uint32_t maxPhotonBounces = 64;
   uint32_t gather = 0;            // final-gather rays per camera hit (0: estimate at the hit)
+  enum class Aov { Radiance, Cells, Portals } aov = Aov::Radiance;
 };
+
+// False colours for the cell and portal pictures: distinct, stable hues.
+Vec3 cellColour(uint32_t cell);
+Vec3 portalCountColour(uint32_t crossings);
 
 struct KernelOutputs {
   // By the cell whose table receives them: the cell traced, and neighbours

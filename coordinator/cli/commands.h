@@ -25,6 +25,7 @@ struct RenderOptions {
   uint32_t photonK = 64;
   float photonRadius = 0.5f;
   float exposure = 1.0f;
+  std::string aov = "radiance";
 };
 
 void addRenderOptions(CLI::App& command, RenderOptions& options);

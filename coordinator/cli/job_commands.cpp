@@ -28,6 +28,11 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
+  command.add_option("--aov", o.aov,
+                     "what the image shows: radiance; cells (false colour of each pixel's cell); "
+                     "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
+      ->check(CLI::IsMember({"radiance", "cells", "portals"}))
+      ->capture_default_str();
 }
 
 void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
@@ -45,6 +50,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setPhotonRadius(o.photonRadius);
   spec.setExposure(o.exposure);
   spec.setGather(o.gather);
+  spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
 }
 
 int runSubmit(const std::string& endpoint, const RenderOptions& render) {
