@@ -11,6 +11,9 @@
 #include <string>
 
 #include "common/accel/brute_force.h"
+#include "common/accel/embree_accelerator.h"
+#include "common/accel/hierarchical_grid.h"
+#include "common/accel/kd_tree.h"
 #include "common/accel/uniform_grid.h"
 
 namespace portico {
@@ -53,6 +56,29 @@ constexpr AcceleratorKind kKinds[] = {
        parameters.reportUnused();
        if (!mesh) return nullptr;
        return std::make_unique<UniformGrid>(*mesh, options, text);
+     }},
+    {"hgrid",
+     [](AcceleratorParameters& parameters, const MeshView* mesh,
+        std::string_view text) -> std::unique_ptr<Accelerator> {
+       const HierarchicalGridOptions options = readHierarchicalGridOptions(parameters);
+       parameters.reportUnused();
+       if (!mesh) return nullptr;
+       return std::make_unique<HierarchicalGrid>(*mesh, options, text);
+     }},
+    {"kd",
+     [](AcceleratorParameters& parameters, const MeshView* mesh,
+        std::string_view text) -> std::unique_ptr<Accelerator> {
+       const KdTreeOptions options = readKdTreeOptions(parameters);
+       parameters.reportUnused();
+       if (!mesh) return nullptr;
+       return std::make_unique<KdTree>(*mesh, options, text);
+     }},
+    {"embree",
+     [](AcceleratorParameters& parameters, const MeshView* mesh,
+        std::string_view text) -> std::unique_ptr<Accelerator> {
+       parameters.reportUnused();
+       if (!mesh) return nullptr;
+       return std::make_unique<EmbreeAccelerator>(*mesh, text);
      }},
 };
 
