@@ -21,6 +21,7 @@ constexpr uint32_t DirectionV = 4;
 constexpr uint32_t Roulette = 5;
 constexpr uint32_t PixelX = 6;
 constexpr uint32_t PixelY = 7;
+constexpr uint32_t PixelShuffle = 8;   // keyed by pixel (not path) and step
 // Light samples of a shading point use LightSampleBase + 3 * i + {0,1,2}.
 constexpr uint32_t LightSampleBase = 16;
 }  // namespace dim

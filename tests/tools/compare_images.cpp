@@ -21,6 +21,10 @@ int main(int argc, char** argv) {
                        {"blocks_checked", comparison.blocksChecked},
                        {"blocks_over_limit", comparison.blocksOverLimit},
                        {"worst_block_error", comparison.worstBlockError}};
+      for (const auto& b : comparison.blocks)
+        if (b.checked && b.relativeError > 0.05)
+          j["blocks_over_5_percent"].push_back({{"x", b.x}, {"y", b.y}, {"image", b.image},
+                                                {"reference", b.reference}, {"error", b.relativeError}});
       std::cout << j.dump() << "\n";
     } else {
       std::cout << portico::describe(comparison) << "\n";
