@@ -16,9 +16,11 @@ struct RenderOptions {
   std::string store;
   std::string output;
   std::string accel = "grid";
-  uint64_t photons = 500000;
+  // Defaults checked against the reference scenes (docs/validation.md):
+  // final gathering at every camera hit, N-rooks pixel samples.
+  uint64_t photons = 200000;
   uint32_t spp = 16;
-  uint32_t gather = 0;
+  uint32_t gather = 8;
   uint64_t seed = 1;
   uint32_t width = 0, height = 0;
   uint32_t lightSamples = 2;
@@ -42,6 +44,19 @@ struct LocalRunOptions {
   std::string logLevel = "info";
 };
 int runRender(const RenderOptions& render, const LocalRunOptions& local);
+
+// `bench accel`: accelerators on furnished cells of chosen sizes (bench_command.cpp).
+struct BenchAccelOptions {
+  std::string sizes = "1000,10000,100000,1000000";
+  uint64_t rays = 100000;
+  std::string specs = "grid,hgrid,kd:median,kd:sah,kd:bbox,embree";
+  std::string csv;
+  std::string plot;
+  uint64_t seed = 1;
+  uint32_t runs = 3;
+  uint32_t embreeThreads = 1;  // 0: Embree's default (every core)
+};
+int runBenchAccel(const BenchAccelOptions& options);
 
 int runSubmit(const std::string& endpoint, const RenderOptions& render);
 int runStatus(const std::string& endpoint, uint64_t job, bool json);
