@@ -1,0 +1,56 @@
+// portico's images against an independent renderer: each reference scene is
+// imported as it is, rendered with the DEFAULT settings of `portico render`
+// and compared with Mitsuba 3's path-traced image: the image mean within
+// 3 %, every 16x16 block brighter than 5 % of the image mean within 10 %.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include "common/image/image_compare.h"
+#include "common/util/child_process.h"
+
+namespace portico {
+namespace {
+
+namespace fs = std::filesystem;
+const std::string kBin = std::string(PORTICO_BINARY_DIR) + "/bin/";
+const fs::path kScenes = fs::path(PORTICO_SOURCE_DIR) / "tests" / "scenes";
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+class ReferenceScene : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
+  const std::string name = GetParam();
+  const fs::path dir = fs::temp_directory_path() / ("portico-reference-" + name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  ChildProcess importer({kBin + "portico", "scene", "import", (kScenes / name / "scene.json").string(),
+                         (dir / "store").string()},
+                        (dir / "import.log").string());
+  ASSERT_EQ(importer.wait(), 0) << readFile(dir / "import.log");
+  const auto started = std::chrono::steady_clock::now();
+  ChildProcess render({kBin + "portico", "render", (dir / "store").string(), "-o", (dir / "image.exr").string()},
+                      (dir / "render.log").string());
+  ASSERT_EQ(render.wait(), 0) << readFile(dir / "render.log");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  const ImageComparison comparison =
+      compareImages(readImage((dir / "image.exr").string()), readImage((kScenes / name / "reference.exr").string()));
+  std::cout << name << ": " << describe(comparison) << " (render " << seconds << " s)\n";
+  EXPECT_LE(comparison.meanRelativeError, 0.03);
+  EXPECT_GT(comparison.blocksChecked, 100);
+  EXPECT_EQ(comparison.blocksOverLimit, 0) << describe(comparison);
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Mitsuba, ReferenceScene, ::testing::Values("cornell_closed", "two_rooms"));
+
+}  // namespace
+}  // namespace portico
