@@ -7,6 +7,7 @@
 #include <chrono>
 #include <fstream>
 
+#include "common/transport/photon_record.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
 
@@ -287,10 +288,13 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         if (deposits.getCell() >= cellCount)
           throw std::runtime_error(fmt::format("result for lease {} deposits photons in cell {}, which does not exist",
                                                leaseId, deposits.getCell()));
-        if (deposits.getPhotons().size() == 0) continue;
-        capnp::MallocMessageBuilder batch;
-        batch.initRoot<wire::PhotonBatch>().setPhotons(deposits.getPhotons());
-        store_.addPhotons(lease->job, deposits.getCell(), deposits.getPhotons().size(), net::packToString(batch));
+        auto records = deposits.getRecords();
+        if (records.size() == 0) continue;
+        if (records.size() % sizeof(PhotonRecord) != 0)
+          throw std::runtime_error(fmt::format("result for lease {} holds a photon table of {} bytes, not whole records",
+                                               leaseId, records.size()));
+        store_.addPhotons(lease->job, deposits.getCell(), records.size() / sizeof(PhotonRecord),
+                          std::string(reinterpret_cast<const char*>(records.begin()), records.size()));
       }
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;

@@ -38,31 +38,12 @@ struct Ray {
   b @14 :Float32;
 }
 
-# A stored photon: where it landed, where it came from, what it carries.
-struct Photon {
-  pathId @0 :UInt64;
-  bounce @1 :UInt16;       # 0: first hit after leaving the light (direct)
-  px @2 :Float32;
-  py @3 :Float32;
-  pz @4 :Float32;
-  dx @5 :Float32;          # direction of travel when it arrived
-  dy @6 :Float32;
-  dz @7 :Float32;
-  r @8 :Float32;
-  g @9 :Float32;
-  b @10 :Float32;
-}
-
-struct PhotonBatch {
-  photons @0 :List(Photon);
-}
-
 # Photons for one cell's table: those that landed in it, and copies of those
 # that landed in a neighbour within the photon radius of their shared portal
 # (so density estimates near a doorway see both sides).
 struct CellPhotons {
   cell @0 :UInt32;
-  photons @1 :List(Photon);
+  records @1 :Data;        # 24-byte photon records (common/transport/photon_record.h)
 }
 
 # Work generators: compact descriptions the worker expands itself, so a job
@@ -172,7 +153,7 @@ struct FetchPhotons {
 struct PhotonsReply {
   job @0 :UInt64;
   cell @1 :UInt32;
-  batches @2 :List(Data);   # each a packed PhotonBatch message
+  batches @2 :List(Data);   # the cell's photon table: 24-byte records, batch by batch
 }
 
 struct Submit {

@@ -6,6 +6,7 @@
 #include <chrono>
 
 #include "common/net/message.h"
+#include "common/transport/photon_record.h"
 
 namespace portico {
 
@@ -25,19 +26,7 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
 
 std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect) {
   std::vector<StoredPhoton> photons;
-  for (auto blob : reply.getBatches()) {
-    net::PackedReader reader(blob.begin(), blob.size());
-    for (auto p : reader.root<wire::PhotonBatch>().getPhotons()) {
-      if (p.getBounce() == 0 && !includeDirect) continue;
-      StoredPhoton photon{{p.getPx(), p.getPy(), p.getPz()},
-                          {p.getDx(), p.getDy(), p.getDz()},
-                          {p.getR(), p.getG(), p.getB()},
-                          p.getPathId(),
-                          p.getBounce()};
-      if (isFinite(photon.position) && isFinite(photon.direction) && isFinite(photon.power))
-        photons.push_back(photon);
-    }
-  }
+  for (auto blob : reply.getBatches()) unpackRecords(blob.begin(), blob.size(), includeDirect, photons);
   return photons;
 }
 
@@ -100,22 +89,9 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
   unsigned cellIndex = 0;
   for (const auto& [cell, photons] : out.deposits) {
     deposits[cellIndex].setCell(cell);
-    auto list = deposits[cellIndex].initPhotons(static_cast<unsigned>(photons.size()));
-    for (size_t i = 0; i < photons.size(); ++i) {
-      const StoredPhoton& p = photons[i];
-      auto d = list[static_cast<unsigned>(i)];
-      d.setPathId(p.pathId);
-      d.setBounce(p.bounce);
-      d.setPx(p.position.x);
-      d.setPy(p.position.y);
-      d.setPz(p.position.z);
-      d.setDx(p.direction.x);
-      d.setDy(p.direction.y);
-      d.setDz(p.direction.z);
-      d.setR(p.power.x);
-      d.setG(p.power.y);
-      d.setB(p.power.z);
-    }
+    const std::string records = packRecords(photons);
+    deposits[cellIndex].setRecords(
+        capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()), records.size()));
     ++cellIndex;
   }
   auto film = result.initFilm(static_cast<unsigned>(out.film.sums().size()));
