@@ -28,6 +28,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"width", spec.getWidth()},          {"height", spec.getHeight()},
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
+                       {"light_hops", spec.getLightHops()},
                        {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
   stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
                       {"deposits", get(counters, "photons.deposits")},

@@ -83,6 +83,7 @@ struct JobSpec {
   photonRadius @11 :Float32;  # largest density-estimate radius (metres)
   gather @12 :UInt32;      # final-gather rays per camera hit (0: estimate at the hit)
   aov @13 :Aov;            # what the image shows
+  lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light)
 }
 
 enum Aov {

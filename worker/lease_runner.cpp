@@ -20,6 +20,7 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
   p.photonK = spec.getPhotonK();
   p.photonRadius = spec.getPhotonRadius();
   p.gather = spec.getGather();
+  p.lightHops = spec.getLightHops();
   p.aov = static_cast<JobParameters::Aov>(spec.getAov());
   return p;
 }

@@ -21,7 +21,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       tracer_(tracer),
       parameters_(parameters),
       photons_(photons),
-      lightSampler_(scene.lights()) {
+      lightSampler_(scene.lights(), LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops)) {
   if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
 }
 

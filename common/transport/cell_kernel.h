@@ -24,6 +24,7 @@ struct JobParameters {
   uint32_t spp = 4;
   uint32_t width = 0, height = 0;
   uint32_t lightSamples = 2;      // shadow rays per camera hit
+  int lightHops = 2;              // sample lights of cells within this many portals (-1: all)
   uint32_t photonK = 64;          // photons per density estimate
   float photonRadius = 0.5f;      // largest search radius, metres
   uint32_t maxPhotonBounces = 64;

@@ -4,12 +4,46 @@
 
 namespace portico {
 
+std::vector<uint32_t> LightSampler::allLights(const std::vector<AreaLight>& lights) {
+  std::vector<uint32_t> ids(lights.size());
+  for (size_t i = 0; i < lights.size(); ++i) ids[i] = static_cast<uint32_t>(i);
+  return ids;
+}
+
+std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t cell, int hops) {
+  if (hops < 0) return allLights(scene.lights());
+  const size_t cellCount = scene.cells().size();
+  std::vector<std::vector<uint32_t>> neighbours(cellCount);
+  for (const Portal& portal : scene.portals()) {
+    if (portal.cellA >= cellCount || portal.cellB >= cellCount) continue;
+    neighbours[portal.cellA].push_back(portal.cellB);
+    neighbours[portal.cellB].push_back(portal.cellA);
+  }
+  std::vector<int> distance(cellCount, -1);
+  std::vector<uint32_t> frontier{cell};
+  if (cell < cellCount) distance[cell] = 0;
+  for (int step = 0; step < hops; ++step) {
+    std::vector<uint32_t> next;
+    for (uint32_t c : frontier)
+      for (uint32_t n : neighbours[c])
+        if (distance[n] < 0) {
+          distance[n] = step + 1;
+          next.push_back(n);
+        }
+    frontier.swap(next);
+  }
+  std::vector<uint32_t> ids;
+  for (const AreaLight& light : scene.lights())
+    if (light.cell < cellCount && distance[light.cell] >= 0) ids.push_back(light.id);
+  return ids;
+}
+
 LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u) const {
   thread_local std::vector<double> cumulative;
-  cumulative.assign(lights_.size(), 0.0);
+  cumulative.assign(candidates_.size(), 0.0);
   double total = 0;
-  for (size_t i = 0; i < lights_.size(); ++i) {
-    const AreaLight& light = lights_[i];
+  for (size_t i = 0; i < candidates_.size(); ++i) {
+    const AreaLight& light = lights_[candidates_[i]];
     const Vec3 toPoint = point - light.center();
     // A point behind the light's plane sees only its dark back.
     const bool lightFacesPoint = dot(light.normal(), toPoint) > 0;
@@ -29,10 +63,10 @@ LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u)
   if (!(total > 0)) return {};
   const double target = u * total;
   size_t chosen = 0;
-  while (chosen + 1 < lights_.size() && cumulative[chosen] <= target) ++chosen;
+  while (chosen + 1 < candidates_.size() && cumulative[chosen] <= target) ++chosen;
   // The first entry whose running total exceeds target has nonzero weight.
   const double previous = chosen ? cumulative[chosen - 1] : 0.0;
-  return {static_cast<uint32_t>(chosen), static_cast<float>((cumulative[chosen] - previous) / total)};
+  return {candidates_[chosen], static_cast<float>((cumulative[chosen] - previous) / total)};
 }
 
 }  // namespace portico

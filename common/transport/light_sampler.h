@@ -1,12 +1,15 @@
-// Chooses which area light a shading point samples. Weights follow each
+// Chooses which area light a shading point samples, among the lights of its
+// cell and of cells a few portals away (a building has thousands of lights;
+// walls hide nearly all of them from any point). Weights follow each
 // light's power over its squared distance (zero for lights facing away), so
-// near, bright, visible-side lights get most samples; every light that can
-// contribute keeps a nonzero probability, so the estimate stays unbiased.
+// near, bright, visible-side lights get most samples; every candidate light
+// that can contribute keeps a nonzero probability.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
+#include "common/scene/scene_store.h"
 #include "common/scene/scene_types.h"
 
 namespace portico {
@@ -18,12 +21,20 @@ struct LightChoice {
 
 class LightSampler {
  public:
-  explicit LightSampler(const std::vector<AreaLight>& lights) : lights_(lights) {}
+  // Samples among `candidates` (light ids).
+  LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates)
+      : lights_(lights), candidates_(std::move(candidates)) {}
+  static std::vector<uint32_t> allLights(const std::vector<AreaLight>& lights);
+  // The lights of cells within `hops` portals of `cell` (breadth first over
+  // the portal graph); hops < 0: every light.
+  static std::vector<uint32_t> lightsNear(const SceneStore& scene, uint32_t cell, int hops);
+  size_t candidateCount() const { return candidates_.size(); }
   // u in [0,1). Uses a thread-local scratch array; safe from several threads.
   LightChoice choose(const Vec3& point, const Vec3& normal, float u) const;
 
  private:
   const std::vector<AreaLight>& lights_;
+  std::vector<uint32_t> candidates_;
 };
 
 }  // namespace portico

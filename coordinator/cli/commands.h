@@ -24,6 +24,7 @@ struct RenderOptions {
   uint64_t seed = 1;
   uint32_t width = 0, height = 0;
   uint32_t lightSamples = 2;
+  int lightHops = 2;
   uint32_t photonK = 64;
   float photonRadius = 0.5f;
   float exposure = 1.0f;

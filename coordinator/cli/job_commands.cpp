@@ -25,6 +25,9 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--width", o.width, "image width (default: the camera's)");
   command.add_option("--height", o.height, "image height (default: the camera's)");
   command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")->capture_default_str();
+  command.add_option("--light-hops", o.lightHops,
+                     "sample the lights of cells within this many portals of a shading point (-1: every light)")
+      ->capture_default_str();
   command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
@@ -50,6 +53,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setPhotonRadius(o.photonRadius);
   spec.setExposure(o.exposure);
   spec.setGather(o.gather);
+  spec.setLightHops(o.lightHops);
   spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
 }
 

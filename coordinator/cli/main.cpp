@@ -66,6 +66,32 @@ int main(int argc, char** argv) {
   cancel->add_option("--coordinator", endpoint, "coordinator endpoint")->required();
   cancel->add_option("JOB", job, "job id")->required();
 
+  BenchAccelOptions benchAccel;
+  auto* bench = app.add_subcommand("bench", "measure portico's parts");
+  bench->require_subcommand(1);
+  auto* benchAccelCommand =
+      bench->add_subcommand("accel", "build time and tracing speed of the accelerators on furnished cells");
+  benchAccelCommand->add_option("--sizes", benchAccel.sizes, "triangle counts of the cells (e.g. 1000,10k,1M)")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--rays", benchAccel.rays, "rays per kind (photon, camera) and size")
+      ->capture_default_str();
+  benchAccelCommand
+      ->add_option("--specs", benchAccel.specs,
+                   "accelerator specs, comma-separated (name=value items belong to the spec before them; ';' "
+                   "also separates); kinds not in this build are skipped")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--csv", benchAccel.csv, "write one row per structure, size and ray kind");
+  benchAccelCommand->add_option("--plot", benchAccel.plot, "write a PNG: build time and Mrays/s against triangles");
+  benchAccelCommand->add_option("--seed", benchAccel.seed, "seed of the furnishing and of the rays")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--runs", benchAccel.runs, "timed runs per measurement (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchAccelCommand
+      ->add_option("--embree-threads", benchAccel.embreeThreads,
+                   "threads of Embree's builder (0: every core); 1 compares like with like")
+      ->capture_default_str();
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
@@ -76,6 +102,7 @@ int main(int argc, char** argv) {
     if (*status) return runStatus(endpoint, job, json);
     if (*wait) return runWait(endpoint, job, quiet);
     if (*cancel) return runCancel(endpoint, job);
+    if (*benchAccelCommand) return runBenchAccel(benchAccel);
   } catch (const std::exception& e) {
     std::cerr << "portico: " << e.what() << "\n";
     return 1;
