@@ -15,6 +15,11 @@ struct MeshView {
   size_t vertexCount = 0;
   const uint32_t* indices = nullptr;  // 3 vertex indices per triangle
   size_t triangleCount = 0;
+  // Floats that may be read past the last vertex (positions[3 * vertexCount]
+  // onwards) without leaving the allocation: Embree reads float3 vertex
+  // buffers with 16-byte loads, so it can share `positions` only when this is
+  // at least 1 (else it copies them). Their values do not matter. 0 when unknown.
+  size_t positionsPaddingFloats = 0;
 
   Vec3 vertex(uint32_t i) const {
     const float* p = positions + 3 * static_cast<size_t>(i);

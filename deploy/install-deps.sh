@@ -11,7 +11,7 @@ packages=(
   libsqlite3-dev sqlite3
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
-  libtbb-dev libassimp-dev
+  libtbb-dev libassimp-dev zlib1g-dev
 )
 
 SUDO=""

@@ -85,6 +85,7 @@ class LocalCluster {
     spec.setPhotonK(32);
     spec.setPhotonRadius(0.5f);
     spec.setExposure(1);
+    spec.setGather(2);   // final gathering: gather rays cross portals too
     const uint64_t job = client.submit(message);
     for (int i = 0; i < 1200; ++i) {
       auto status = nlohmann::json::parse(client.statusJson(job));

@@ -1,0 +1,220 @@
+// Embree accelerator: one process-wide device, one scene per cell with one
+// triangle geometry over shared buffers, rtcIntersect1 / rtcOccluded1.
+#include "common/accel/embree_accelerator.h"
+
+#include <embree3/rtcore.h>
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "common/accel/triangle_intersect.h"
+
+#if defined(__SSE__) || defined(__x86_64__)
+#include <pmmintrin.h>
+#include <xmmintrin.h>
+#define PORTICO_HAS_MXCSR 1
+#endif
+
+namespace portico {
+
+namespace {
+
+// The process's device, made on first use and kept for the process's
+// lifetime (releasing it from a static destructor can race TBB's shutdown).
+struct EmbreeDevice {
+  RTCDevice device = nullptr;
+  std::string config;
+  std::atomic<int64_t> bytes{0};  // allocated by the device now (memory monitor)
+};
+
+std::mutex deviceMutex;
+std::string requestedConfig;
+EmbreeDevice* processDevice = nullptr;
+
+// Embree reports errors on the thread whose API call failed (its calls
+// catch internal exceptions, including those of build threads): collect
+// them per thread, turn them into exceptions after the call.
+thread_local std::string embreeErrors;
+
+void onEmbreeError(void*, RTCError code, const char* message) {
+  if (!embreeErrors.empty()) embreeErrors += "; ";
+  embreeErrors += "Embree error " + std::to_string(int(code)) + (message ? std::string(": ") + message : "");
+}
+
+bool onEmbreeMemory(void* user, ssize_t bytes, bool) {
+  static_cast<EmbreeDevice*>(user)->bytes.fetch_add(int64_t(bytes), std::memory_order_relaxed);
+  return true;
+}
+
+[[noreturn]] void failEmbree(const std::string& what) {
+  std::string errors;
+  errors.swap(embreeErrors);
+  throw std::runtime_error("embree: " + what + (errors.empty() ? "" : " (" + errors + ")"));
+}
+
+EmbreeDevice& sharedDevice() {
+  std::lock_guard<std::mutex> lock(deviceMutex);
+  if (processDevice) return *processDevice;
+  auto* created = new EmbreeDevice;
+  created->config = requestedConfig;
+  created->device = rtcNewDevice(created->config.empty() ? nullptr : created->config.c_str());
+  if (!created->device) {
+    const RTCError code = rtcGetDeviceError(nullptr);
+    delete created;
+    throw std::runtime_error("embree: cannot create the device (error " + std::to_string(int(code)) +
+                             "; config '" + requestedConfig + "')");
+  }
+  rtcSetDeviceErrorFunction(created->device, onEmbreeError, nullptr);
+  rtcSetDeviceMemoryMonitorFunction(created->device, onEmbreeMemory, created);
+  spdlog::debug("embree: device ready ({}), config '{}'", rtcGetDeviceProperty(created->device, RTC_DEVICE_PROPERTY_VERSION),
+                created->config);
+  processDevice = created;
+  return *processDevice;
+}
+
+RTCScene asScene(void* scene) { return static_cast<RTCScene>(scene); }
+
+// Whether the ray can be handed to Embree: finite, with a direction and a
+// non-empty [tMin, tMax) (portico's other structures answer "no hit" too).
+bool traceable(const Ray& ray) {
+  return hasFiniteOriginAndDirection(ray) &&
+         (ray.direction.x != 0.0f || ray.direction.y != 0.0f || ray.direction.z != 0.0f) && ray.tMin < ray.tMax;
+}
+
+// portico's hits satisfy tMin < t < tMax; Embree's tnear < t <= tfar, with
+// tnear >= 0 (a negative tMin, which portico's renderer never uses, is
+// taken as 0).
+void fillRay(const Ray& ray, RTCRay& out) {
+  out.org_x = ray.origin.x;
+  out.org_y = ray.origin.y;
+  out.org_z = ray.origin.z;
+  out.tnear = std::max(ray.tMin, 0.0f);
+  out.dir_x = ray.direction.x;
+  out.dir_y = ray.direction.y;
+  out.dir_z = ray.direction.z;
+  out.time = 0.0f;
+  out.tfar = std::nextafter(ray.tMax, -kInfinity);
+  out.mask = 0xffffffffu;
+  out.id = 0;
+  out.flags = 0;
+}
+
+}  // namespace
+
+bool configureEmbreeDevice(std::string_view config) {
+  std::lock_guard<std::mutex> lock(deviceMutex);
+  if (processDevice) return processDevice->config == config;
+  requestedConfig = std::string(config);
+  return true;
+}
+
+EmbreeAccelerator::EmbreeAccelerator(const MeshView& mesh, std::string_view spec) {
+  const auto start = std::chrono::steady_clock::now();
+  stats_.spec = std::string(spec);
+  if (mesh.triangleCount >= kNoPrimitive || mesh.vertexCount >= std::numeric_limits<uint32_t>::max())
+    throw std::invalid_argument("embree: " + std::to_string(mesh.triangleCount) +
+                                " triangles exceed the 32-bit primitive ids; split the cell");
+  for (uint32_t primitive = 0; primitive < mesh.triangleCount; ++primitive) {
+    const Bounds3 box = mesh.triangleBounds(primitive);
+    if (isFinite(box.lo) && isFinite(box.hi)) bounds_.extend(box);
+  }
+
+  EmbreeDevice& device = sharedDevice();
+  embreeErrors.clear();
+  const int64_t bytesBefore = device.bytes.load(std::memory_order_relaxed);
+  RTCScene scene = rtcNewScene(device.device);
+  if (!scene) failEmbree("cannot create a scene");
+  scene_ = scene;
+  try {
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_NONE);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    if (mesh.triangleCount > 0 && mesh.vertexCount > 0) {
+      RTCGeometry geometry = rtcNewGeometry(device.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      if (!geometry) failEmbree("cannot create a triangle geometry");
+      rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
+      // Embree loads each float3 vertex with a 16-byte load: the last one
+      // needs one readable float after it.
+      const float* positions = mesh.positions;
+      if (mesh.positionsPaddingFloats < 1) {
+        vertexCopy_.reserve(3 * mesh.vertexCount + 1);
+        vertexCopy_.assign(mesh.positions, mesh.positions + 3 * mesh.vertexCount);
+        vertexCopy_.push_back(0.0f);
+        positions = vertexCopy_.data();
+      }
+      rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions, 0,
+                                 3 * sizeof(float), mesh.vertexCount);
+      rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices, 0,
+                                 3 * sizeof(uint32_t), mesh.triangleCount);
+      rtcCommitGeometry(geometry);
+      rtcAttachGeometry(scene, geometry);
+      rtcReleaseGeometry(geometry);
+    }
+    rtcCommitScene(scene);
+    if (!embreeErrors.empty()) failEmbree("building the scene of " + std::to_string(mesh.triangleCount) + " triangles failed");
+  } catch (...) {
+    rtcReleaseScene(scene);
+    scene_ = nullptr;
+    throw;
+  }
+
+  const int64_t sceneBytes = device.bytes.load(std::memory_order_relaxed) - bytesBefore;
+  stats_.triangleReferences = mesh.triangleCount;
+  stats_.bytes = sizeof(*this) + uint64_t(std::max<int64_t>(sceneBytes, 0)) + vertexCopy_.capacity() * sizeof(float);
+  stats_.buildMs =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  spdlog::debug("embree: {} triangles, vertices {}", mesh.triangleCount,
+                sharesVertices() ? "shared with the cell" : "copied (no padding after the last vertex)");
+}
+
+EmbreeAccelerator::~EmbreeAccelerator() {
+  if (scene_) rtcReleaseScene(asScene(scene_));
+}
+
+Hit EmbreeAccelerator::intersect(const Ray& ray) const {
+  if (!traceable(ray)) return Hit{};
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  alignas(16) RTCRayHit query;
+  fillRay(ray, query.ray);
+  query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  query.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(asScene(scene_), &context, &query);
+  if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
+  return Hit{query.ray.tfar, query.hit.primID, query.hit.u, query.hit.v};
+}
+
+bool EmbreeAccelerator::occluded(const Ray& ray) const {
+  if (!traceable(ray)) return false;
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  alignas(16) RTCRay query;
+  fillRay(ray, query);
+  rtcOccluded1(asScene(scene_), &context, &query);
+  return query.tfar == -kInfinity;
+}
+
+// ---------------------------------------------------------------------------
+
+FlushDenormalsScope::FlushDenormalsScope() {
+#ifdef PORTICO_HAS_MXCSR
+  saved_ = _mm_getcsr();
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+#endif
+}
+
+FlushDenormalsScope::~FlushDenormalsScope() {
+#ifdef PORTICO_HAS_MXCSR
+  _mm_setcsr(saved_);
+#endif
+}
+
+}  // namespace portico
