@@ -165,6 +165,14 @@ void CellGeometry::readMapped(uint32_t expectedCellId, size_t materialCount) {
 
   mesh_.positions = gatherChunks<float>(positionChunks, vertexCount * 3, 3, joinedPositions_, "position");
   mesh_.vertexCount = vertexCount;
+  // Positions read in place end inside the mapping (more lists follow them
+  // in the file): tell Embree how far it may read past the last vertex.
+  if (joinedPositions_.empty() && vertexCount > 0) {
+    const char* end = reinterpret_cast<const char*>(mesh_.positions + vertexCount * 3);
+    const char* mappingEnd = static_cast<const char*>(mapped_) + mappedBytes_;
+    if (end >= static_cast<const char*>(mapped_) && end <= mappingEnd)
+      mesh_.positionsPaddingFloats = static_cast<size_t>(mappingEnd - end) / sizeof(float);
+  }
   mesh_.indices = gatherChunks<uint32_t>(indexChunks, triangleCount * 3, 3, joinedIndices_, "index");
   mesh_.triangleCount = triangleCount;
   materials_ = gatherChunks<uint32_t>(materialChunks, triangleCount, 1, joinedMaterials_, "material");

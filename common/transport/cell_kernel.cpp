@@ -176,6 +176,9 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
 }
 
 void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
+  // A camera ray looks past at most this many hidden surfaces in one cell.
+  constexpr int kMaxHiddenSurfaces = 64;
+  int hiddenSkipped = 0;
   RayState current = ray;
   for (;;) {
     ++out.counters.raySegments;
@@ -190,8 +193,11 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         return;
       case CellEvent::Kind::Surface:
         // Cut-away surfaces are invisible to the camera: look past them.
-        if (scene_.materials()[tracer_.cell().material(event.primitive)].hiddenFromCamera) {
-          current.tMin = event.t;
+        if (scene_.materials()[tracer_.cell().material(event.primitive)].hiddenFromCamera &&
+            ++hiddenSkipped < kMaxHiddenSurfaces) {
+          // Strictly past the hidden hit, whether an accelerator's interval
+          // is open (portico's) or closed at tMin (Embree's).
+          current.tMin = std::nextafter(event.t, kInfinity);
           continue;
         }
         if (parameters_.aov == JobParameters::Aov::Cells)
