@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/accel/accelerator.h"
@@ -74,19 +75,20 @@ inline void addRandomTriangles(TestMesh& mesh, int count, std::mt19937& random) 
   }
 }
 
-// A room of boxes on a 0.5 lattice: a shell, a wall, stacked boxes sharing
-// faces (coplanar overlapping triangles: ties), plus exact duplicates.
-inline void addRoomOfBoxes(TestMesh& mesh, std::mt19937& random) {
+// A room of boxes on a 0.5 lattice: a shell, a wall, `boxes` boxes standing
+// on the floor, every third with one stacked on it (shared faces: coplanar
+// overlapping triangles, so ties), plus `duplicates` exact duplicates.
+inline void addRoomOfBoxes(TestMesh& mesh, std::mt19937& random, int boxes = 30, int duplicates = 40) {
   mesh.addBox({0, 0, 0}, {10, 8, 3});
   mesh.addBox({4.5f, 0, 0}, {5, 8, 3});
-  for (int i = 0; i < 30; ++i) {
+  for (int i = 0; i < boxes; ++i) {
     const float x = 0.5f * float(random() % 18), y = 0.5f * float(random() % 14);
     const float w = 0.5f * float(1 + random() % 3), h = 0.5f * float(1 + random() % 3);
     mesh.addBox({x, y, 0}, {x + w, y + w, h});
     if (i % 3 == 0) mesh.addBox({x, y, h}, {x + w, y + w, h + 0.5f});  // stacked: shared face
   }
   const size_t existing = mesh.triangleCount();
-  for (int i = 0; i < 40; ++i) {
+  for (int i = 0; i < duplicates; ++i) {
     const uint32_t* t = &mesh.indices[3 * (random() % existing)];
     mesh.addTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2]));
   }
@@ -217,6 +219,27 @@ inline bool sameBits(const Hit& a, const Hit& b) {
   return a.primitive == b.primitive && std::bit_cast<uint32_t>(a.t) == std::bit_cast<uint32_t>(b.t) &&
          std::bit_cast<uint32_t>(a.u) == std::bit_cast<uint32_t>(b.u) &&
          std::bit_cast<uint32_t>(a.v) == std::bit_cast<uint32_t>(b.v);
+}
+
+// Asks `accelerator` every ray from 4 threads at once, `passes` times each,
+// and counts per thread the answers that differ from single-threaded ones:
+// same(hit, expected) decides whether two hits agree; occluded() must agree.
+template <class Accelerator, class Same>
+std::vector<int> mismatchesFromManyThreads(const Accelerator& accelerator, const std::vector<Ray>& rays,
+                                           int passes, Same same) {
+  std::vector<Hit> expected;
+  for (const Ray& ray : rays) expected.push_back(accelerator.intersect(ray));
+  std::vector<int> mismatches(4, 0);
+  std::vector<std::thread> threads;
+  for (int thread = 0; thread < 4; ++thread)
+    threads.emplace_back([&, thread] {
+      for (int pass = 0; pass < passes; ++pass)
+        for (size_t i = 0; i < rays.size(); ++i)
+          mismatches[thread] += !same(accelerator.intersect(rays[i]), expected[i]) ||
+                                accelerator.occluded(rays[i]) != expected[i].found();
+    });
+  for (std::thread& thread : threads) thread.join();
+  return mismatches;
 }
 
 }  // namespace portico::accel_test

@@ -228,21 +228,8 @@ TEST(HierarchicalGrid, AnswersFromManyThreadsAtOnce) {
   const TestMesh mesh = accel_test::furnishedHall(20000, 9);
   const HierarchicalGrid grid(mesh.view());
   const std::vector<Ray> rays = hierarchyRays(mesh, grid, 4000, 900);
-  std::vector<Hit> expected;
-  for (const Ray& ray : rays) expected.push_back(grid.intersect(ray));
-  std::vector<int> mismatches(4, 0);
-  std::vector<std::thread> threads;
-  for (int thread = 0; thread < 4; ++thread)
-    threads.emplace_back([&, thread] {
-      for (int pass = 0; pass < 2; ++pass)
-        for (size_t i = 0; i < rays.size(); ++i) {
-          const Hit hit = grid.intersect(rays[i]);
-          mismatches[thread] += std::memcmp(&hit, &expected[i], sizeof(Hit)) != 0 ||
-                                grid.occluded(rays[i]) != expected[i].found();
-        }
-    });
-  for (std::thread& thread : threads) thread.join();
-  for (int count : mismatches) EXPECT_EQ(count, 0);
+  const auto same = [](const Hit& a, const Hit& b) { return std::memcmp(&a, &b, sizeof(Hit)) == 0; };
+  for (int count : accel_test::mismatchesFromManyThreads(grid, rays, 2, same)) EXPECT_EQ(count, 0);
 }
 
 // ---------------------------------------------------------------------------

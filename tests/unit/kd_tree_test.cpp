@@ -20,90 +20,23 @@
 #include "common/accel/brute_force.h"
 #include "common/accel/kd_build.h"
 #include "common/accel/triangle_intersect.h"
+#include "tests/unit/accel_test_scenes.h"
 
 namespace portico {
 namespace {
 
 const char* const kKdSpecs[] = {"kd:median", "kd:sah", "kd:bbox"};
 
-// A mesh owned by the test, viewed as the accelerators see cells.
-struct KdTestMesh {
-  std::vector<float> positions;
-  std::vector<uint32_t> indices;
-
-  uint32_t addVertex(const Vec3& p) {
-    positions.insert(positions.end(), {p.x, p.y, p.z});
-    return uint32_t(positions.size() / 3 - 1);
-  }
-  void addTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
-    indices.insert(indices.end(), {addVertex(a), addVertex(b), addVertex(c)});
-  }
-  void addQuad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-    // Shared vertices, so the two halves share an edge exactly.
-    const uint32_t ia = addVertex(a), ib = addVertex(b), ic = addVertex(c), id = addVertex(d);
-    indices.insert(indices.end(), {ia, ib, ic, ia, ic, id});
-  }
-  void addBox(const Vec3& lo, const Vec3& hi) {
-    const Vec3 p[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
-                       {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
-    addQuad(p[0], p[1], p[2], p[3]);
-    addQuad(p[4], p[5], p[6], p[7]);
-    addQuad(p[0], p[1], p[5], p[4]);
-    addQuad(p[3], p[2], p[6], p[7]);
-    addQuad(p[0], p[3], p[7], p[4]);
-    addQuad(p[1], p[2], p[6], p[5]);
-  }
-  Vec3 vertex(size_t i) const { return {positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]}; }
-  size_t triangleCount() const { return indices.size() / 3; }
-  MeshView view() const {
-    MeshView mesh;
-    mesh.positions = positions.data();
-    mesh.vertexCount = positions.size() / 3;
-    mesh.indices = indices.data();
-    mesh.triangleCount = indices.size() / 3;
-    return mesh;
-  }
-  Bounds3 bounds() const {
-    Bounds3 box;
-    for (size_t i = 0; i < positions.size() / 3; ++i) box.extend(vertex(i));
-    return box;
-  }
-};
-
-// (a) A soup of random triangles of many sizes.
-void addRandomTriangles(KdTestMesh& mesh, int count, std::mt19937& random) {
-  std::uniform_real_distribution<float> position(0, 10), offset(-1, 1);
-  const float sizes[] = {0.02f, 0.2f, 1.0f, 3.0f};
-  for (int i = 0; i < count; ++i) {
-    const Vec3 centre{position(random), position(random), position(random)};
-    const float size = sizes[random() % 4];
-    const auto corner = [&] { return centre + Vec3(offset(random), offset(random), offset(random)) * size; };
-    mesh.addTriangle(corner(), corner(), corner());
-  }
-}
+using accel_test::addLongThinTriangles;  // (c) long, thin triangles: each straddles many planes
+using accel_test::addRandomTriangles;    // (a) a soup of random triangles of many sizes
+using accel_test::describe;
+using KdTestMesh = accel_test::TestMesh;
 
 // (b) A furnished room: a shell, a wall, boxes on a 0.5 lattice standing on
 // the floor and stacked (shared faces: coplanar overlapping triangles, so
-// ties, and many planar events on the same planes).
+// ties, and many planar events on the same planes); no duplicates here.
 void addRoom(KdTestMesh& mesh, std::mt19937& random) {
-  mesh.addBox({0, 0, 0}, {10, 8, 3});
-  mesh.addBox({4.5f, 0, 0}, {5, 8, 3});
-  for (int i = 0; i < 40; ++i) {
-    const float x = 0.5f * float(random() % 18), y = 0.5f * float(random() % 14);
-    const float w = 0.5f * float(1 + random() % 3), h = 0.5f * float(1 + random() % 3);
-    mesh.addBox({x, y, 0}, {x + w, y + w, h});
-    if (i % 3 == 0) mesh.addBox({x, y, h}, {x + w, y + w, h + 0.5f});
-  }
-}
-
-// (c) Long, thin triangles across the whole scene: each straddles many planes.
-void addLongThinTriangles(KdTestMesh& mesh, int count, std::mt19937& random) {
-  std::uniform_real_distribution<float> position(0, 10), width(-0.01f, 0.01f);
-  for (int i = 0; i < count; ++i) {
-    const Vec3 a{position(random), position(random), position(random)};
-    const Vec3 b{position(random), position(random), position(random)};
-    mesh.addTriangle(a, b, b + Vec3(width(random), width(random), width(random)));
-  }
+  accel_test::addRoomOfBoxes(mesh, random, /*boxes=*/40, /*duplicates=*/0);
 }
 
 // (d) Degenerate triangles (points, segments) and exact duplicates.
@@ -238,20 +171,7 @@ std::vector<Ray> testRays(const KdTestMesh& mesh, const KdTree& tree, int count,
   return rays;
 }
 
-std::string describe(const Ray& ray) {
-  std::ostringstream out;
-  out.precision(9);
-  out << "origin (" << ray.origin.x << ", " << ray.origin.y << ", " << ray.origin.z << ") direction ("
-      << ray.direction.x << ", " << ray.direction.y << ", " << ray.direction.z << ") t (" << ray.tMin
-      << ", " << ray.tMax << ")";
-  return out.str();
-}
-
-bool sameHit(const Hit& a, const Hit& b) {
-  return a.primitive == b.primitive && std::bit_cast<uint32_t>(a.t) == std::bit_cast<uint32_t>(b.t) &&
-         std::bit_cast<uint32_t>(a.u) == std::bit_cast<uint32_t>(b.u) &&
-         std::bit_cast<uint32_t>(a.v) == std::bit_cast<uint32_t>(b.v);
-}
+using accel_test::sameBits;
 
 // The tree must agree with brute force exactly: same primitive, same bits.
 void expectSameAsBruteForce(const KdTestMesh& mesh, const KdTree& tree, const std::vector<Ray>& rays,
@@ -263,7 +183,7 @@ void expectSameAsBruteForce(const KdTestMesh& mesh, const KdTree& tree, const st
     const Hit got = tree.intersect(ray);
     hits += expected.found();
     const bool sameOcclusion = tree.occluded(ray) == expected.found();
-    if ((!sameHit(got, expected) || !sameOcclusion) && ++mismatches <= 5)
+    if ((!sameBits(got, expected) || !sameOcclusion) && ++mismatches <= 5)
       ADD_FAILURE() << tree.stats().spec << ": " << describe(ray) << ": brute force primitive "
                     << expected.primitive << " t " << expected.t << ", kd-tree primitive " << got.primitive
                     << " t " << got.t << (sameOcclusion ? "" : " (occluded() disagrees)");
@@ -428,19 +348,7 @@ TEST(KdTree, AnswersFromManyThreadsAtOnce) {
   const KdTestMesh mesh = mixedScene(10);
   const KdTree tree = buildTree(mesh, "kd:sah");
   const std::vector<Ray> rays = testRays(mesh, tree, 4000, 1000);
-  std::vector<Hit> expected;
-  for (const Ray& ray : rays) expected.push_back(tree.intersect(ray));
-  std::vector<int> mismatches(4, 0);
-  std::vector<std::thread> threads;
-  for (int thread = 0; thread < 4; ++thread)
-    threads.emplace_back([&, thread] {
-      for (int pass = 0; pass < 3; ++pass)
-        for (size_t i = 0; i < rays.size(); ++i)
-          mismatches[thread] += !sameHit(tree.intersect(rays[i]), expected[i]) ||
-                                tree.occluded(rays[i]) != expected[i].found();
-    });
-  for (std::thread& thread : threads) thread.join();
-  for (int count : mismatches) EXPECT_EQ(count, 0);
+  for (int count : accel_test::mismatchesFromManyThreads(tree, rays, 3, sameBits)) EXPECT_EQ(count, 0);
 }
 
 // ---------------------------------------------------------------------------
@@ -626,7 +534,7 @@ TEST(KdTreeSpec, BuildsEachVariantThroughTheFactory) {
                   {coordinate(random) - 5, coordinate(random) - 5, coordinate(random) - 5}};
     const Hit expected = brute->intersect(ray);
     for (const auto& tree : trees) {
-      ASSERT_TRUE(sameHit(tree->intersect(ray), expected)) << tree->stats().spec << " " << describe(ray);
+      ASSERT_TRUE(sameBits(tree->intersect(ray), expected)) << tree->stats().spec << " " << describe(ray);
       ASSERT_EQ(tree->occluded(ray), expected.found());
     }
   }

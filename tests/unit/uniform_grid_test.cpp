@@ -15,183 +15,30 @@
 
 #include "common/accel/accelerator.h"
 #include "common/accel/brute_force.h"
+#include "tests/unit/accel_test_scenes.h"
 
 namespace portico {
 namespace {
 
-// A mesh owned by the test, viewed as the accelerators see cells.
-struct TestMesh {
-  std::vector<float> positions;
-  std::vector<uint32_t> indices;
-
-  uint32_t addVertex(const Vec3& p) {
-    positions.insert(positions.end(), {p.x, p.y, p.z});
-    return uint32_t(positions.size() / 3 - 1);
-  }
-  void addTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
-    indices.insert(indices.end(), {addVertex(a), addVertex(b), addVertex(c)});
-  }
-  void addQuad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
-    // Shared vertices, so the two halves share an edge exactly.
-    const uint32_t ia = addVertex(a), ib = addVertex(b), ic = addVertex(c), id = addVertex(d);
-    indices.insert(indices.end(), {ia, ib, ic, ia, ic, id});
-  }
-  void addBox(const Vec3& lo, const Vec3& hi) {
-    const Vec3 p[8] = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
-                       {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
-    addQuad(p[0], p[1], p[2], p[3]);
-    addQuad(p[4], p[5], p[6], p[7]);
-    addQuad(p[0], p[1], p[5], p[4]);
-    addQuad(p[3], p[2], p[6], p[7]);
-    addQuad(p[0], p[3], p[7], p[4]);
-    addQuad(p[1], p[2], p[6], p[5]);
-  }
-  MeshView view() const {
-    MeshView mesh;
-    mesh.positions = positions.data();
-    mesh.vertexCount = positions.size() / 3;
-    mesh.indices = indices.data();
-    mesh.triangleCount = indices.size() / 3;
-    return mesh;
-  }
-  Bounds3 bounds() const {
-    Bounds3 box;
-    for (size_t i = 0; i < positions.size(); i += 3) box.extend({positions[i], positions[i + 1], positions[i + 2]});
-    return box;
-  }
-};
-
-void addRandomTriangles(TestMesh& mesh, int count, std::mt19937& random) {
-  std::uniform_real_distribution<float> position(0, 10), offset(-1, 1);
-  const float sizes[] = {0.02f, 0.2f, 1.0f, 3.0f};
-  for (int i = 0; i < count; ++i) {
-    const Vec3 centre{position(random), position(random), position(random)};
-    const float size = sizes[random() % 4];
-    const auto corner = [&] { return centre + Vec3(offset(random), offset(random), offset(random)) * size; };
-    mesh.addTriangle(corner(), corner(), corner());
-  }
-}
+using accel_test::addRandomTriangles;
+using accel_test::addLongThinTriangles;
+using accel_test::describe;
+using accel_test::mixedScene;
+using accel_test::TestMesh;
 
 // Rooms of a building: a shell, walls, stacked boxes sharing faces (coplanar
 // overlapping triangles: ties), all on a 0.5 lattice so faces fall on voxel
 // boundaries for many resolutions, plus exact duplicates of some triangles.
-void addRoom(TestMesh& mesh, std::mt19937& random) {
-  mesh.addBox({0, 0, 0}, {10, 8, 3});
-  mesh.addBox({4.5f, 0, 0}, {5, 8, 3});  // a wall, coplanar with the shell's floor and ceiling
-  for (int i = 0; i < 30; ++i) {
-    const float x = 0.5f * float(random() % 18), y = 0.5f * float(random() % 14);
-    const float w = 0.5f * float(1 + random() % 3), h = 0.5f * float(1 + random() % 3);
-    mesh.addBox({x, y, 0}, {x + w, y + w, h});
-    if (i % 3 == 0) mesh.addBox({x, y, h}, {x + w, y + w, h + 0.5f});  // stacked: shared face
-  }
-  // Duplicated triangles: the same t from different primitives.
-  const size_t existing = mesh.indices.size() / 3;
-  for (int i = 0; i < 40; ++i) {
-    const size_t source = random() % existing;
-    const uint32_t* t = &mesh.indices[3 * source];
-    const Vec3 a{mesh.positions[3 * t[0]], mesh.positions[3 * t[0] + 1], mesh.positions[3 * t[0] + 2]};
-    const Vec3 b{mesh.positions[3 * t[1]], mesh.positions[3 * t[1] + 1], mesh.positions[3 * t[1] + 2]};
-    const Vec3 c{mesh.positions[3 * t[2]], mesh.positions[3 * t[2] + 1], mesh.positions[3 * t[2] + 2]};
-    mesh.addTriangle(a, b, c);
-  }
-}
+void addRoom(TestMesh& mesh, std::mt19937& random) { accel_test::addRoomOfBoxes(mesh, random); }
 
-// Long, thin triangles crossing the whole scene: each spans many voxels.
-void addLongThinTriangles(TestMesh& mesh, int count, std::mt19937& random) {
-  std::uniform_real_distribution<float> position(0, 10), width(-0.01f, 0.01f);
-  for (int i = 0; i < count; ++i) {
-    const Vec3 a{position(random), position(random), position(random)};
-    const Vec3 b{position(random), position(random), position(random)};
-    mesh.addTriangle(a, b, b + Vec3(width(random), width(random), width(random)));
-  }
-}
-
-TestMesh mixedScene(uint32_t seed) {
-  std::mt19937 random(seed);
-  TestMesh mesh;
-  addRandomTriangles(mesh, 400, random);
-  addRoom(mesh, random);
-  addLongThinTriangles(mesh, 40, random);
-  return mesh;
-}
-
-// Rays of every kind the grid must get right.
+// Rays of every kind the grid must get right, some starting on voxel boundaries.
 std::vector<Ray> testRays(const TestMesh& mesh, const UniformGrid& grid, int count, uint32_t seed) {
-  std::mt19937 random(seed);
-  const Bounds3 box = mesh.bounds();
-  const Vec3 diagonal = box.diagonal();
-  std::uniform_real_distribution<float> unit(0, 1), symmetric(-1, 1);
-  const auto inside = [&] {
-    return box.lo + Vec3(unit(random) * diagonal.x, unit(random) * diagonal.y, unit(random) * diagonal.z);
-  };
-  const auto anywhere = [&] {  // the bounds grown by one diagonal each side
-    return box.center() + Vec3(symmetric(random) * 1.5f * diagonal.x, symmetric(random) * 1.5f * diagonal.y,
-                               symmetric(random) * 1.5f * diagonal.z);
-  };
-  const auto randomDirection = [&] {
-    Vec3 d;
-    do d = {symmetric(random), symmetric(random), symmetric(random)};
-    while (dot(d, d) < 1e-4f);
-    return d * (0.1f + 3 * unit(random));  // not normalised
-  };
-  const auto axisDirection = [&] {
-    Vec3 d(0.0f);
-    const int axis = int(random() % 3);
-    d[axis] = random() % 2 ? 1.0f : -1.0f;
-    if (random() % 3 == 0) d[(axis + 1) % 3] = symmetric(random);  // one zero component
-    return d;
-  };
-  const auto onVoxelBoundaries = [&](Vec3 p) {
-    const auto low = grid.gridLow();
-    const auto size = grid.voxelSize();
-    const auto resolution = grid.resolution();
-    for (int axis = 0; axis < 3; ++axis)
-      if (random() % 2) p[axis] = float(low[axis] + size[axis] * double(random() % (resolution[axis] + 1)));
-    return p;
-  };
-  const auto meshVertex = [&] {
-    const size_t i = random() % (mesh.positions.size() / 3);
-    return Vec3(mesh.positions[3 * i], mesh.positions[3 * i + 1], mesh.positions[3 * i + 2]);
-  };
-
-  std::vector<Ray> rays;
-  for (int i = 0; i < count; ++i) {
-    Ray ray;
-    switch (i % 8) {
-      case 0: ray = {inside(), randomDirection()}; break;
-      case 1: ray = {anywhere(), randomDirection()}; break;
-      case 2: ray = {inside(), axisDirection()}; break;
-      case 3: ray = {onVoxelBoundaries(inside()), random() % 2 ? axisDirection() : randomDirection()}; break;
-      case 4: {  // through a vertex: shared edges, corners of boxes, ties
-        const Vec3 origin = anywhere();
-        ray = {origin, meshVertex() - origin};
-        break;
-      }
-      case 5: {  // towards the bounds from far outside
-        const Vec3 origin = anywhere();
-        ray = {origin, inside() - origin};
-        break;
-      }
-      case 6: ray = {onVoxelBoundaries(anywhere()), axisDirection()}; break;
-      case 7: {  // a finite segment, possibly starting later
-        ray = {inside(), randomDirection()};
-        ray.tMin = unit(random) < 0.5f ? 0.0f : unit(random);
-        ray.tMax = ray.tMin + 3 * unit(random);
-        break;
-      }
-    }
-    rays.push_back(ray);
-  }
-  return rays;
-}
-
-std::string describe(const Ray& ray) {
-  std::ostringstream out;
-  out.precision(9);
-  out << "origin (" << ray.origin.x << ", " << ray.origin.y << ", " << ray.origin.z << ") direction ("
-      << ray.direction.x << ", " << ray.direction.y << ", " << ray.direction.z << ") t (" << ray.tMin
-      << ", " << ray.tMax << ")";
-  return out.str();
+  const auto low = grid.gridLow();
+  const auto size = grid.voxelSize();
+  const auto resolution = grid.resolution();
+  return accel_test::testRays(mesh, count, seed, [&](int axis, std::mt19937& random) {
+    return float(low[axis] + size[axis] * double(random() % (resolution[axis] + 1)));
+  });
 }
 
 // The grid must agree with brute force exactly: same primitive, same bits.
@@ -203,10 +50,7 @@ void expectSameAsBruteForce(const TestMesh& mesh, const UniformGrid& grid, int r
     const Hit expected = brute.intersect(ray);
     const Hit got = grid.intersect(ray);
     hits += expected.found();
-    const bool same = got.primitive == expected.primitive &&
-                      std::bit_cast<uint32_t>(got.t) == std::bit_cast<uint32_t>(expected.t) &&
-                      std::bit_cast<uint32_t>(got.u) == std::bit_cast<uint32_t>(expected.u) &&
-                      std::bit_cast<uint32_t>(got.v) == std::bit_cast<uint32_t>(expected.v);
+    const bool same = accel_test::sameBits(got, expected);
     const bool sameOcclusion = grid.occluded(ray) == expected.found();
     if ((!same || !sameOcclusion) && ++mismatches <= 5)
       ADD_FAILURE() << describe(ray) << ": brute force primitive " << expected.primitive << " t "
@@ -369,21 +213,8 @@ TEST(UniformGrid, AnswersFromManyThreadsAtOnce) {
   const TestMesh mesh = mixedScene(8);
   const UniformGrid grid(mesh.view());
   const std::vector<Ray> rays = testRays(mesh, grid, 4000, 800);
-  std::vector<Hit> expected;
-  for (const Ray& ray : rays) expected.push_back(grid.intersect(ray));
-  std::vector<int> mismatches(4, 0);
-  std::vector<std::thread> threads;
-  for (int thread = 0; thread < 4; ++thread)
-    threads.emplace_back([&, thread] {
-      for (int pass = 0; pass < 3; ++pass)
-        for (size_t i = 0; i < rays.size(); ++i) {
-          const Hit hit = grid.intersect(rays[i]);
-          mismatches[thread] += hit.primitive != expected[i].primitive || hit.t != expected[i].t ||
-                                grid.occluded(rays[i]) != expected[i].found();
-        }
-    });
-  for (std::thread& thread : threads) thread.join();
-  for (int count : mismatches) EXPECT_EQ(count, 0);
+  const auto same = [](const Hit& a, const Hit& b) { return a.primitive == b.primitive && a.t == b.t; };
+  for (int count : accel_test::mismatchesFromManyThreads(grid, rays, 3, same)) EXPECT_EQ(count, 0);
 }
 
 TEST(BruteForce, FindsTheNearestHitAndBreaksTiesBySmallerId) {
