@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <csignal>
 #include <random>
 #include <thread>
 
@@ -44,20 +45,10 @@ class LocalCluster {
   LocalCluster(const fs::path& dir, int workers, const std::vector<std::vector<std::string>>& workerExtra = {})
       : dir_(dir) {
     fs::create_directories(dir);
-    coordinator_ = std::make_unique<ChildProcess>(
-        std::vector<std::string>{kBin + "portico-coordinator", "--listen", "tcp://127.0.0.1:*", "--db",
-                                 (dir / "jobs.db").string(), "--endpoint-file", (dir / "endpoint").string(),
-                                 "--liveness-ms", "2000", "--heartbeat-ms", "250"},
-        (dir / "coordinator.log").string());
-    for (int i = 0; i < 200 && endpoint_.empty(); ++i) {
-      std::ifstream in(dir / "endpoint");
-      in >> endpoint_;
-      if (endpoint_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-    if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir / "coordinator.log"));
+    startCoordinator("tcp://127.0.0.1:*");
     for (int i = 0; i < workers; ++i) {
       std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + std::to_string(i),
-                                    "--heartbeat-ms", "250"};
+                                    "--heartbeat-ms", "250", "--liveness-ms", "1500"};
       if (size_t(i) < workerExtra.size()) argv.insert(argv.end(), workerExtra[i].begin(), workerExtra[i].end());
       workers_.emplace_back(argv, (dir / ("worker-" + std::to_string(i) + ".log")).string());
     }
@@ -68,8 +59,29 @@ class LocalCluster {
   }
   const std::string& endpoint() const { return endpoint_; }
 
-  // Submits and waits; returns the final status.
-  nlohmann::json render(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+  // (Re)starts the coordinator on `listen` with the cluster's jobs.db.
+  void startCoordinator(const std::string& listen) {
+    fs::remove(dir_ / "endpoint");
+    coordinator_ = std::make_unique<ChildProcess>(
+        std::vector<std::string>{kBin + "portico-coordinator", "--listen", listen, "--db", (dir_ / "jobs.db").string(),
+                                 "--endpoint-file", (dir_ / "endpoint").string(), "--liveness-ms", "2000",
+                                 "--heartbeat-ms", "250"},
+        (dir_ / "coordinator.log").string());
+    endpoint_.clear();
+    for (int i = 0; i < 400 && endpoint_.empty(); ++i) {
+      std::ifstream in(dir_ / "endpoint");
+      in >> endpoint_;
+      if (endpoint_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir_ / "coordinator.log"));
+  }
+  // kill -9: no chance to write anything down.
+  void killCoordinator() {
+    coordinator_->kill(SIGKILL);
+    coordinator_->wait();
+  }
+
+  uint64_t submit(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
     net::CoordinatorClient client(endpoint_);
     capnp::MallocMessageBuilder message;
     auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
@@ -86,14 +98,27 @@ class LocalCluster {
     spec.setPhotonRadius(0.5f);
     spec.setExposure(1);
     spec.setGather(2);   // final gathering: gather rays cross portals too
-    const uint64_t job = client.submit(message);
+    return client.submit(message);
+  }
+
+  nlohmann::json status(uint64_t job) {
+    net::CoordinatorClient client(endpoint_);
+    return nlohmann::json::parse(client.statusJson(job));
+  }
+
+  nlohmann::json wait(uint64_t job) {
     for (int i = 0; i < 1200; ++i) {
-      auto status = nlohmann::json::parse(client.statusJson(job));
-      const std::string state = status.value("state", "");
-      if (state != "photons" && state != "render") return status;
+      auto current = status(job);
+      const std::string state = current.value("state", "");
+      if (state != "photons" && state != "render") return current;
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
     throw std::runtime_error("job did not finish within 120 s");
+  }
+
+  // Submits and waits; returns the final status.
+  nlohmann::json render(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+    return wait(submit(store, output, photons, spp));
   }
 
  private:
@@ -196,6 +221,33 @@ TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
   expectConservation(stats);
   EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
   EXPECT_EQ(differingFloats(dir_ / "crash.exr", dir_ / "reference.exr"), 0u);
+}
+
+TEST_F(Pipeline, ACoordinatorKilledMidJobResumesFromJobsDbWithTheSameBits) {
+  const uint64_t photons = 60000;
+  {
+    LocalCluster cluster(dir_ / "restart-reference", 1);
+    ASSERT_EQ(cluster.render(store_, dir_ / "restart-reference.exr", photons, 1).value("state", ""), "done");
+  }
+  LocalCluster cluster(dir_ / "restart", 2);
+  const std::string endpoint = cluster.endpoint();   // the restart binds the same port
+  const uint64_t job = cluster.submit(store_, dir_ / "restart.exr", photons, 1);
+  // Kill it once work is under way (some leases done, the job unfinished).
+  for (int i = 0; i < 400; ++i) {
+    const auto status = cluster.status(job);
+    if (status["leases"].get<int64_t>() >= 3 || status.value("state", "") != "photons") break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  cluster.killCoordinator();
+  cluster.startCoordinator(endpoint);
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
+  EXPECT_NE(readFile(dir_ / "restart" / "coordinator.log").find("requeued"), std::string::npos);
+  const auto stats = nlohmann::json::parse(readFile(dir_ / "restart.exr.json"));
+  expectConservation(stats);
+  EXPECT_EQ(stats["photons"],
+            nlohmann::json::parse(readFile(dir_ / "restart-reference.exr.json"))["photons"]);
+  EXPECT_EQ(differingFloats(dir_ / "restart.exr", dir_ / "restart-reference.exr"), 0u);
 }
 
 TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
