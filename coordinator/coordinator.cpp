@@ -321,14 +321,19 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
   if (!lease || lease->state != "open" || lease->worker != identity) return;
   const std::string message = fmt::format("cell {}: {}", lease->cell, failure.getMessage().cStr());
   spdlog::error("lease {} failed: {}", leaseId, message);
+  const std::string counter = fmt::format("failures.cell.{}", lease->cell);
+  int64_t failures;
   {
     sql::Transaction tx(store_.database());
     store_.requeueLease(leaseId);
+    store_.addCounter(lease->job, counter, 1);
+    failures = store_.counters(lease->job)[counter];
     tx.commit();
   }
-  // A worker-side failure (corrupt cell file, bad input) would fail again
-  // on any worker; fail the job with the worker's message.
-  failJob(lease->job, message);
+  // A failure may be passing (a worker short of memory); one that repeats
+  // (a corrupt cell file) would fail forever: give up after a few attempts.
+  if (failures >= options_.maxCellFailures)
+    failJob(lease->job, fmt::format("{} (failed {} times)", message, failures));
 }
 
 void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request) {

@@ -23,6 +23,7 @@ struct CoordinatorOptions {
   int heartbeatMs = 1000;
   int livenessMs = 10000;          // silence after which a worker is presumed dead
   int64_t maxLeaseWork = 50000;    // rays per lease: about a second of tracing
+  int64_t maxCellFailures = 3;     // failed leases of one cell before its job fails
 };
 
 class Coordinator {

@@ -25,6 +25,8 @@ int main(int argc, char** argv) {
   app.add_option("--liveness-ms", options.livenessMs, "silence after which a worker is presumed dead")
       ->capture_default_str();
   app.add_option("--lease-rays", options.maxLeaseWork, "rays per lease")->capture_default_str();
+  app.add_option("--max-cell-failures", options.maxCellFailures, "failed leases of one cell before its job fails")
+      ->capture_default_str();
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

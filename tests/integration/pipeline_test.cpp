@@ -368,6 +368,29 @@ TEST_F(Pipeline, GarbageOnTheSocketIsDroppedAndTheCoordinatorKeepsServing) {
   EXPECT_NE(log.find("dropped"), std::string::npos);
 }
 
+TEST_F(Pipeline, ACorruptCellFileFailsTheJobNamingTheCellAndNothingCrashes) {
+  const fs::path dir = dir_ / "corrupt";
+  const fs::path store = dir / "store";
+  fs::create_directories(dir);
+  fs::copy(store_, store, fs::copy_options::recursive);
+  // Cell 5 (the dark room) gets garbage bytes of a plausible size.
+  {
+    std::ofstream cell(store / "cells" / "5.cell", std::ios::binary | std::ios::trunc);
+    std::mt19937 random(1);
+    for (int i = 0; i < 4096; ++i) cell.put(static_cast<char>(random()));
+  }
+  LocalCluster cluster(dir, 2);
+  const auto status = cluster.render(store, dir / "never.png", 20000, 1);
+  EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2);
+  const std::string error = status.value("error", "");
+  EXPECT_NE(error.find("cell 5"), std::string::npos) << error;
+  EXPECT_NE(error.find("5.cell"), std::string::npos) << error;
+  EXPECT_NE(error.find("failed 3 times"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(dir / "never.png"));
+  // The coordinator still serves: a good job on the same cluster finishes.
+  EXPECT_EQ(cluster.render(store_, dir / "after.png", 5000, 1).value("state", ""), "done");
+}
+
 TEST_F(Pipeline, RefusesAJobForAMissingStoreWithAClearMessage) {
   LocalCluster cluster(dir_ / "refuse", 0);
   net::CoordinatorClient client(cluster.endpoint());
