@@ -341,6 +341,23 @@ TEST_F(Pipeline, SubmitStatusAndWaitWorkAgainstServicesStartedByHand) {
   EXPECT_NE(readFile(dir / "wait999.log").find("999"), std::string::npos);
 }
 
+TEST_F(Pipeline, CancelStopsAJobAndWaitReportsIt) {
+  const fs::path dir = dir_ / "cancel";
+  LocalCluster cluster(dir, 1);
+  const uint64_t job = cluster.submit(store_, dir / "cancelled.png", 50000000, 1);
+  ASSERT_EQ(runCommand({kBin + "portico", "cancel", "--coordinator", cluster.endpoint(), std::to_string(job)},
+                       dir / "cancel.log"),
+            0)
+      << readFile(dir / "cancel.log");
+  EXPECT_NE(runCommand({kBin + "portico", "wait", "--coordinator", cluster.endpoint(), std::to_string(job)},
+                       dir / "wait.log"),
+            0);
+  const auto status = cluster.status(job);
+  EXPECT_EQ(status.value("state", ""), "cancelled");
+  EXPECT_EQ(status["photons"]["queued"].get<int64_t>(), 0);   // its queues are dropped
+  EXPECT_FALSE(fs::exists(dir / "cancelled.png"));
+}
+
 TEST_F(Pipeline, GarbageOnTheSocketIsDroppedAndTheCoordinatorKeepsServing) {
   const fs::path dir = dir_ / "garbage";
   LocalCluster cluster(dir, 1);
