@@ -270,7 +270,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   const bool active = job && isActive(job->state) && phaseOf(job->state) == lease->phase;
   JobContext* context = nullptr;
   if (active) context = &this->context(lease->job);
-  {
+  try {
     sql::Transaction tx(store_.database());
     store_.completeLease(leaseId);
     if (active) {
@@ -307,6 +307,13 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
       store_.addCounter(lease->job, "leases.completed", 1);
     }
     tx.commit();
+  } catch (const std::exception& e) {
+    // Nothing of a malformed result was kept (the transaction rolled back);
+    // its batches go back to the queue, and a cell that keeps producing
+    // bad results fails its job like any failing cell.
+    spdlog::error("rejected the result of lease {}: {}", leaseId, e.what());
+    recordCellFailure(*lease, fmt::format("cell {}: {}", lease->cell, e.what()));
+    return;
   }
   if (active) advanceIfPhaseDone(lease->job);
 }
@@ -321,19 +328,23 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
   if (!lease || lease->state != "open" || lease->worker != identity) return;
   const std::string message = fmt::format("cell {}: {}", lease->cell, failure.getMessage().cStr());
   spdlog::error("lease {} failed: {}", leaseId, message);
-  const std::string counter = fmt::format("failures.cell.{}", lease->cell);
+  recordCellFailure(*lease, message);
+}
+
+void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string& message) {
+  const std::string counter = fmt::format("failures.cell.{}", lease.cell);
   int64_t failures;
   {
     sql::Transaction tx(store_.database());
-    store_.requeueLease(leaseId);
-    store_.addCounter(lease->job, counter, 1);
-    failures = store_.counters(lease->job)[counter];
+    store_.requeueLease(lease.id);
+    store_.addCounter(lease.job, counter, 1);
+    failures = store_.counters(lease.job)[counter];
     tx.commit();
   }
   // A failure may be passing (a worker short of memory); one that repeats
   // (a corrupt cell file) would fail forever: give up after a few attempts.
   if (failures >= options_.maxCellFailures)
-    failJob(lease->job, fmt::format("{} (failed {} times)", message, failures));
+    failJob(lease.job, fmt::format("{} (failed {} times)", message, failures));
 }
 
 void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request) {

@@ -56,6 +56,8 @@ class Coordinator {
 
   void dispatch();
   bool assignWork(WorkerInfo& worker);
+  // Requeues a failed lease; fails the job once its cell has failed too often.
+  void recordCellFailure(const LeaseRecord& lease, const std::string& message);
   void advanceIfPhaseDone(uint64_t job);
   void finishJob(uint64_t job);
   void failJob(uint64_t job, const std::string& error);
