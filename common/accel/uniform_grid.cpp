@@ -28,6 +28,7 @@
 #include <string>
 
 #include "common/accel/triangle_intersect.h"
+#include "common/triangle_box_overlap.h"
 
 namespace portico {
 
@@ -45,48 +46,6 @@ constexpr double kGridPadding = 1e-4;
 // last. On the stack, so concurrent queries share nothing.
 constexpr uint32_t kMailboxSize = 64;
 
-struct Double3 {
-  double x, y, z;
-};
-Double3 operator-(const Double3& a, const Double3& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-double dot(const Double3& a, const Double3& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Double3 cross(const Double3& a, const Double3& b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-Double3 toDouble(const Vec3& v) { return {v.x, v.y, v.z}; }
-
-// Whether the triangle overlaps the box (center, halfSize): the separating
-// axis test of Akenine-Moeller (2001). Computed in double from float input,
-// and the box carries the reference margin, so rounding never loses a voxel.
-bool triangleOverlapsBox(const Double3& center, const Double3& halfSize, const Double3& v0,
-                         const Double3& v1, const Double3& v2) {
-  const Double3 a = v0 - center, b = v1 - center, c = v2 - center;
-  const auto separatedOn = [&](const Double3& axis) {
-    const double pa = dot(axis, a), pb = dot(axis, b), pc = dot(axis, c);
-    const double radius = halfSize.x * std::fabs(axis.x) + halfSize.y * std::fabs(axis.y) +
-                          halfSize.z * std::fabs(axis.z);
-    return std::min({pa, pb, pc}) > radius || std::max({pa, pb, pc}) < -radius;
-  };
-  // The box's own axes are covered by the caller, which only asks about
-  // voxels within the triangle's (grown) bounding box.
-  const Double3 edges[3] = {b - a, c - b, a - c};
-  for (const Double3& e : edges) {
-    if (separatedOn({0.0, -e.z, e.y}) || separatedOn({e.z, 0.0, -e.x}) ||
-        separatedOn({-e.y, e.x, 0.0}))
-      return false;
-  }
-  return !separatedOn(cross(edges[0], edges[1]));
-}
-
-std::array<int, 3> resolutionFromLongestAxis(const std::array<double, 3>& extent, int longest) {
-  const double longestExtent = std::max({extent[0], extent[1], extent[2]});
-  std::array<int, 3> resolution{};
-  for (int axis = 0; axis < 3; ++axis) {
-    const double voxels = std::round(longest * (extent[axis] / longestExtent));
-    resolution[axis] = static_cast<int>(std::clamp(voxels, 1.0, double(longest)));
-  }
-  return resolution;
-}
 
 }  // namespace
 
@@ -117,6 +76,16 @@ std::array<int, 3> automaticGridResolution(const std::array<double, 3>& extent,
           static_cast<int>(std::clamp(voxels, 1.0, double(kMaxAutomaticResolution)));
     }
     break;
+  }
+  return resolution;
+}
+
+std::array<int, 3> resolutionFromLongestAxis(const std::array<double, 3>& extent, int longest) {
+  const double longestExtent = std::max({extent[0], extent[1], extent[2]});
+  std::array<int, 3> resolution{};
+  for (int axis = 0; axis < 3; ++axis) {
+    const double voxels = std::round(longest * (extent[axis] / longestExtent));
+    resolution[axis] = static_cast<int>(std::clamp(voxels, 1.0, double(longest)));
   }
   return resolution;
 }
@@ -216,7 +185,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
             const Double3 center{low_[0] + (x + 0.5) * voxelSize_[0],
                                  low_[1] + (y + 0.5) * voxelSize_[1],
                                  low_[2] + (z + 0.5) * voxelSize_[2]};
-            if (!triangleOverlapsBox(center, voxelHalfSize, a, b, c)) continue;
+            if (!triangleOverlapsBoxBeyondBounds(center, voxelHalfSize, a, b, c)) continue;
           }
           visit(uint32_t(x) + strideY * uint32_t(y) + strideZ * uint32_t(z));
         }

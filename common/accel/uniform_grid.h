@@ -38,6 +38,10 @@ UniformGridOptions readUniformGridOptions(AcceleratorParameters& parameters);
 std::array<int, 3> automaticGridResolution(const std::array<double, 3>& extent,
                                            size_t triangleCount, double density);
 
+// Voxels per axis for an explicit resolution: `longest` along the longest
+// axis, the others in proportion to their extent (at least 1).
+std::array<int, 3> resolutionFromLongestAxis(const std::array<double, 3>& extent, int longest);
+
 class UniformGrid final : public Accelerator {
  public:
   // mesh's arrays must outlive this object.

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "common/scene/triangle_box_overlap.h"
+#include "common/triangle_box_overlap.h"
 
 namespace portico {
 

@@ -6,7 +6,7 @@
 //  * Voxel faces are the same floats for both neighbours (one boundary table
 //    per axis), so a portal lies exactly on both cells' faces.
 //  * A triangle is written into every voxel it touches, by a conservative
-//    separating-axis test (triangle_box_overlap.h) against the voxel grown by
+//    separating-axis test (common/triangle_box_overlap.h) against the voxel grown by
 //    overlapTolerance(): rounding may add a triangle to a neighbour, never
 //    drop it. A triangle lying in a shared face goes to both voxels.
 //  * Portals: for each axis, each of the RG - 1 inner planes, each of its

@@ -19,7 +19,7 @@
 #include "common/scene/mesh_loader.h"
 #include "common/scene/quad_light.h"
 #include "common/scene/scene_store.h"
-#include "common/scene/triangle_box_overlap.h"
+#include "common/triangle_box_overlap.h"
 #include "tests/unit/scene_test_support.h"
 
 namespace portico {
