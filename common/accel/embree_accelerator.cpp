@@ -88,14 +88,16 @@ bool traceable(const Ray& ray) {
          (ray.direction.x != 0.0f || ray.direction.y != 0.0f || ray.direction.z != 0.0f) && ray.tMin < ray.tMax;
 }
 
-// portico's hits satisfy tMin < t < tMax; Embree's tnear < t <= tfar, with
-// tnear >= 0 (a negative tMin, which portico's renderer never uses, is
-// taken as 0).
+// portico's hits satisfy tMin < t < tMax; Embree accepts tnear <= t <= tfar
+// (a hit exactly at tnear comes back: a camera ray looking past a surface
+// from t would find it again), with tnear >= 0 (a negative tMin, which
+// portico's renderer never uses, is taken as 0). So both ends move one
+// float inward.
 void fillRay(const Ray& ray, RTCRay& out) {
   out.org_x = ray.origin.x;
   out.org_y = ray.origin.y;
   out.org_z = ray.origin.z;
-  out.tnear = std::max(ray.tMin, 0.0f);
+  out.tnear = ray.tMin > 0.0f ? std::nextafter(ray.tMin, kInfinity) : 0.0f;
   out.dir_x = ray.direction.x;
   out.dir_y = ray.direction.y;
   out.dir_z = ray.direction.z;

@@ -195,9 +195,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         // Cut-away surfaces are invisible to the camera: look past them.
         if (scene_.materials()[tracer_.cell().material(event.primitive)].hiddenFromCamera &&
             ++hiddenSkipped < kMaxHiddenSurfaces) {
-          // Strictly past the hidden hit, whether an accelerator's interval
-          // is open (portico's) or closed at tMin (Embree's).
-          current.tMin = std::nextafter(event.t, kInfinity);
+          // Hits count only beyond tMin (every accelerator keeps the
+          // interval open), so this looks strictly past the hidden surface.
+          current.tMin = event.t;
           continue;
         }
         if (parameters_.aov == JobParameters::Aov::Cells)
