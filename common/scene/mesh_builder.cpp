@@ -96,6 +96,22 @@ void MeshBuilder::addParallelogram(const Vec3& corner, const Vec3& edge1, const 
   addTriangle(a, c, d, material);
 }
 
+void MeshBuilder::addSurface(int columns, int rows, bool wrapS, const std::function<Vec3(float, float)>& point,
+                             uint32_t material) {
+  if (columns < 1 || rows < 1 || (wrapS && columns < 3))
+    throw std::invalid_argument("MeshBuilder::addSurface: too few columns or rows");
+  const int distinctColumns = wrapS ? columns : columns + 1;
+  const uint32_t first = static_cast<uint32_t>(positions_.size() / 3);
+  for (int j = 0; j <= rows; ++j)
+    for (int i = 0; i < distinctColumns; ++i) addVertex(point(float(i) / float(columns), float(j) / float(rows)));
+  const auto at = [&](int i, int j) { return first + uint32_t(j * distinctColumns + (i % distinctColumns)); };
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) {
+      addTriangle(at(i, j), at(i + 1, j), at(i + 1, j + 1), material);
+      addTriangle(at(i, j), at(i + 1, j + 1), at(i, j + 1), material);
+    }
+}
+
 void MeshBuilder::moveInto(CellContent& cell) {
   cell.positions = std::move(positions_);
   cell.indices = std::move(indices_);

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/math.h"
@@ -37,14 +38,23 @@ class MeshBuilder {
   // front is the side of cross(edge1, edge2) (the convention of AreaLight).
   void addParallelogram(const Vec3& corner, const Vec3& edge1, const Vec3& edge2, uint32_t material);
 
+  // A curved surface sampled on a (columns + 1) x (rows + 1) lattice of
+  // shared vertices, point(s, t) with s, t in [0, 1]; each lattice quad
+  // becomes two triangles whose front is the side of
+  // cross(d point/ds, d point/dt). With wrapS the last column reuses the
+  // first (a closed lathe or cylinder: no seam of duplicate vertices).
+  void addSurface(int columns, int rows, bool wrapS, const std::function<Vec3(float s, float t)>& point,
+                  uint32_t material);
+
+  uint32_t addVertex(const Vec3& p);
+  void addTriangle(uint32_t a, uint32_t b, uint32_t c, uint32_t material);
+
   size_t triangleCount() const { return indices_.size() / 3; }
   // Moves the triangles into `cell` (positions, indices, materials), leaving
   // the builder empty.
   void moveInto(CellContent& cell);
 
  private:
-  uint32_t addVertex(const Vec3& p);
-  void addTriangle(uint32_t a, uint32_t b, uint32_t c, uint32_t material);
   std::vector<float> positions_;
   std::vector<uint32_t> indices_;
   std::vector<uint32_t> materials_;
