@@ -205,12 +205,13 @@ void bookshelf(Emitter& e, const PieceSpec& p, const Materials& m, float detail)
 
 void cabinet(Emitter& e, const PieceSpec& p, const Materials& m, float detail) {
   const float w = p.width, d = p.depth, h = p.height;
-  e.box(Bounds3(Vec3(0, 0, 0), Vec3(w, h, d)), m.white, false);
-  e.box(Bounds3(Vec3(-0.01f, h, -0.01f), Vec3(w + 0.01f, h + 0.03f, d + 0.01f)), m.wood, true);
+  // The body stands 4 cm back so that the top's overhang and the knobs stay on the footprint.
+  e.box(Bounds3(Vec3(0.01f, 0, 0.04f), Vec3(w - 0.01f, h, d - 0.01f)), m.white, false);
+  e.box(Bounds3(Vec3(0, h, 0.03f), Vec3(w, h + 0.03f, d)), m.wood, true);
   const int doors = std::max(1, int(w / 0.45f));
   for (int k = 0; k < doors; ++k) {   // a round knob per door, on the front (-z)
     const float x = w * (float(k) + 0.5f) / float(doors);
-    cushion(e, Vec3(x, 0.75f * h, -0.015f), Vec3(0.015f, 0.015f, 0.015f), detail * 0.5f, m.metal);
+    cushion(e, Vec3(x, 0.75f * h, 0.02f), Vec3(0.015f, 0.015f, 0.015f), detail * 0.5f, m.metal);
   }
 }
 
@@ -232,8 +233,10 @@ void plant(Emitter& e, const PieceSpec& p, const Materials& m, float detail) {
   for (int k = 0; k < leaves; ++k) {
     const float angle = kTwoPi * (float(k) / float(leaves)) + 0.37f * float(p.variant % 7);
     const float tier = float(k % 3) / 3.0f;
-    leaf(e, Vec3(cx, potHeight + tier * 0.3f * p.height, cz), angle, 0.5f * p.height * (1.0f - 0.3f * tier),
-         0.12f + 0.04f * tier, 0.5f * p.height, detail, m.leaf);
+    // Leaves reach at most to the footprint's edge (their width adds a little).
+    leaf(e, Vec3(cx, potHeight + tier * 0.3f * p.height, cz), angle,
+         (0.5f * std::min(p.width, p.depth) - 0.06f) * (1.0f - 0.3f * tier), 0.1f + 0.02f * tier, 0.5f * p.height,
+         detail, m.leaf);
   }
 }
 
