@@ -15,6 +15,7 @@
 #include <stdexcept>
 
 #include "common/scene/building_json.h"
+#include "common/scene/store_scene_reader.h"
 #include "common/scene/imported_scene.h"
 #include "common/scene/mesh_loader.h"
 #include "common/scene/quad_light.h"
@@ -48,7 +49,7 @@ class MaterialTable {
   uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out) {
     const std::array<float, 6> key{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
     auto [it, inserted] = ids_.emplace(key, static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission});
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false});
     return it->second;
   }
 
@@ -137,6 +138,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
     } catch (const std::runtime_error& e) {
       fail(fmt::format("{}: {}", entry.label(), e.what()));
     }
+    scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     ImportedObject object;
     object.label = entry.label();
     object.cell = givenCells ? cellIds.at(entry.cell) : 0;
@@ -182,6 +184,7 @@ ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
   MaterialTable materials;
   for (const std::string& path : paths) {
     const LoadedMeshFile mesh = loadMeshFile(path);
+    scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     for (const MeshFilePart& part : mesh.parts) {
       const MeshFileMaterial& source = mesh.materials[part.material];
       const std::string label = fmt::format("mesh file '{}': part '{}'", path, part.name);
@@ -250,8 +253,8 @@ void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
 
 }  // namespace
 
-void importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
-                    const ImportOptions& options) {
+ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
+                             const ImportOptions& options) {
   if (inputs.empty()) throw std::runtime_error("scene import: no input (a building.json, or mesh files)");
   if (options.gridResolution > kMaxImportGridResolution)
     throw std::runtime_error(fmt::format("scene import: --grid {} is above the maximum of {}", options.gridResolution,
@@ -264,24 +267,33 @@ void importBuilding(const std::vector<std::string>& inputs, const std::string& s
   if (!building && !options.camera.empty())
     throw std::runtime_error("scene import: a camera name needs a building.json with \"cameras\"");
 
-  const ImportedScene scene = building ? sceneFromBuildingJson(inputs.front(), options) : sceneFromMeshFiles(inputs);
+  // A scene store as input: re-cut a generated or imported building (--grid).
+  const bool store = inputs.size() == 1 && isSceneStore(inputs.front());
+  if (store && options.gridResolution == 0)
+    throw std::runtime_error(fmt::format("scene import: {} is already a scene store; give --grid RG to re-cut it "
+                                         "into uniform cells", inputs.front()));
+  const ImportedScene scene = store      ? sceneFromStore(inputs.front())
+                              : building ? sceneFromBuildingJson(inputs.front(), options)
+                                         : sceneFromMeshFiles(inputs);
 
   nlohmann::json sources = nlohmann::json::array();
   for (const std::string& input : inputs) sources.push_back(fs::absolute(input).lexically_normal().string());
   SceneStoreWriter writer(storeDirectory);
   writer.setMeta("generator", "import");
   writer.setMeta("source", sources.dump());
+  writer.setMeta("degenerate_triangles_dropped", std::to_string(scene.degenerateTrianglesDropped));
   writer.setMeta("cells",
                  options.gridResolution > 0
                      ? fmt::format("grid {}^3", options.gridResolution)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
   for (const ImportedMaterial& material : scene.materials)
-    writer.addMaterial(material.name, material.albedo, material.emission);
+    writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
   if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
   else
     writeGivenCells(scene, writer);
   writer.commit();
+  return ImportSummary{scene.triangleCount(), scene.degenerateTrianglesDropped};
 }
 
 }  // namespace portico

@@ -13,7 +13,8 @@
 //
 // Everything is read and checked before the store is created, so a failed
 // import leaves no directory behind: every error is a std::runtime_error of
-// one line naming the file and the object at fault.
+// one line naming the file and the object at fault. Degenerate (zero-area)
+// triangles are not errors: they are dropped and counted.
 #pragma once
 
 #include <cstdint>
@@ -32,7 +33,14 @@ struct ImportOptions {
 // The largest gridResolution accepted (16.7 million cells).
 constexpr uint32_t kMaxImportGridResolution = 256;
 
-void importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
-                    const ImportOptions& options = {});
+// What an import did besides writing the store; also in the store's meta
+// ("degenerate_triangles_dropped").
+struct ImportSummary {
+  uint64_t triangles = 0;                    // of the input, as kept (before any grid cutting)
+  uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
+};
+
+ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
+                             const ImportOptions& options = {});
 
 }  // namespace portico

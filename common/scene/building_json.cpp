@@ -1,6 +1,7 @@
-// building.json -> BuildingDescription. Unknown keys are ignored (the
-// reference scenes carry descriptions, derived camera vectors, triangle
-// counts); known keys are checked strictly, and every error is one line that
+// building.json -> BuildingDescription. Every key is checked: known keys
+// strictly, descriptive ones (the reference scenes carry descriptions,
+// derived camera vectors, triangle counts) and '_'-prefixed ones are
+// ignored, any other is refused by name. Every error is one line that
 // starts with the file and names what is wrong.
 #include "common/scene/building_json.h"
 
@@ -12,11 +13,15 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+
+#include "common/scene/portal_geometry.h"
 
 namespace portico {
 
@@ -67,6 +72,17 @@ std::string markNonFiniteLiterals(const std::string& text) {
   return out;
 }
 
+// Keys that describe rather than define (the reference scenes carry them):
+// accepted anywhere and ignored, like every key starting with '_'.
+constexpr std::string_view kDescriptiveKeys[] = {
+    "description", "note", "notes", "comment", "triangles", "area_m2", "camera_derived", "camera_model",
+    "coordinate_system", "emission_model", "material_model", "geometry", "pixel_values", "room_aabb"};
+
+bool isDescriptiveKey(const std::string& key) {
+  return key.rfind('_', 0) == 0 ||
+         std::find(std::begin(kDescriptiveKeys), std::end(kDescriptiveKeys), key) != std::end(kDescriptiveKeys);
+}
+
 class Reader {
  public:
   explicit Reader(std::string path) : path_(std::move(path)) {}
@@ -103,6 +119,19 @@ class Reader {
     if (number != std::floor(number) || number < 1 || number > maximum)
       fail(fmt::format("{} = {} must be a whole number in [1, {}]", what, number, maximum));
     return static_cast<uint32_t>(number);
+  }
+
+  // Refuses a key of `object` that is neither in `known` nor descriptive
+  // (see kDescriptiveKeys): a misspelt "emision" would otherwise silently
+  // turn a light off.
+  void requireKnownKeys(const json& object, const std::string& what,
+                        std::initializer_list<std::string_view> known) const {
+    for (const auto& [key, value] : object.items()) {
+      if (std::find(known.begin(), known.end(), key) != known.end() || isDescriptiveKey(key)) continue;
+      std::string names;
+      for (std::string_view name : known) names += fmt::format("{}{}", names.empty() ? "" : ", ", name);
+      fail(fmt::format("{}: unknown key \"{}\" (known: {}; keys starting with '_' are ignored)", what, key, names));
+    }
   }
 
   const json* member(const json& object, const char* key) const {
@@ -153,8 +182,10 @@ std::vector<BuildingCell> readCells(const Reader& reader, const json& list) {
     if (cell.name.empty()) reader.fail(what + ".name is empty");
     what = fmt::format("cell '{}'", cell.name);
     if (!names.insert(cell.name).second) reader.fail(fmt::format("{} is defined twice", what));
+    reader.requireKnownKeys(entry, what, {"name", "aabb"});
     const json& aabb = reader.required(entry, "aabb", what);
     if (!aabb.is_object()) reader.fail(what + ": \"aabb\" must be an object with \"min\" and \"max\"");
+    reader.requireKnownKeys(aabb, what + " aabb", {"min", "max"});
     cell.bounds.lo = reader.vec3(reader.required(aabb, "min", what + " aabb"), what + " aabb.min");
     cell.bounds.hi = reader.vec3(reader.required(aabb, "max", what + " aabb"), what + " aabb.max");
     for (int axis = 0; axis < 3; ++axis)
@@ -204,6 +235,7 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
       object.name = reader.string(*name, what + ".name");
     if (object.name.empty()) object.name = meshPath.stem().string();
     what = object.label();
+    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission"});
 
     if (const json* cell = reader.member(entry, "cell")) {
       object.cell = reader.string(*cell, what + ".cell");
@@ -240,6 +272,7 @@ std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
     if (!entry.is_object()) reader.fail(what + " must be an object");
     BuildingPortal portal;
     portal.index = i;
+    reader.requireKnownKeys(entry, what, {"between", "polygon"});
     const json& between = reader.required(entry, "between", what);
     if (!between.is_array() || between.size() != 2)
       reader.fail(what + ": \"between\" must be an array of two cell names");
@@ -255,15 +288,10 @@ std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
       portal.polygon.push_back(reader.vec3(polygon[p], fmt::format("{} polygon[{}]", label, p)));
     if (std::string problem = portalShapeProblem(portal.polygon); !problem.empty())
       reader.fail(fmt::format("{}: polygon {}", label, problem));
-    // A portal is where its two cells meet: it must lie in both boxes.
-    for (const std::string& name : {portal.cellA, portal.cellB}) {
-      const Bounds3 box = findCell(cells, name)->bounds;
-      const float tolerance = 1e-4f * std::max(1.0f, maxComponent(box.diagonal()));
-      const Bounds3 grown(box.lo - Vec3(tolerance), box.hi + Vec3(tolerance));
-      for (size_t p = 0; p < portal.polygon.size(); ++p)
-        if (!grown.contains(portal.polygon[p]))
-          reader.fail(fmt::format("{}: polygon[{}] lies outside the aabb of cell '{}'", label, p, name));
-    }
+    // A portal is where its two cells meet: it must lie on a face of both boxes.
+    for (const std::string& name : {portal.cellA, portal.cellB})
+      if (std::string problem = portalBoundaryProblem(findCell(cells, name)->bounds, portal.polygon); !problem.empty())
+        reader.fail(fmt::format("{}: polygon is not on the boundary of cell '{}': {}", label, name, problem));
     portals.push_back(std::move(portal));
   }
   return portals;
@@ -271,6 +299,7 @@ std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
 
 BuildingCamera readCamera(const Reader& reader, const json& entry, const std::string& what) {
   if (!entry.is_object()) reader.fail(what + " must be an object");
+  reader.requireKnownKeys(entry, what, {"name", "origin", "target", "up", "fov_y_deg", "width", "height"});
   BuildingCamera result;
   Camera& camera = result.camera;
   camera.origin = reader.vec3(reader.required(entry, "origin", what), what + ".origin");
@@ -324,38 +353,11 @@ std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) 
 
 std::string BuildingObject::label() const { return fmt::format("objects[{}] ('{}')", index, name); }
 
-std::string portalShapeProblem(const std::vector<Vec3>& polygon) {
-  if (polygon.size() < 3) return fmt::format("has {} points; a polygon needs at least 3", polygon.size());
-  Bounds3 box;
-  for (const Vec3& p : polygon) box.extend(p);
-  const float size = maxComponent(box.diagonal());
-  // Newell's normal: robust for any planar polygon, zero for a degenerate one.
-  Vec3 newell(0);
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Vec3& a = polygon[i];
-    const Vec3& b = polygon[(i + 1) % polygon.size()];
-    newell += Vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
-  }
-  if (!(size > 0.0f) || length(newell) <= 1e-8f * size * size) return "has zero area";
-  const Vec3 normal = normalize(newell);
-  for (size_t i = 0; i < polygon.size(); ++i)
-    if (std::abs(dot(polygon[i] - polygon[0], normal)) > 1e-4f * size)
-      return fmt::format("is not planar (point {} lies {} m off the plane of the others)", i,
-                         std::abs(dot(polygon[i] - polygon[0], normal)));
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Vec3& a = polygon[i];
-    const Vec3& b = polygon[(i + 1) % polygon.size()];
-    const Vec3& c = polygon[(i + 2) % polygon.size()];
-    if (dot(cross(b - a, c - b), normal) < -1e-6f * size * size)
-      return fmt::format("is not convex (it turns the other way at point {})", (i + 1) % polygon.size());
-  }
-  return {};
-}
-
 BuildingDescription readBuildingJson(const std::string& path) {
   const json root = parseFile(path);
   const Reader reader(path);
   if (!root.is_object()) reader.fail("the top level must be a JSON object");
+  reader.requireKnownKeys(root, "top level", {"name", "units", "objects", "cells", "portals", "camera", "cameras"});
   BuildingDescription building;
   building.path = path;
   building.name = fs::path(path).stem().string();

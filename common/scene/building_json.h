@@ -55,8 +55,4 @@ struct BuildingDescription {
 // object, cell, portal or camera at fault.
 BuildingDescription readBuildingJson(const std::string& path);
 
-// Empty when `polygon` is a usable portal (at least 3 finite points, planar
-// and convex within a tolerance relative to its size), otherwise the problem.
-std::string portalShapeProblem(const std::vector<Vec3>& polygon);
-
 }  // namespace portico

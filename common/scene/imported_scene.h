@@ -18,6 +18,7 @@ struct ImportedMaterial {
   std::string name;
   Vec3 albedo;
   Vec3 emission;
+  bool hiddenFromCamera = false;   // kept when a scene store is re-cut
 };
 
 // One object of a building.json, or one part of a mesh file.
@@ -60,6 +61,7 @@ struct ImportedScene {
   std::vector<ImportedLight> lights;
   Camera camera;                         // cell: index into cells
   Bounds3 bounds;                        // triangles, camera origins and given cells, not padded
+  uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
   uint64_t triangleCount() const {
     uint64_t count = 0;
     for (const ImportedObject& object : objects) count += object.triangleCount();

@@ -48,6 +48,18 @@ MeshFileMaterial readMaterial(const aiMaterial& source, size_t index) {
   return material;
 }
 
+// Zero area: a repeated corner, or corners on one line so exactly that the
+// cross product of the edges is zero in float. Such a triangle has no normal
+// (normalising gives NaN) and can never be hit, so it is dropped.
+bool isDegenerate(const std::vector<float>& positions, uint32_t a, uint32_t b, uint32_t c) {
+  if (a == b || b == c || a == c) return true;
+  const auto at = [&](uint32_t i) {
+    const float* p = &positions[3 * size_t{i}];
+    return Vec3(p[0], p[1], p[2]);
+  };
+  return !(length(cross(at(b) - at(a), at(c) - at(a))) > 0.0f);
+}
+
 class PartCollector {
  public:
   PartCollector(const aiScene& scene, LoadedMeshFile& file) : scene_(scene), file_(file) {}
@@ -84,6 +96,13 @@ class PartCollector {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices != 3) continue;   // points and lines
       const uint32_t a = face.mIndices[0], b = face.mIndices[1], c = face.mIndices[2];
+      if (std::max({a, b, c}) >= mesh.mNumVertices)
+        fail(file_.path, fmt::format("part '{}': face {} uses vertex {}, but the part has {} vertices", part.name, f,
+                                     std::max({a, b, c}), mesh.mNumVertices));
+      if (isDegenerate(part.positions, a, b, c)) {
+        ++file_.degenerateTriangles;
+        continue;
+      }
       if (mirrors)
         part.indices.insert(part.indices.end(), {a, c, b});
       else
@@ -112,7 +131,8 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
   Assimp::Importer importer;
   // Only what every format needs: polygons to triangles, shared vertices.
   // Deliberately absent: winding flips, left-handed conversion, generated or
-  // fixed normals, degenerate removal (the file's triangles are the scene).
+  // fixed normals, Assimp's degenerate removal (it would turn some triangles
+  // into lines and points silently; PartCollector drops and counts them).
   const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
   if (scene == nullptr) fail(path, fmt::format("cannot be read: {}", oneLine(importer.GetErrorString())));
   if (scene->mRootNode == nullptr) fail(path, "cannot be read: the file has no scene");
@@ -122,7 +142,10 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) file.materials.push_back(readMaterial(*scene->mMaterials[m], m));
   if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
   PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");
-  if (file.parts.empty()) fail(path, "has no triangles");
+  if (file.parts.empty())
+    fail(path, file.degenerateTriangles > 0
+                   ? fmt::format("has no triangles but {} degenerate (zero-area) ones", file.degenerateTriangles)
+                   : std::string("has no triangles"));
   return file;
 }
 

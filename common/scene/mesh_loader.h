@@ -11,7 +11,8 @@
 //  * Units and axes. Positions are used as they are: metres, right-handed,
 //    +Y up. Node transforms (glTF hierarchies, a Collada up-axis fix) are
 //    applied.
-// Points and lines are dropped; a file with no triangle at all is an error.
+// Points and lines are dropped, and so are degenerate (zero-area) triangles,
+// counted; a file with no triangle left is an error.
 #pragma once
 
 #include <cstdint>
@@ -42,6 +43,9 @@ struct LoadedMeshFile {
   std::string path;
   std::vector<MeshFileMaterial> materials;
   std::vector<MeshFilePart> parts;   // only parts with at least one triangle
+  // Zero-area triangles left out of `parts` (a repeated corner, or three
+  // corners on one line): they have no normal and can never be hit.
+  size_t degenerateTriangles = 0;
   size_t triangleCount() const;
 };
 

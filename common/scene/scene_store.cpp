@@ -198,6 +198,10 @@ std::string SceneStore::cellPath(uint32_t cell) const {
   return (fs::path(directory_) / cells_[cell].file).string();
 }
 
+std::string SceneStore::cataloguePath() const {
+  return (fs::path(directory_) / scene_schema::kDatabaseFile).string();
+}
+
 std::optional<uint32_t> SceneStore::locateCell(const Vec3& p) const {
   // Cells may nest (a room inside a voxel of a coarse grid) and touching
   // cells share their boundary planes: the smallest cell is the most specific.

@@ -27,6 +27,7 @@ class SceneStore {
   // Free-form facts about the store (format, generator, seed, ...).
   const std::map<std::string, std::string>& meta() const { return meta_; }
   std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
+  std::string cataloguePath() const;              // absolute path of scene.db
   // The cell whose bounds contain p (the smallest, when several do); nullopt if none.
   std::optional<uint32_t> locateCell(const Vec3& p) const;
   uint64_t totalTriangles() const;

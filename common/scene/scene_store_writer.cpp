@@ -11,8 +11,10 @@
 #include <optional>
 #include <stdexcept>
 #include <system_error>
+#include <unordered_map>
 
 #include "common/scene/cell_file_writer.h"
+#include "common/scene/portal_geometry.h"
 #include "common/scene/scene_store.h"
 #include "common/scene/scene_store_schema.h"
 #include "common/util/sqlite.h"
@@ -35,46 +37,11 @@ bool isReplaceable(const fs::path& directory) {
   return fs::is_empty(directory, error) || fs::exists(directory / scene_schema::kDatabaseFile, error);
 }
 
-// Whether `p` lies in `box` grown by a small tolerance relative to its size
-// (coordinates computed by an importer or generator may be a few ulps off).
+// Whether `p` lies in `box` grown by boxTolerance (coordinates computed by
+// an importer or generator may be a few ulps off).
 bool nearlyContains(const Bounds3& box, const Vec3& p) {
-  const float tolerance = 1e-4f * std::max(1.0f, maxComponent(box.diagonal()));
+  const float tolerance = boxTolerance(box);
   return box.contains(p) || Bounds3(box.lo - Vec3(tolerance), box.hi + Vec3(tolerance)).contains(p);
-}
-
-// Newell's normal: robust for any planar polygon, zero for a degenerate one.
-Vec3 newellNormal(const std::vector<Vec3>& polygon) {
-  Vec3 normal(0);
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    const Vec3& a = polygon[i];
-    const Vec3& b = polygon[(i + 1) % polygon.size()];
-    normal += Vec3((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y));
-  }
-  return normal;
-}
-
-// Empty when the polygon is a usable portal; otherwise what is wrong with it.
-std::string portalPolygonProblem(const std::vector<Vec3>& polygon) {
-  if (polygon.size() < 3) return fmt::format("has {} vertices, a polygon needs at least 3", polygon.size());
-  Bounds3 box;
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    if (!isFinite(polygon[i])) return fmt::format("vertex {} is not finite {}", i, formatVec(polygon[i]));
-    box.extend(polygon[i]);
-  }
-  const float size = std::max(1e-6f, maxComponent(box.diagonal()));
-  const Vec3 newell = newellNormal(polygon);
-  if (length(newell) <= 1e-8f * size * size) return "has zero area";
-  const Vec3 normal = normalize(newell);
-  for (size_t i = 0; i < polygon.size(); ++i) {
-    if (std::abs(dot(polygon[i] - polygon[0], normal)) > 1e-4f * size)
-      return fmt::format("is not planar (vertex {} lies off the plane of the others)", i);
-    const Vec3& a = polygon[i];
-    const Vec3& b = polygon[(i + 1) % polygon.size()];
-    const Vec3& c = polygon[(i + 2) % polygon.size()];
-    if (dot(cross(b - a, c - b), normal) < -1e-6f * size * size)
-      return fmt::format("is not convex (turns the wrong way at vertex {})", (i + 1) % polygon.size());
-  }
-  return {};
 }
 
 }  // namespace
@@ -93,6 +60,9 @@ struct SceneStoreWriter::Impl {
   uint64_t maxChunkElements = kMaxCellChunkElements;
   std::vector<Material> materials;
   std::vector<Portal> portals;
+  // Portal ids by cell, filled by addPortal: writeCell looks up its portals
+  // instead of scanning them all (an RG^3 voxel grid has 3 RG^2 (RG - 1)).
+  std::unordered_map<uint32_t, std::vector<uint32_t>> portalsByCell;
   std::vector<AreaLight> lights;
   std::optional<Camera> camera;
   std::map<std::string, std::string> meta;
@@ -182,9 +152,11 @@ uint32_t SceneStoreWriter::addPortal(uint32_t cellA, uint32_t cellB, const std::
     if (impl_->cells.count(cell))
       impl_->fail(fmt::format("{}: {} was already written; add portals before writing the cells they touch",
                               what, impl_->describeCell(cell)));
-  if (std::string problem = portalPolygonProblem(polygon); !problem.empty())
+  if (std::string problem = portalShapeProblem(polygon); !problem.empty())
     impl_->fail(fmt::format("{}: polygon {}", what, problem));
   impl_->portals.push_back(Portal{id, cellA, cellB, polygon});
+  impl_->portalsByCell[cellA].push_back(id);
+  impl_->portalsByCell[cellB].push_back(id);
   return id;
 }
 
@@ -257,8 +229,8 @@ void SceneStoreWriter::writeCell(const CellContent& cell) {
   }
 
   std::vector<const Portal*> touching;
-  for (const Portal& portal : impl_->portals)
-    if (portal.cellA == cell.id || portal.cellB == cell.id) touching.push_back(&portal);
+  if (auto it = impl_->portalsByCell.find(cell.id); it != impl_->portalsByCell.end())
+    for (uint32_t portal : it->second) touching.push_back(&impl_->portals[portal]);   // in id order, as before
 
   const std::string file = fmt::format("{}/{}.cell", scene_schema::kCellDirectory, cell.id);
   written.info = CellInfo{cell.id, cell.name, cell.bounds, triangleCount, 0, file};

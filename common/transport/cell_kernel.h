@@ -19,6 +19,10 @@
 
 namespace portico {
 
+// JobSpec.lightHops meaning "choose from the store": 2 for room cells, all
+// lights for voxel cells (scene import --grid).
+constexpr int kAutomaticLightHops = -2;
+
 struct JobParameters {
   uint64_t seed = 1;
   uint32_t spp = 4;

@@ -34,6 +34,8 @@ CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
 }
 
 namespace {
+constexpr float kPortalSlack = 1e-4f;   // metres
+
 float distanceToSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Vec3 ab = b - a;
   const float len2 = dot(ab, ab);
@@ -86,6 +88,10 @@ CellEvent CellTracer::trace(const Ray& ray) const {
     const WatertightRay frame(ray.direction);
     Ray limited = ray;
     limited.tMax = event.kind == CellEvent::Kind::Surface ? hit.t : ray.tMax;
+    // A ray starting on a portal's plane (a camera exactly on a voxel face)
+    // and moving out must leave at t = 0, whatever the rounding of t: an
+    // outward portal a hair behind the origin still counts.
+    limited.tMin = std::min(ray.tMin, -kPortalSlack);
     for (const PortalTriangle& portal : portalTriangles_) {
       if (dot(ray.direction, portal.outward) <= 0) continue;
       float t, u, v;

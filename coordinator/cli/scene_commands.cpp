@@ -1,21 +1,37 @@
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <filesystem>
 #include <iostream>
+#include <optional>
 
+#include "common/scene/building_generator.h"
 #include "common/scene/building_importer.h"
 #include "common/scene/demo_generator.h"
+#include "common/scene/floor_levels.h"
 #include "common/scene/scene_store.h"
+#include "common/scene/scene_validation.h"
+#include "coordinator/cli/compressed_size.h"
 #include "coordinator/cli/commands.h"
 
 namespace portico::cli {
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store) {
   if (preset == "demo") {
-    if (floors != 1) std::cerr << "portico: the demo preset has one floor; --floors ignored\n";
+    if (floors > 1) std::cerr << "portico: the demo preset has one floor; --floors ignored\n";
     generateDemoBuilding(store, seed);
+  } else if (const std::optional<BuildingPreset> building = findBuildingPreset(preset, floors)) {
+    if (floors != 0 && preset != "tower")
+      std::cerr << fmt::format("portico: preset {} has {} floors; --floors is for the tower\n", preset, building->floors);
+    const GeneratedBuildingStats stats = generateBuilding(*building, seed, store);
+    std::cerr << fmt::format("portico: generated {} ({} triangles, {} cells) in {:.1f} s: {:.2f} M triangles/s\n",
+                             preset, stats.triangles, stats.cells, stats.seconds,
+                             double(stats.triangles) / std::max(1e-9, stats.seconds) / 1e6);
   } else {
-    std::cerr << fmt::format("portico: unknown preset '{}' (known: demo)\n", preset);
+    std::cerr << fmt::format("portico: unknown preset '{}' (known: demo, {})\n", preset,
+                             fmt::join(buildingPresetNames(), ", "));
     return 2;
   }
   return runSceneInfo(store, false);
@@ -26,18 +42,73 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
   return runSceneInfo(store, false);
 }
 
+namespace {
+
+std::string formatBytes(uint64_t bytes) {
+  const char* const units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double value = double(bytes);
+  int unit = 0;
+  while (value >= 1024 && unit < 4) value /= 1024, ++unit;
+  return unit == 0 ? fmt::format("{} B", bytes) : fmt::format("{:.1f} {}", value, units[unit]);
+}
+
+// Table 2's columns: the store's files as they lie on disk (cell files and
+// scene.db), and the same files each deflated by zlib.
+struct StoreBytes {
+  uint64_t raw = 0;
+  std::optional<uint64_t> compressed;
+};
+
+StoreBytes measureStore(const SceneStore& store, bool compress) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> files{store.cataloguePath()};
+  for (const CellInfo& cell : store.cells()) files.push_back(store.cellPath(cell.id));
+  StoreBytes bytes;
+  if (compress) bytes.compressed = 0;
+  for (const std::string& file : files) {
+    std::error_code error;
+    const uintmax_t size = fs::file_size(file, error);
+    if (error) continue;   // a missing cell file is the validation's to report
+    bytes.raw += size;
+    if (compress) *bytes.compressed += zlibCompressedSize(file);
+  }
+  return bytes;
+}
+
+}  // namespace
+
 int runSceneInfo(const std::string& directory, bool json) {
+  return runSceneInfo(directory, SceneInfoOptions{json, /*compress=*/false});
+}
+
+int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) {
   const SceneStore store = SceneStore::open(directory);
-  uint64_t maxTriangles = 0;
-  for (const CellInfo& cell : store.cells()) maxTriangles = std::max(maxTriangles, cell.triangleCount);
+  uint64_t maxTriangles = 0, emptyCells = 0;
+  for (const CellInfo& cell : store.cells()) {
+    maxTriangles = std::max(maxTriangles, cell.triangleCount);
+    emptyCells += cell.triangleCount == 0 ? 1 : 0;
+  }
+  const double avgTriangles = double(store.totalTriangles()) / double(std::max<size_t>(1, store.cells().size()));
+  const uint32_t floors = floorCount(store);
+  const StoreBytes bytes = measureStore(store, options.compress);
+  const std::vector<std::string> problems = validateSceneStore(store);
+
   nlohmann::json info;
   info["store"] = store.directory();
   info["cells"] = store.cells().size();
+  info["empty_cells"] = emptyCells;
   info["portals"] = store.portals().size();
   info["lights"] = store.lights().size();
   info["materials"] = store.materials().size();
+  info["floors"] = floors;
   info["triangles"] = store.totalTriangles();
+  info["avg_triangles_per_cell"] = avgTriangles;
   info["max_triangles_per_cell"] = maxTriangles;
+  info["bytes"] = bytes.raw;
+  info["bytes_compressed"] = bytes.compressed ? nlohmann::json(*bytes.compressed) : nlohmann::json(nullptr);
+  info["valid"] = problems.empty();
+  info["problems"] = problems;
+  info["meta"] = store.meta();
   const Camera& camera = store.camera();
   info["camera"] = {{"origin", {camera.origin.x, camera.origin.y, camera.origin.z}},
                     {"target", {camera.target.x, camera.target.y, camera.target.z}},
@@ -49,18 +120,48 @@ int runSceneInfo(const std::string& directory, bool json) {
   for (const CellInfo& cell : store.cells())
     cells.push_back({{"id", cell.id}, {"name", cell.name}, {"triangles", cell.triangleCount}, {"bytes", cell.byteCount}});
   info["cell_list"] = cells;
-  if (json) {
+  if (options.json) {
     std::cout << info.dump() << "\n";
+    return problems.empty() ? 0 : 1;
+  }
+
+  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} floor{}, {} materials, {} triangles\n",
+                           store.directory(), store.cells().size(), store.portals().size(), store.lights().size(),
+                           floors, floors == 1 ? "" : "s", store.materials().size(), store.totalTriangles());
+  std::cout << fmt::format("triangles per cell: avg {:.1f}, max {} ({} cell{} without triangles)\n", avgTriangles,
+                           maxTriangles, emptyCells, emptyCells == 1 ? "" : "s");
+  if (bytes.compressed)
+    std::cout << fmt::format("on disk: {} ({} bytes), zlib-compressed {} ({} bytes, {:.0f} %)\n",
+                             formatBytes(bytes.raw), bytes.raw, formatBytes(*bytes.compressed), *bytes.compressed,
+                             100.0 * double(*bytes.compressed) / double(std::max<uint64_t>(1, bytes.raw)));
+  else
+    std::cout << fmt::format("on disk: {} ({} bytes)\n", formatBytes(bytes.raw), bytes.raw);
+  if (auto it = store.meta().find("degenerate_triangles_dropped"); it != store.meta().end() && it->second != "0")
+    std::cout << fmt::format("import dropped {} degenerate triangles\n", it->second);
+  std::cout << fmt::format("camera: {}x{} in cell {}{}\n", camera.width, camera.height, camera.cell,
+                           camera.cell < store.cells().size() ? fmt::format(" ('{}')", store.cells()[camera.cell].name)
+                                                              : std::string());
+  // A store of 10^4 cells would bury the summary: list the largest few.
+  constexpr size_t kListedCells = 64, kLargestCells = 10;
+  std::vector<const CellInfo*> listed;
+  for (const CellInfo& cell : store.cells()) listed.push_back(&cell);
+  if (listed.size() > kListedCells) {
+    std::stable_sort(listed.begin(), listed.end(),
+                     [](const CellInfo* a, const CellInfo* b) { return a->triangleCount > b->triangleCount; });
+    listed.resize(kLargestCells);
+    std::cout << fmt::format("the {} largest of {} cells (--json lists every cell):\n", kLargestCells,
+                             store.cells().size());
+  }
+  for (const CellInfo* cell : listed)
+    std::cout << fmt::format("  cell {:4} {:20} {:8} triangles {:10} bytes\n", cell->id, cell->name,
+                             cell->triangleCount, cell->byteCount);
+  if (problems.empty()) {
+    std::cout << "valid: portals on their cells' boundaries, no dangling ids, every cell file readable\n";
     return 0;
   }
-  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} materials, {} triangles (max {} per cell)\n",
-                           store.directory(), store.cells().size(), store.portals().size(), store.lights().size(),
-                           store.materials().size(), store.totalTriangles(), maxTriangles);
-  std::cout << fmt::format("camera: {}x{} in cell {}\n", camera.width, camera.height, camera.cell);
-  for (const CellInfo& cell : store.cells())
-    std::cout << fmt::format("  cell {:4} {:20} {:8} triangles {:10} bytes\n", cell.id, cell.name, cell.triangleCount,
-                             cell.byteCount);
-  return 0;
+  std::cout << fmt::format("INVALID: {} problem{}\n", problems.size(), problems.size() == 1 ? "" : "s");
+  for (const std::string& problem : problems) std::cout << "  " << problem << "\n";
+  return 1;
 }
 
 }  // namespace portico::cli

@@ -338,6 +338,15 @@ struct BrokenBuilding {
     EXPECT_EQ(error.find('\n'), std::string::npos) << "not one line: " << error;
     return error;
   }
+  // Imports with the floor's mesh replaced by `file` holding `contents`;
+  // returns the error, after checking it names the file and the object.
+  std::string floorMeshError(const std::string& file, const std::string& contents) const {
+    writeText(temp.path() / file, contents);
+    const std::string error = importError({{"\"floor.obj\"", "\"" + file + "\""}});
+    EXPECT_NE(error.find(file), std::string::npos) << error;
+    EXPECT_NE(error.find("'floor'"), std::string::npos) << error;
+    return error;
+  }
 };
 
 TEST(BuildingImportErrors, TheUnbrokenBuildingImports) {
@@ -362,19 +371,17 @@ TEST(BuildingImportErrors, MissingMeshNamesTheFileAndObject) {
 TEST(BuildingImportErrors, UnreadableMeshNamesTheFile) {
   TempDirectory temp;
   BrokenBuilding building(temp);
-  writeText(temp.path() / "junk.obj", "this is not a mesh\n");
-  const std::string error = building.importError({{"\"floor.obj\"", "\"junk.obj\""}});
-  EXPECT_NE(error.find("junk.obj"), std::string::npos) << error;
-  EXPECT_NE(error.find("'floor'"), std::string::npos) << error;
+  building.floorMeshError("junk.obj", "this is not a mesh\n");
+  const std::string error = building.floorMeshError("junk.glb", "glTF but not really");
+  EXPECT_NE(error.find("cannot be read"), std::string::npos) << error;
+  fs::create_directory(temp.path() / "folder.obj");
+  EXPECT_NE(building.importError({{"\"floor.obj\"", "\"folder.obj\""}}).find("is not a regular file"),
+            std::string::npos);
 }
 
 TEST(BuildingImportErrors, NonFiniteMeshVertexNamesTheFileAndObject) {
   TempDirectory temp;
-  BrokenBuilding building(temp);
-  writeText(temp.path() / "nan.obj", "v 0 0 0\nv nan 0 2\nv 2 0 2\nf 1 2 3\n");
-  const std::string error = building.importError({{"\"floor.obj\"", "\"nan.obj\""}});
-  EXPECT_NE(error.find("nan.obj"), std::string::npos) << error;
-  EXPECT_NE(error.find("'floor'"), std::string::npos) << error;
+  const std::string error = BrokenBuilding(temp).floorMeshError("nan.obj", "v 0 0 0\nv nan 0 2\nv 2 0 2\nf 1 2 3\n");
   EXPECT_NE(error.find("vertex 1 is not finite"), std::string::npos) << error;
 }
 
@@ -425,7 +432,7 @@ TEST(BuildingImportErrors, CameraOutsideEveryCell) {
 
 TEST(BuildingImportErrors, MissingCamera) {
   TempDirectory temp;
-  const std::string error = BrokenBuilding(temp).importError({{"\"camera\":", "\"view\":"}});
+  const std::string error = BrokenBuilding(temp).importError({{"\"camera\":", "\"_view\":"}});
   EXPECT_NE(error.find("has no \"camera\""), std::string::npos) << error;
 }
 
@@ -450,6 +457,115 @@ TEST(BuildingImportErrors, BrokenPortals) {
   EXPECT_NE(error.find("at least 3"), std::string::npos) << error;
   error = building.importError({{"[2, 1.5, 0.5]]", "[1.8, 1.5, 0.5]]"}});
   EXPECT_NE(error.find("not planar"), std::string::npos) << error;
+}
+
+TEST(BuildingImportErrors, MalformedJsonNamesTheFile) {
+  TempDirectory temp;
+  const std::string error = BrokenBuilding(temp).importError({{"\"units\": \"metres\",", "\"units\": \"metres\""}});
+  EXPECT_NE(error.find("building.json: not valid JSON"), std::string::npos) << error;
+  EXPECT_NE(error.find("line 3"), std::string::npos) << error;
+}
+
+TEST(BuildingImportErrors, UnknownKeysAreNamed) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  // A misspelt "emission" would otherwise turn the lamp off without a word.
+  std::string error = building.importError({{"\"emission\": [10, 10, 10]", "\"emision\": [10, 10, 10]"}});
+  EXPECT_NE(error.find("building.json: objects[1] ('lamp'): unknown key \"emision\""), std::string::npos) << error;
+  EXPECT_NE(error.find("known: obj, mesh, name, cell, albedo, emission"), std::string::npos) << error;
+  error = building.importError({{"\"portals\":", "\"portal\":"}});
+  EXPECT_NE(error.find("top level: unknown key \"portal\""), std::string::npos) << error;
+  error = building.importError({{"\"max\": [2, 2, 2]", "\"max\": [2, 2, 2], \"maxx\": 1"}});
+  EXPECT_NE(error.find("cell 'room' aabb: unknown key \"maxx\""), std::string::npos) << error;
+  error = building.importError({{"\"fov_y_deg\": 60", "\"fov\": 60"}});
+  EXPECT_NE(error.find("camera: unknown key \"fov\""), std::string::npos) << error;
+  error = building.importError({{"\"between\":", "\"betwen\": [], \"between\":"}});
+  EXPECT_NE(error.find("portals[0]: unknown key \"betwen\""), std::string::npos) << error;
+}
+
+TEST(BuildingImport, DescriptiveAndUnderscoreKeysAreIgnored) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  const std::string path =
+      building.json({{"\"units\": \"metres\",", "\"units\": \"metres\", \"description\": \"x\", \"_by\": \"me\","},
+                     {"\"name\": \"floor\",", "\"name\": \"floor\", \"triangles\": 2, \"_source\": 1,"}});
+  importBuilding({path}, temp / "store");
+  EXPECT_EQ(SceneStore::open(temp / "store").totalTriangles(), 4u);
+}
+
+TEST(BuildingImportErrors, InfiniteMeshVertexNamesTheFileAndObject) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  std::string error = building.floorMeshError("inf.obj", "v 0 0 0\nv 0 0 2\nv 2 0 inf\nf 1 2 3\n");
+  EXPECT_NE(error.find("vertex 2 is not finite"), std::string::npos) << error;
+  error = building.floorMeshError("huge.obj", "v 0 0 0\nv 0 1e39 2\nv 2 0 2\nf 1 2 3\n");   // beyond float
+  EXPECT_NE(error.find("vertex 1 is not finite"), std::string::npos) << error;
+}
+
+TEST(BuildingImport, DegenerateTrianglesAreDroppedAndCounted) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  // Two good triangles, one with a repeated corner, one with three corners on a line.
+  writeText(temp.path() / "floor.obj",
+            "v 0 0 0\nv 0 0 2\nv 2 0 2\nv 2 0 0\nv 0 0 1\nf 1 2 3\nf 1 3 4\nf 1 2 2\nf 1 5 2\n");
+  const ImportSummary summary = importBuilding({building.json()}, temp / "store");
+  EXPECT_EQ(summary.degenerateTrianglesDropped, 2u);
+  EXPECT_EQ(summary.triangles, 4u);   // the floor's 2 and the lamp's 2
+  const SceneStore store = SceneStore::open(temp / "store");
+  EXPECT_EQ(store.totalTriangles(), 4u);
+  EXPECT_EQ(store.meta().at("degenerate_triangles_dropped"), "2");
+}
+
+TEST(BuildingImportErrors, AMeshOfOnlyDegenerateTrianglesIsEmpty) {
+  TempDirectory temp;
+  const std::string error = BrokenBuilding(temp).floorMeshError("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  EXPECT_NE(error.find("has no triangles but 1 degenerate"), std::string::npos) << error;
+}
+
+TEST(BuildingImportErrors, EmptyScenes) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  std::string error = building.importError(
+      {{"{\"obj\": \"floor.obj\", \"name\": \"floor\", \"cell\": \"room\", \"albedo\": [0.5, 0.5, 0.5], \"emission\": "
+        "null},",
+        ""},
+       {"{\"obj\": \"lamp.obj\", \"name\": \"lamp\", \"cell\": \"room\", \"albedo\": [0, 0, 0], \"emission\": [10, "
+        "10, 10]}",
+        ""}});
+  EXPECT_NE(error.find("building.json: \"objects\" must be a non-empty array"), std::string::npos) << error;
+  // A mesh file without a triangle, in a building.json and on its own.
+  building.floorMeshError("points.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\n");
+  error = errorOf([&] { importBuilding({temp / "points.obj"}, temp / "store"); });
+  EXPECT_NE(error.find("points.obj"), std::string::npos) << error;
+  EXPECT_FALSE(fs::exists(temp / "store"));
+}
+
+TEST(BuildingImportErrors, PortalsOffTheirCellsBoundaries) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  const std::string onTheWall = "[[2, 0, 0.5], [2, 0, 1.5], [2, 1.5, 1.5], [2, 1.5, 0.5]]";
+  const std::string inTheRoom = "[[1, 0, 0.5], [1, 0, 1.5], [1, 1.5, 1.5], [1, 1.5, 0.5]]";
+  // In the room, short of the wall it shares with the hall.
+  std::string error = building.importError({{onTheWall, inTheRoom}});
+  EXPECT_NE(error.find("portals[0] (room - hall): polygon is not on the boundary of cell 'room'"), std::string::npos)
+      << error;
+  // Overlapping cells: on the hall's face but inside the room, so a ray
+  // crossing it would not leave the room.
+  error = building.importError({{"\"min\": [2, 0, 0]", "\"min\": [1, 0, 0]"}, {onTheWall, inTheRoom}});
+  EXPECT_NE(error.find("not on the boundary of cell 'room': lies inside the box"), std::string::npos) << error;
+  EXPECT_EQ(error.find("cell 'hall'"), std::string::npos) << error;
+}
+
+TEST(BuildingImportErrors, AFailedImportLeavesTheOldStoreAsItWas) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  importBuilding({building.json()}, temp / "store");
+  const std::vector<char> before = testing_support::readBytes(temp.path() / "store" / "scene.db");
+  const std::string path = building.json({{"\"floor.obj\"", "\"ghost.obj\""}});
+  EXPECT_NE(errorOf([&] { importBuilding({path}, temp / "store"); }).find("ghost.obj"), std::string::npos);
+  EXPECT_EQ(testing_support::readBytes(temp.path() / "store" / "scene.db"), before);
+  EXPECT_EQ(SceneStore::open(temp / "store").totalTriangles(), 4u);
+  EXPECT_FALSE(testing_support::hasEntryStartingWith(temp.path(), "store."));
 }
 
 TEST(BuildingImportErrors, BuildingJsonMustBeTheOnlyInput) {
