@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # Installs everything portico needs to build, run and test on Debian bookworm.
 # Idempotent: re-running only refreshes the package lists and installs what is missing.
+#
+#   deploy/install-deps.sh            build, run and test dependencies
+#   deploy/install-deps.sh --slurm    also Slurm (slurmctld, slurmd, srun, sbatch) and MUNGE,
+#                                     for deploy/slurm/ and its test (tests/deploy/slurm_test.sh)
 set -euo pipefail
 
 packages=(
@@ -12,11 +16,22 @@ packages=(
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libtbb-dev libassimp-dev zlib1g-dev
+  python3 python3-yaml python3-venv
 )
+
+for arg in "$@"; do
+  case "$arg" in
+    --slurm) packages+=(slurm-wlm munge) ;;
+    -h|--help) sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "install-deps.sh: unknown option $arg (known: --slurm)" >&2; exit 2 ;;
+  esac
+done
 
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${packages[@]}"
+# Wait for another apt/dpkg run (another install on the same machine) instead of failing.
+apt_opts=(-o DPkg::Lock::Timeout=600)
+$SUDO apt-get "${apt_opts[@]}" update -qq
+$SUDO apt-get "${apt_opts[@]}" install -y -qq --no-install-recommends "${packages[@]}"
