@@ -6,8 +6,10 @@
 
 #include <chrono>
 #include <fstream>
+#include <set>
 
 #include "common/transport/photon_record.h"
+#include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
 
@@ -25,6 +27,12 @@ int64_t wallMs() {
       .count();
 }
 
+// Checked before jobs.db is opened: a refused start leaves nothing behind.
+CoordinatorOptions checkedOptions(CoordinatorOptions options) {
+  requireKeysBeyondLoopback(options.listen, options.keysDirectory);
+  return options;
+}
+
 std::string shortId(const std::string& identity) {
   std::string hex;
   for (unsigned char c : identity) hex += fmt::format("{:02x}", c);
@@ -33,11 +41,14 @@ std::string shortId(const std::string& identity) {
 }  // namespace
 
 Coordinator::Coordinator(CoordinatorOptions options)
-    : options_(std::move(options)), store_(options_.database), zmq_(1), router_(zmq_, zmq::socket_type::router) {
+    : options_(checkedOptions(std::move(options))),
+      store_(options_.database),
+      zmq_(1),
+      router_(zmq_, zmq::socket_type::router),
+      maxFrameBytes_(net::maxCoordinatorFrameBytes(options_.maxLeaseWork)) {
   router_.set(zmq::sockopt::linger, 0);
-  // Refuse frames far beyond any legitimate message before they are buffered.
-  router_.set(zmq::sockopt::maxmsgsize, int64_t(net::kMaxFrameBytes));
   router_.set(zmq::sockopt::router_mandatory, false);
+  security_ = std::make_unique<RouterSecurity>(zmq_, router_, options_.keysDirectory, maxFrameBytes_);
   router_.bind(options_.listen);
   endpoint_ = router_.get(zmq::sockopt::last_endpoint);
   if (!options_.endpointFile.empty()) {
@@ -87,6 +98,7 @@ void Coordinator::run() {
       }
       handle(id, frame);
     }
+    security_->logConnectionEvents();
     const int64_t now = nowMs();
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
       lastHeartbeatMs_ = now;
@@ -122,6 +134,7 @@ void Coordinator::handle(const std::string& identity, const zmq::message_t& fram
       case wire::Envelope::RESULT: onResult(identity, envelope.getResult()); break;
       case wire::Envelope::FAILURE: onFailure(identity, envelope.getFailure()); break;
       case wire::Envelope::FETCH_PHOTONS: onFetchPhotons(identity, envelope.getFetchPhotons()); break;
+      case wire::Envelope::FETCH_FILE: onFetchFile(identity, envelope.getFetchFile()); break;
       case wire::Envelope::SUBMIT: onSubmit(identity, envelope.getSubmit()); break;
       case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
       case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
@@ -158,6 +171,7 @@ void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello
                  hello.getVersion(), wire::PROTOCOL_VERSION);
     sendError(identity, fmt::format("protocol version {} is not supported (coordinator speaks {})",
                                     hello.getVersion(), wire::PROTOCOL_VERSION));
+    releaseWorker(identity, "dropped: wrong protocol version");   // if it had joined before
     return;
   }
   WorkerInfo& worker = workers_[identity];
@@ -171,6 +185,7 @@ void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello
   auto welcome = message.initRoot<wire::Envelope>().initWelcome();
   welcome.setVersion(wire::PROTOCOL_VERSION);
   welcome.setHeartbeatMs(options_.heartbeatMs);
+  welcome.setMaxFrameBytes(maxFrameBytes_);
   send(identity, message);
 }
 
@@ -357,6 +372,17 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
   for (size_t i = 0; i < blobs.size(); ++i)
     list.set(static_cast<unsigned>(i),
              capnp::Data::Reader(reinterpret_cast<const kj::byte*>(blobs[i].data()), blobs[i].size()));
+  send(identity, message);
+}
+
+void Coordinator::onFetchFile(const std::string& identity, wire::FetchFile::Reader request) {
+  std::set<std::string> stores;
+  for (const auto& [id, context] : jobs_) stores.insert(context.scene->directory());
+  capnp::MallocMessageBuilder message;
+  auto chunk = message.initRoot<wire::Envelope>().initFileChunk();
+  serveFileChunk(stores, request, chunk);
+  if (chunk.hasError() && chunk.getError().size())
+    spdlog::warn("refused a file to {}: {}", shortId(identity), chunk.getError().cStr());
   send(identity, message);
 }
 

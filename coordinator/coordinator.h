@@ -12,6 +12,7 @@
 #include "common/net/message.h"
 #include "common/scene/scene_store.h"
 #include "coordinator/job_store.h"
+#include "coordinator/router_security.h"
 #include "coordinator/worker_registry.h"
 
 namespace portico {
@@ -24,6 +25,7 @@ struct CoordinatorOptions {
   int livenessMs = 10000;          // silence after which a worker is presumed dead
   int64_t maxLeaseWork = 50000;    // rays per lease: about a second of tracing
   int64_t maxCellFailures = 3;     // failed leases of one cell before its job fails
+  std::string keysDirectory;       // CURVE keys (`portico keys generate`); required beyond loopback
 };
 
 class Coordinator {
@@ -48,6 +50,7 @@ class Coordinator {
   void onResult(const std::string& identity, wire::Result::Reader result);
   void onFailure(const std::string& identity, wire::Failure::Reader failure);
   void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
+  void onFetchFile(const std::string& identity, wire::FetchFile::Reader request);
   void onSubmit(const std::string& identity, wire::Submit::Reader submit);
   void onStatus(const std::string& identity, wire::StatusRequest::Reader request);
   void replyStatus(const std::string& identity, uint64_t job);   // job 0: all jobs
@@ -72,6 +75,8 @@ class Coordinator {
   JobStore store_;
   zmq::context_t zmq_;
   zmq::socket_t router_;
+  std::unique_ptr<RouterSecurity> security_;   // after router_: gone before it closes
+  uint64_t maxFrameBytes_;
   std::string endpoint_;
   WorkerRegistry workers_;
   std::map<uint64_t, JobContext> jobs_;

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 1;
+const protocolVersion :UInt32 = 2;   # 2: fetchFile / fileChunk (cells over the wire)
 
 enum Phase {
   photons @0;
@@ -83,7 +83,7 @@ struct JobSpec {
   photonRadius @11 :Float32;  # largest density-estimate radius (metres)
   gather @12 :UInt32;      # final-gather rays per camera hit (0: estimate at the hit)
   aov @13 :Aov;            # what the image shows
-  lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light)
+  lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
 }
 
 enum Aov {
@@ -121,6 +121,7 @@ struct Hello {
 struct Welcome {
   version @0 :UInt32;
   heartbeatMs @1 :UInt32;
+  maxFrameBytes @2 :UInt64;  # the largest frame the coordinator accepts; a bigger Result is sent as a Failure
 }
 
 struct Assign {
@@ -155,6 +156,24 @@ struct PhotonsReply {
   job @0 :UInt64;
   cell @1 :UInt32;
   batches @2 :List(Data);   # the cell's photon table: 24-byte records, batch by batch
+}
+
+# Cells over the wire: a worker without the scene store's file system asks
+# for its files (scene.db, cells/N.cell) chunk by chunk and keeps them in its
+# disk cache (worker --cache-dir).
+struct FetchFile {
+  store @0 :Text;           # the store directory as the job names it
+  path @1 :Text;            # "scene.db" or "cells/<id>.cell"
+  offset @2 :UInt64;
+}
+
+struct FileChunk {
+  store @0 :Text;
+  path @1 :Text;
+  offset @2 :UInt64;
+  totalBytes @3 :UInt64;    # the whole file's size
+  data @4 :Data;            # at most 4 MiB from offset
+  error @5 :Text;           # empty on success; else why the file cannot be served
 }
 
 struct Submit {
@@ -197,5 +216,7 @@ struct Envelope {
     shutdown @14 :Void;
     error @15 :Text;         # a request the coordinator refused
     goodbye @16 :Void;       # a worker leaving cleanly
+    fetchFile @17 :FetchFile;
+    fileChunk @18 :FileChunk;
   }
 }

@@ -1,5 +1,6 @@
 #include "worker/cell_cache.h"
 
+#include <malloc.h>
 #include <spdlog/spdlog.h>
 
 namespace portico {
@@ -11,36 +12,40 @@ const SceneStore& CellCache::scene(const std::string& directory) {
   return *it->second;
 }
 
-void CellCache::touch(Entry& entry) { recency_.splice(recency_.begin(), recency_, entry.position); }
+void CellCache::touch(Entry& entry) {
+  recency_.splice(recency_.begin(), recency_, entry.position);
+  entry.pinnedEpoch = epoch_;
+}
 
 void CellCache::insert(Entry& entry) {
   recency_.push_front(&entry);
   entry.position = recency_.begin();
+  entry.pinnedEpoch = epoch_;
   held_ += entry.bytes;
-  // Keep the newest entry even when it alone exceeds the budget: the lease
-  // needs it; everything older goes first.
-  evictUntil(budget_ > entry.bytes ? budget_ : entry.bytes);
 }
 
-void CellCache::evictUntil(uint64_t bytes) {
-  while (held_ > bytes && recency_.size() > 1) {
-    Entry* victim = recency_.back();
-    recency_.pop_back();
-    held_ -= victim->bytes;
-    // Find and erase the owner map entry.
-    for (auto it = cells_.begin(); it != cells_.end(); ++it)
-      if (&it->second == victim) {
-        cells_.erase(it);
-        victim = nullptr;
-        break;
-      }
-    if (victim)
-      for (auto it = maps_.begin(); it != maps_.end(); ++it)
-        if (&it->second == victim) {
-          maps_.erase(it);
-          break;
-        }
+void CellCache::evict(Entry* victim) {
+  recency_.erase(victim->position);
+  held_ -= victim->bytes;
+  if (victim->cellKey)
+    cells_.erase(*victim->cellKey);
+  else if (victim->mapKey)
+    maps_.erase(*victim->mapKey);
+}
+
+void CellCache::makeRoom(uint64_t bytes) {
+  bool evicted = false;
+  for (auto it = recency_.end(); it != recency_.begin() && held_ + bytes > budget_;) {
+    --it;
+    Entry* entry = *it;
+    if (entry->pinnedEpoch == epoch_) continue;   // the lease in progress uses it
+    it = std::next(it);
+    evict(entry);
+    evicted = true;
   }
+  // Give freed pages back to the system, so that the worker's resident
+  // size follows what the cache holds.
+  if (evicted) ::malloc_trim(0);
 }
 
 const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const std::string& acceleratorSpec) {
@@ -53,6 +58,8 @@ const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId,
   const SceneStore& store = scene(directory);
   if (cellId >= store.cells().size())
     throw std::runtime_error("cell " + std::to_string(cellId) + " does not exist in " + directory);
+  const uint64_t fileBytes = store.cells()[cellId].byteCount;
+  makeRoom(uint64_t(loadedBytesPerFileByte_ * double(fileBytes)));
   auto loaded = std::make_unique<LoadedCell>();
   loaded->geometry = CellGeometry::load(store.cellPath(cellId), cellId, store.materials().size());
   loaded->accelerator = buildAccelerator(parseAcceleratorSpec(acceleratorSpec), loaded->geometry->mesh());
@@ -63,9 +70,13 @@ const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId,
   spdlog::debug("loaded cell {} ({} triangles, {} bytes), {} built in {:.2f} ms", cellId,
                 loaded->geometry->mesh().triangleCount, loaded->geometry->bytes(), acceleratorSpec,
                 loaded->accelerator->stats().buildMs);
+  // Learn the ratio (with a margin for the build's scratch memory).
+  if (fileBytes > (64u << 10))
+    loadedBytesPerFileByte_ = std::max(loadedBytesPerFileByte_, 1.5 * double(loaded->bytes()) / double(fileBytes));
   Entry& entry = cells_[key];
   entry.bytes = loaded->bytes();
   entry.cell = std::move(loaded);
+  entry.cellKey = key;
   insert(entry);
   return *entry.cell;
 }
@@ -85,6 +96,7 @@ const PhotonMap& CellCache::storePhotonMap(uint64_t job, uint32_t cell, std::uni
   }
   entry.bytes = map->bytes();
   entry.map = std::move(map);
+  entry.mapKey = MapKey{job, cell};
   ++statistics_.photonMapsBuilt;
   insert(entry);
   return *entry.map;

@@ -6,6 +6,7 @@
 #include <list>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <tuple>
 
@@ -29,21 +30,30 @@ struct CacheStatistics {
   double acceleratorBuildMs = 0;
 };
 
+// The budget bounds what the cache holds *and* what it is about to load:
+// room is made before a cell is read and its accelerator built (from an
+// estimate that learns from the cells loaded so far), so the worker's peak
+// stays near the budget instead of budget + one cell + build scratch.
+// Entries used by the current lease are pinned and never evicted under it.
 class CellCache {
  public:
   explicit CellCache(uint64_t budgetBytes) : budget_(budgetBytes) {}
 
   const SceneStore& scene(const std::string& directory);
-  // Loads (or finds) the cell and its accelerator for the given spec.
+  // A new lease: what the previous one pinned may go again.
+  void beginLease() { ++epoch_; }
+  // Loads (or finds) the cell and its accelerator for the given spec; pinned.
   const LoadedCell& cell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec);
-  // The photon map of (job, cell), or nullptr when not cached.
+  // The photon map of (job, cell), or nullptr when not cached; pinned.
   const PhotonMap* photonMap(uint64_t job, uint32_t cell);
   const PhotonMap& storePhotonMap(uint64_t job, uint32_t cell, std::unique_ptr<PhotonMap> map);
+  // Evicts unpinned entries, least recently used first, until `bytes` more
+  // fit in the budget (or nothing unpinned is left).
+  void makeRoom(uint64_t bytes);
 
   CacheStatistics takeStatistics();
   uint64_t bytesHeld() const { return held_; }
-  // Evicts least recently used entries until the cache holds at most `bytes`.
-  void evictUntil(uint64_t bytes);
+  uint64_t budget() const { return budget_; }
 
  private:
   using CellKey = std::tuple<std::string, uint32_t, std::string>;
@@ -52,13 +62,19 @@ class CellCache {
     std::unique_ptr<LoadedCell> cell;
     std::unique_ptr<PhotonMap> map;
     uint64_t bytes = 0;
+    uint64_t pinnedEpoch = 0;
+    std::optional<CellKey> cellKey;   // which map owns it, for O(log n) eviction
+    std::optional<MapKey> mapKey;
     std::list<Entry*>::iterator position;
   };
   void touch(Entry& entry);
   void insert(Entry& entry);
+  void evict(Entry* victim);
 
   uint64_t budget_;
   uint64_t held_ = 0;
+  uint64_t epoch_ = 1;
+  double loadedBytesPerFileByte_ = 3.0;   // learnt: geometry + accelerator + build scratch per file byte
   std::map<std::string, std::unique_ptr<SceneStore>> scenes_;
   std::map<CellKey, Entry> cells_;
   std::map<MapKey, Entry> maps_;

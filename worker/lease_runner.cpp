@@ -32,13 +32,20 @@ std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool i
 }
 
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
-                                                      std::optional<std::vector<StoredPhoton>> photons) {
+                                                      std::optional<std::vector<StoredPhoton>> photons,
+                                                      const std::string& storeDirectory) {
   const auto started = std::chrono::steady_clock::now();
   auto spec = assign.getSpec();
-  const std::string store = spec.getStore();
+  const std::string& store = storeDirectory;
   const uint32_t cellId = assign.getCell();
-  const JobParameters parameters = parametersFromSpec(spec);
+  JobParameters parameters = parametersFromSpec(spec);
   const SceneStore& scene = cache.scene(store);
+  if (parameters.lightHops == kAutomaticLightHops) {
+    // Lights a couple of rooms away matter; a couple of voxels away is no
+    // distance at all: voxel cells sample every light.
+    const auto cells = scene.meta().find("cells");
+    parameters.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
+  }
   const LoadedCell& cell = cache.cell(store, cellId, spec.getAccel().size() ? spec.getAccel().cStr() : "grid");
 
   const PhotonMap* indirect = nullptr;
@@ -46,6 +53,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
     indirect = cache.photonMap(assign.getJob(), cellId);
     if (!indirect) {
       if (!photons) throw std::logic_error("render lease without photons");
+      cache.makeRoom(2 * photons->size() * sizeof(StoredPhoton));   // the map, and its build's scratch
       indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(*photons)));
     }
   }

@@ -22,7 +22,10 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
 std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect);
 
 // Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
+// The scene is read from `storeDirectory` (the job's store, or the worker's
+// local copy of it).
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
-                                                      std::optional<std::vector<StoredPhoton>> photons);
+                                                      std::optional<std::vector<StoredPhoton>> photons,
+                                                      const std::string& storeDirectory);
 
 }  // namespace portico

@@ -2,6 +2,7 @@
 // coordinator leases to it.
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
+#include <malloc.h>
 #include <unistd.h>
 
 #include <csignal>
@@ -32,10 +33,20 @@ int main(int argc, char** argv) {
   app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str();
   app.add_option("--liveness-ms", options.livenessMs)->capture_default_str();
   app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease");
+  app.add_option("--keys", options.keysDirectory,
+                 "CURVE keys directory (`portico keys generate`), as the coordinator's: coordinator.public, client.secret")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--cache-dir", options.cacheDirectory,
+                 "fetch scene stores from the coordinator into this disk cache (no shared file system needed)");
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [worker {}] [%l] %v", options.name));
+  // Large blocks (accelerators, photon maps, messages) are mapped and
+  // unmapped, never kept in the heap after free: resident memory then
+  // follows the cache's budget.
+  mallopt(M_MMAP_THRESHOLD, 256 * 1024);
+  mallopt(M_TRIM_THRESHOLD, 1024 * 1024);
   try {
     options.memoryBytes = portico::parseByteSize(memory);
     portico::WorkerSession session(options);

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <fstream>
 #include <future>
 #include <optional>
 #include <thread>
@@ -25,8 +26,16 @@ int64_t steadyMs() {
       .count();
 }
 
+// Never blocks: a DEALER whose handshake was refused (a wrong CURVE key) has
+// no peer left, and a blocking send would hang the loop that notices the
+// silence and reconnects. What cannot be sent is lost like a dropped connection.
+void sendFrame(zmq::socket_t& socket, zmq::message_t& frame) {
+  if (!socket.send(frame, zmq::send_flags::dontwait)) spdlog::debug("no peer to send a {} byte message to", frame.size());
+}
+
 void send(zmq::socket_t& socket, capnp::MallocMessageBuilder& message) {
-  socket.send(net::encode(message), zmq::send_flags::none);
+  zmq::message_t frame = net::encode(message);
+  sendFrame(socket, frame);
 }
 
 void sendSimple(zmq::socket_t& socket, void (*fill)(wire::Envelope::Builder)) {
@@ -35,17 +44,41 @@ void sendSimple(zmq::socket_t& socket, void (*fill)(wire::Envelope::Builder)) {
   send(socket, message);
 }
 
+uint64_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  uint64_t size = 0, resident = 0;
+  statm >> size >> resident;
+  return resident * uint64_t(::sysconf(_SC_PAGESIZE));
+}
+
 // A lease in progress: the decoded Assign (owning its bytes) and the tracing thread.
 struct ActiveLease {
   std::unique_ptr<net::Decoded> assign;
   bool waitingForPhotons = false;
+  bool waitingForFile = false;
   std::future<std::unique_ptr<capnp::MallocMessageBuilder>> result;
 };
 }  // namespace
 
+// --memory bounds the whole worker: the cache gets what is left after the
+// process's own footprint (code, libraries, Embree and TBB) and room for a
+// lease's messages and kernel buffers.
+uint64_t cacheBudgetFor(const WorkerOptions& options) {
+  const uint64_t resident = residentBytes();
+  const uint64_t leaseBuffers = uint64_t(12) << 20;
+  if (options.memoryBytes < resident + leaseBuffers + (uint64_t(4) << 20))
+    throw std::runtime_error(fmt::format("--memory {} MiB is too small: the worker itself takes {} MiB, a lease's "
+                                         "buffers {} MiB, and cells need room",
+                                         options.memoryBytes >> 20, resident >> 20, leaseBuffers >> 20));
+  return options.memoryBytes - resident - leaseBuffers;
+}
+
 WorkerSession::WorkerSession(WorkerOptions options)
-    : options_(std::move(options)), cache_(options_.memoryBytes), leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
+    : options_(std::move(options)), cache_(cacheBudgetFor(options_)), leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   if (leaseDone_ < 0) throw std::runtime_error("cannot create an eventfd");
+  // Read now: a bad key file stops the worker at start, not at its first connection.
+  if (!options_.keysDirectory.empty()) keys_ = net::loadClientKeys(options_.keysDirectory);
+  if (!options_.cacheDirectory.empty()) mirror_ = std::make_unique<StoreMirror>(options_.cacheDirectory);
 }
 
 WorkerSession::~WorkerSession() { ::close(leaseDone_); }
@@ -63,7 +96,8 @@ std::future<std::unique_ptr<capnp::MallocMessageBuilder>> WorkerSession::startLe
         (void)!::write(fd, &one, sizeof one);
       }
     } notify{leaseDone_};
-    return runLease(cache_, assign, std::move(p));
+    const std::string store = assign.getSpec().getStore();
+    return runLease(cache_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store);
   });
 }
 
@@ -75,6 +109,7 @@ int WorkerSession::run() {
     zmq::socket_t socket(context, zmq::socket_type::dealer);
     socket.set(zmq::sockopt::linger, 0);
     socket.set(zmq::sockopt::maxmsgsize, int64_t(net::kMaxFrameBytes));
+    if (keys_) net::applyClientKeys(socket, *keys_);
     socket.connect(options_.connect);
     {
       capnp::MallocMessageBuilder message;
@@ -87,8 +122,55 @@ int WorkerSession::run() {
     }
     int64_t lastHeard = steadyMs(), lastSent = steadyMs();
     bool welcomed = false;
+    uint64_t coordinatorMaxFrame = 0;   // 0: not announced (an older coordinator)
     std::optional<ActiveLease> lease;
     bool reconnect = false;
+    const auto failLease = [&](const std::string& why) {
+      const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
+      spdlog::error("lease {} failed: {}", leaseId, why);
+      capnp::MallocMessageBuilder message;
+      auto failure = message.initRoot<wire::Envelope>().initFailure();
+      failure.setLease(leaseId);
+      failure.setMessage(why);
+      send(socket, message);
+      lease.reset();
+    };
+    // A new lease waits for what it lacks, one request at a time: the
+    // store's files (--cache-dir), then the cell's photons (render phase);
+    // then it starts tracing.
+    const auto advanceLease = [&]() {
+      auto assign = lease->assign->envelope().getAssign();
+      if (!lease->waitingForFile) cache_.beginLease();
+      if (mirror_) {
+        std::optional<std::string> file;
+        try {
+          file = mirror_->missing(assign.getSpec().getStore(), assign.getCell());
+        } catch (const std::exception& e) {
+          failLease(e.what());
+          return;
+        }
+        if (file) {
+          capnp::MallocMessageBuilder message;
+          auto fetch = message.initRoot<wire::Envelope>().initFetchFile();
+          fetch.setStore(assign.getSpec().getStore());
+          fetch.setPath(*file);
+          fetch.setOffset(mirror_->receivedBytes(assign.getSpec().getStore(), *file));
+          send(socket, message);
+          lease->waitingForFile = true;
+          return;
+        }
+      }
+      if (assign.getPhase() == wire::Phase::RENDER && !cache_.photonMap(assign.getJob(), assign.getCell())) {
+        capnp::MallocMessageBuilder message;
+        auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
+        fetch.setJob(assign.getJob());
+        fetch.setCell(assign.getCell());
+        send(socket, message);
+        lease->waitingForPhotons = true;
+        return;
+      }
+      lease->result = startLease(assign, std::nullopt);
+    };
 
     while (!stopping_ && !reconnect) {
       // The eventfd wakes the loop the moment a lease finishes.
@@ -118,6 +200,7 @@ int WorkerSession::run() {
             switch (envelope.which()) {
               case wire::Envelope::WELCOME:
                 welcomed = true;
+                coordinatorMaxFrame = envelope.getWelcome().getMaxFrameBytes();
                 backoffMs = 250;
                 spdlog::info("connected to {}", options_.connect);
                 sendSimple(socket, [](wire::Envelope::Builder e) { e.setReady(); });
@@ -137,17 +220,19 @@ int WorkerSession::run() {
                 }
                 lease.emplace();
                 lease->assign = std::make_unique<net::Decoded>(frame);
-                auto assign = lease->assign->envelope().getAssign();
-                if (assign.getPhase() == wire::Phase::RENDER && !cache_.photonMap(assign.getJob(), assign.getCell())) {
-                  capnp::MallocMessageBuilder message;
-                  auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
-                  fetch.setJob(assign.getJob());
-                  fetch.setCell(assign.getCell());
-                  send(socket, message);
-                  lease->waitingForPhotons = true;
-                } else {
-                  lease->result = startLease(assign, std::nullopt);
+                advanceLease();
+                break;
+              }
+              case wire::Envelope::FILE_CHUNK: {
+                if (!lease || !lease->waitingForFile || !mirror_) break;
+                lease->waitingForFile = false;
+                try {
+                  mirror_->accept(envelope.getFileChunk());
+                } catch (const std::exception& e) {
+                  failLease(e.what());
+                  break;
                 }
+                advanceLease();
                 break;
               }
               case wire::Envelope::PHOTONS: {
@@ -155,6 +240,10 @@ int WorkerSession::run() {
                 auto assign = lease->assign->envelope().getAssign();
                 auto reply = envelope.getPhotons();
                 if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) break;
+                // Room for the decoded photons before decoding them (24-byte records).
+                uint64_t records = 0;
+                for (auto batch : reply.getBatches()) records += batch.size() / 24;
+                cache_.makeRoom(records * sizeof(StoredPhoton));
                 auto photons = decodePhotons(reply, assign.getSpec().getGather() > 0);
                 lease->waitingForPhotons = false;
                 lease->result = startLease(assign, std::move(photons));
@@ -186,7 +275,14 @@ int WorkerSession::run() {
             spdlog::warn("fault injection: exiting with lease {} unreported", leaseId);
             std::_Exit(3);
           }
-          send(socket, *message);
+          zmq::message_t frame = net::encode(*message);
+          // libzmq would drop a longer frame and the connection with it, and
+          // the lease would come back forever: report it as a failure instead.
+          if (coordinatorMaxFrame && frame.size() > coordinatorMaxFrame)
+            throw std::runtime_error(fmt::format(
+                "result of {} bytes is over the coordinator's {} byte message limit; lower its --lease-rays",
+                frame.size(), coordinatorMaxFrame));
+          sendFrame(socket, frame);
           ++leasesDone;
         } catch (const std::exception& e) {
           spdlog::error("lease {} failed: {}", leaseId, e.what());
@@ -211,7 +307,11 @@ int WorkerSession::run() {
         lastSent = now;
       }
       if (now - lastHeard > options_.livenessMs) {
-        spdlog::warn("coordinator silent for {} ms; reconnecting in {} ms", now - lastHeard, backoffMs);
+        if (welcomed)
+          spdlog::warn("coordinator silent for {} ms; reconnecting in {} ms", now - lastHeard, backoffMs);
+        else   // a refused CURVE handshake looks exactly like this
+          spdlog::warn("no answer from {} within {:.0f} s: wrong --keys, or coordinator down; retrying in {} ms",
+                       options_.connect, (now - lastHeard) / 1000.0, backoffMs);
         // A lease in flight is abandoned: the coordinator requeues it.
         if (lease && lease->result.valid()) lease->result.wait();
         std::this_thread::sleep_for(std::chrono::milliseconds(backoffMs));

@@ -14,9 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "common/net/curve_keys.h"
 #include "proto/wire.capnp.h"
 
 #include "worker/cell_cache.h"
+#include "worker/store_mirror.h"
 
 namespace portico {
 
@@ -30,6 +32,10 @@ struct WorkerOptions {
   // Fault injection for recovery tests: exit abruptly, without reporting it,
   // when the Nth lease is finished (0: never).
   int crashAfterLeases = 0;
+  std::string keysDirectory;   // CURVE keys ("" for none)
+  // Fetch scene stores from the coordinator into this directory instead of
+  // reading them where the job says ("" : read them in place).
+  std::string cacheDirectory;
 };
 
 class WorkerSession {
@@ -46,6 +52,8 @@ class WorkerSession {
       wire::Assign::Reader assign, std::optional<std::vector<StoredPhoton>> photons);
 
   WorkerOptions options_;
+  std::unique_ptr<StoreMirror> mirror_;
+  std::optional<net::ClientKeys> keys_;
   CellCache cache_;
   int leaseDone_;   // eventfd
   std::atomic<bool> stopping_{false};

@@ -24,7 +24,7 @@ struct RenderOptions {
   uint64_t seed = 1;
   uint32_t width = 0, height = 0;
   uint32_t lightSamples = 2;
-  int lightHops = 2;
+  int lightHops = -2;   // -2: automatic (2 for rooms and portals, every light for voxel cells)
   uint32_t photonK = 64;
   float photonRadius = 0.5f;
   float exposure = 1.0f;
@@ -36,13 +36,29 @@ void addRenderOptions(CLI::App& command, RenderOptions& options);
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store);
+// `scene info`: counts (Tables 1 and 2 of the paper), bytes raw and
+// compressed, and the validation pass; exit status 1 when the store is invalid.
+struct SceneInfoOptions {
+  bool json = false;
+  bool compress = true;   // zlib every file for bytes_compressed: minutes on a store of GBs
+};
+int runSceneInfo(const std::string& store, const SceneInfoOptions& options);
+// The summary printed after generate and import: as above, without compressing.
 int runSceneInfo(const std::string& store, bool json);
+// `scene plan`: top-down floor plans as a PNG (scene_plan.h).
+struct ScenePlanOptions {
+  std::string output;
+  int floor = -1;         // -1: every floor
+  int panelSize = 800;    // pixels along the longer side of a floor's panel
+};
+int runScenePlan(const std::string& store, const ScenePlanOptions& options);
 
 struct LocalRunOptions {
   uint32_t workers = 2;
   std::string memory = "2GiB";
   bool keepLogs = false;
   std::string logLevel = "info";
+  std::string keys;   // CURVE keys for the local services ("" for none)
 };
 int runRender(const RenderOptions& render, const LocalRunOptions& local);
 
@@ -59,9 +75,38 @@ struct BenchAccelOptions {
 };
 int runBenchAccel(const BenchAccelOptions& options);
 
-int runSubmit(const std::string& endpoint, const RenderOptions& render);
-int runStatus(const std::string& endpoint, uint64_t job, bool json);
-int runWait(const std::string& endpoint, uint64_t job, bool quiet);
-int runCancel(const std::string& endpoint, uint64_t job);
+// `bench pipeline`: one photon pass over a generated building, in-core with
+// Embree on 2 threads and through portico with 1 and 2 workers (bench_pipeline.cpp).
+struct BenchPipelineOptions {
+  std::string preset;
+  std::string store;        // reuse the scene store there, or generate it there (and keep it); "" = temporary
+  uint32_t floors = 0;      // the tower's floors
+  uint64_t sceneSeed = 1;   // furnishing seed of the generated building
+  uint64_t photons = 1000000;
+  uint64_t seed = 1;        // the photon pass's seed
+  std::string modes = "embree-incore-2t,portico-1w,portico-2w";
+  std::string accel = "grid";
+  std::string memory = "8GiB";  // per portico worker
+  uint32_t runs = 1;
+  std::string csv;
+  std::string plot;
+};
+int runBenchPipeline(const BenchPipelineOptions& options);
+
+// How the client commands reach a running coordinator.
+struct ConnectOptions {
+  std::string endpoint;
+  std::string keys;             // CURVE keys directory ("" for none)
+  double timeoutSeconds = 30;   // per request
+};
+void addConnectOptions(CLI::App& command, ConnectOptions& options);
+
+int runSubmit(const ConnectOptions& connect, const RenderOptions& render);
+int runStatus(const ConnectOptions& connect, uint64_t job, bool json);
+int runWait(const ConnectOptions& connect, uint64_t job, bool quiet);
+int runCancel(const ConnectOptions& connect, uint64_t job);
+
+// `keys generate DIR`: a CURVE key pair for the coordinator and one for its clients (keys_command.cpp).
+int runKeysGenerate(const std::string& directory);
 
 }  // namespace portico::cli

@@ -26,8 +26,8 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--height", o.height, "image height (default: the camera's)");
   command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")->capture_default_str();
   command.add_option("--light-hops", o.lightHops,
-                     "sample the lights of cells within this many portals of a shading point (-1: every light)")
-      ->capture_default_str();
+                     "sample the lights of cells within this many portals of a shading point (-1: every light; "
+                     "default: 2 with room cells, every light with --grid voxel cells)");
   command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
@@ -37,6 +37,22 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
       ->check(CLI::IsMember({"radiance", "cells", "portals"}))
       ->capture_default_str();
 }
+
+void addConnectOptions(CLI::App& command, ConnectOptions& o) {
+  command.add_option("--coordinator", o.endpoint, "coordinator endpoint")->required();
+  command.add_option("--keys", o.keys, "CURVE keys directory (`portico keys generate`), as the coordinator's")
+      ->check(CLI::ExistingDirectory);
+  command.add_option("--timeout", o.timeoutSeconds, "seconds to wait for each answer")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+namespace {
+net::CoordinatorClient connectTo(const ConnectOptions& o) {
+  return net::CoordinatorClient(o.endpoint, o.keys,
+                                std::chrono::milliseconds(static_cast<int64_t>(o.timeoutSeconds * 1000)));
+}
+}  // namespace
 
 void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
@@ -57,16 +73,16 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
 }
 
-int runSubmit(const std::string& endpoint, const RenderOptions& render) {
+int runSubmit(const ConnectOptions& connect, const RenderOptions& render) {
   capnp::MallocMessageBuilder message;
   fillSubmit(render, message);
-  net::CoordinatorClient client(endpoint);
+  net::CoordinatorClient client = connectTo(connect);
   std::cout << client.submit(message) << "\n";
   return 0;
 }
 
-int runStatus(const std::string& endpoint, uint64_t job, bool json) {
-  net::CoordinatorClient client(endpoint);
+int runStatus(const ConnectOptions& connect, uint64_t job, bool json) {
+  net::CoordinatorClient client = connectTo(connect);
   const auto status = nlohmann::json::parse(client.statusJson(job));
   if (json) {
     std::cout << status.dump() << "\n";
@@ -76,8 +92,8 @@ int runStatus(const std::string& endpoint, uint64_t job, bool json) {
   return 0;
 }
 
-int runWait(const std::string& endpoint, uint64_t job, bool quiet) {
-  net::CoordinatorClient client(endpoint);
+int runWait(const ConnectOptions& connect, uint64_t job, bool quiet) {
+  net::CoordinatorClient client = connectTo(connect);
   ProgressDisplay display(quiet);
   for (;;) {
     const auto status = nlohmann::json::parse(client.statusJson(job));
@@ -91,8 +107,8 @@ int runWait(const std::string& endpoint, uint64_t job, bool quiet) {
   }
 }
 
-int runCancel(const std::string& endpoint, uint64_t job) {
-  net::CoordinatorClient client(endpoint);
+int runCancel(const ConnectOptions& connect, uint64_t job) {
+  net::CoordinatorClient client = connectTo(connect);
   const auto status = nlohmann::json::parse(client.cancel(job));
   std::cout << fmt::format("job {}: {}\n", job, status.value("state", "?"));
   return 0;

@@ -13,120 +13,12 @@
 
 #include "common/image/image_writer.h"
 #include "common/net/client.h"
-#include "common/util/child_process.h"
+#include "tests/integration/service_harness.h"
 
 namespace portico {
 namespace {
 
-namespace fs = std::filesystem;
-const std::string kBin = std::string(PORTICO_BINARY_DIR) + "/bin/";
-
-fs::path makeTempDirectory(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("portico-test-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-int runCommand(const std::vector<std::string>& argv, const fs::path& log) {
-  ChildProcess process(argv, log.string());
-  return process.wait();
-}
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
-// A coordinator and N workers started by hand, as a user would.
-class LocalCluster {
- public:
-  // workerExtra[i] are extra arguments of worker i (fault injection).
-  LocalCluster(const fs::path& dir, int workers, const std::vector<std::vector<std::string>>& workerExtra = {})
-      : dir_(dir) {
-    fs::create_directories(dir);
-    startCoordinator("tcp://127.0.0.1:*");
-    for (int i = 0; i < workers; ++i) {
-      std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + std::to_string(i),
-                                    "--heartbeat-ms", "250", "--liveness-ms", "1500"};
-      if (size_t(i) < workerExtra.size()) argv.insert(argv.end(), workerExtra[i].begin(), workerExtra[i].end());
-      workers_.emplace_back(argv, (dir / ("worker-" + std::to_string(i) + ".log")).string());
-    }
-  }
-  ~LocalCluster() {
-    for (auto& w : workers_) w.stop();
-    coordinator_->stop();
-  }
-  const std::string& endpoint() const { return endpoint_; }
-
-  // (Re)starts the coordinator on `listen` with the cluster's jobs.db.
-  void startCoordinator(const std::string& listen) {
-    fs::remove(dir_ / "endpoint");
-    coordinator_ = std::make_unique<ChildProcess>(
-        std::vector<std::string>{kBin + "portico-coordinator", "--listen", listen, "--db", (dir_ / "jobs.db").string(),
-                                 "--endpoint-file", (dir_ / "endpoint").string(), "--liveness-ms", "2000",
-                                 "--heartbeat-ms", "250"},
-        (dir_ / "coordinator.log").string());
-    endpoint_.clear();
-    for (int i = 0; i < 400 && endpoint_.empty(); ++i) {
-      std::ifstream in(dir_ / "endpoint");
-      in >> endpoint_;
-      if (endpoint_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(25));
-    }
-    if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir_ / "coordinator.log"));
-  }
-  // kill -9: no chance to write anything down.
-  void killCoordinator() {
-    coordinator_->kill(SIGKILL);
-    coordinator_->wait();
-  }
-
-  uint64_t submit(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
-    net::CoordinatorClient client(endpoint_);
-    capnp::MallocMessageBuilder message;
-    auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
-    spec.setStore(store.string());
-    spec.setOutput(output.string());
-    spec.setAccel("grid");
-    spec.setPhotons(photons);
-    spec.setSpp(spp);
-    spec.setSeed(7);
-    spec.setWidth(96);
-    spec.setHeight(64);
-    spec.setLightSamples(1);
-    spec.setPhotonK(32);
-    spec.setPhotonRadius(0.5f);
-    spec.setExposure(1);
-    spec.setGather(2);   // final gathering: gather rays cross portals too
-    return client.submit(message);
-  }
-
-  nlohmann::json status(uint64_t job) {
-    net::CoordinatorClient client(endpoint_);
-    return nlohmann::json::parse(client.statusJson(job));
-  }
-
-  nlohmann::json wait(uint64_t job) {
-    for (int i = 0; i < 1200; ++i) {
-      auto current = status(job);
-      const std::string state = current.value("state", "");
-      if (state != "photons" && state != "render") return current;
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    throw std::runtime_error("job did not finish within 120 s");
-  }
-
-  // Submits and waits; returns the final status.
-  nlohmann::json render(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
-    return wait(submit(store, output, photons, spp));
-  }
-
- private:
-  fs::path dir_;
-  std::unique_ptr<ChildProcess> coordinator_;
-  std::vector<ChildProcess> workers_;
-  std::string endpoint_;
-};
+using namespace harness;
 
 class Pipeline : public ::testing::Test {
  protected:
@@ -142,19 +34,6 @@ class Pipeline : public ::testing::Test {
 };
 fs::path Pipeline::dir_, Pipeline::store_;
 
-void expectConservation(const nlohmann::json& stats) {
-  const auto& photons = stats["photons"];
-  EXPECT_GT(photons["emitted"].get<int64_t>(), 0);
-  EXPECT_EQ(photons["emitted"].get<int64_t>(),
-            photons["absorbed"].get<int64_t>() + photons["escaped"].get<int64_t>());
-  EXPECT_EQ(photons["queued"].get<int64_t>(), 0);
-  EXPECT_GT(photons["deposits"].get<int64_t>(), photons["emitted"].get<int64_t>() / 2);
-  EXPECT_EQ(stats["rays"]["queued"].get<int64_t>(), 0);
-  EXPECT_EQ(stats["rays"]["invalid"].get<int64_t>(), 0);
-  // Every shadow ray ends exactly once: blocked, reached, or escaped.
-  EXPECT_GE(stats["rays"]["shadow"].get<int64_t>(),
-            stats["rays"]["shadow_blocked"].get<int64_t>() + stats["rays"]["shadow_reached"].get<int64_t>());
-}
 
 TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitForBit) {
   const uint64_t photons = 60000;
@@ -193,14 +72,6 @@ TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitFor
   EXPECT_GT(lit, two.rgb.size() / 3);
 }
 
-// Reads an EXR and counts the floats whose bits differ from another.
-size_t differingFloats(const fs::path& a, const fs::path& b) {
-  const LinearImage x = readImage(a.string()), y = readImage(b.string());
-  if (x.rgb.size() != y.rgb.size()) return SIZE_MAX;
-  size_t differing = 0;
-  for (size_t i = 0; i < x.rgb.size(); ++i) differing += std::memcmp(&x.rgb[i], &y.rgb[i], sizeof(float)) != 0;
-  return differing;
-}
 
 TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
   const uint64_t photons = 60000;
@@ -300,18 +171,6 @@ TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
   EXPECT_GT(stats["cells"]["loaded"].get<int64_t>(), 0);
 }
 
-// Runs a command and returns its standard output (stderr goes to the log).
-std::string captureOutput(const std::vector<std::string>& argv, const fs::path& dir, const std::string& name,
-                          int* exitCode) {
-  const fs::path out = dir / (name + ".out");
-  std::vector<std::string> shell{"/bin/sh", "-c", ""};
-  std::string command;
-  for (const std::string& a : argv) command += "'" + a + "' ";
-  shell[2] = command + "> '" + out.string() + "'";
-  *exitCode = runCommand(shell, dir / (name + ".log"));
-  return readFile(out);
-}
-
 TEST_F(Pipeline, SubmitStatusAndWaitWorkAgainstServicesStartedByHand) {
   const fs::path dir = dir_ / "cli";
   LocalCluster cluster(dir, 2);
@@ -356,33 +215,6 @@ TEST_F(Pipeline, CancelStopsAJobAndWaitReportsIt) {
   EXPECT_EQ(status.value("state", ""), "cancelled");
   EXPECT_EQ(status["photons"]["queued"].get<int64_t>(), 0);   // its queues are dropped
   EXPECT_FALSE(fs::exists(dir / "cancelled.png"));
-}
-
-TEST_F(Pipeline, GarbageOnTheSocketIsDroppedAndTheCoordinatorKeepsServing) {
-  const fs::path dir = dir_ / "garbage";
-  LocalCluster cluster(dir, 1);
-  zmq::context_t context(1);
-  zmq::socket_t rogue(context, zmq::socket_type::dealer);
-  rogue.set(zmq::sockopt::linger, 0);
-  rogue.connect(cluster.endpoint());
-  std::mt19937 random(99);
-  for (int i = 0; i < 300; ++i) {
-    std::string bytes(1 + random() % 300, '\0');
-    for (char& c : bytes) c = static_cast<char>(random());
-    rogue.send(zmq::buffer(bytes), zmq::send_flags::none);
-  }
-  // Multi-frame garbage, and a Result for a lease that was never given.
-  rogue.send(zmq::str_buffer("a"), zmq::send_flags::sndmore);
-  rogue.send(zmq::str_buffer("b"), zmq::send_flags::none);
-  {
-    capnp::MallocMessageBuilder message;
-    message.initRoot<wire::Envelope>().initResult().setLease(424242);
-    rogue.send(net::encode(message), zmq::send_flags::none);
-  }
-  const auto status = cluster.render(store_, dir / "after.png", 5000, 1);
-  EXPECT_EQ(status.value("state", ""), "done") << status.dump(2);
-  const std::string log = readFile(dir / "coordinator.log");
-  EXPECT_NE(log.find("dropped"), std::string::npos);
 }
 
 TEST_F(Pipeline, ACorruptCellFileFailsTheJobNamingTheCellAndNothingCrashes) {

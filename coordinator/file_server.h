@@ -1,0 +1,26 @@
+// Serves a scene store's files to workers that cannot see its file system
+// (worker --cache-dir): scene.db and cells/<id>.cell of the stores of the
+// coordinator's active jobs, nothing else, in chunks that fit a message.
+#pragma once
+
+#include <cstdint>
+#include <set>
+#include <string>
+
+#include <capnp/message.h>
+
+#include "proto/wire.capnp.h"
+
+namespace portico {
+
+constexpr uint64_t kFileChunkBytes = uint64_t(4) << 20;
+
+// Whether `path` is a file a store serves: "scene.db" or "cells/<digits>.cell".
+bool isServableStorePath(const std::string& path);
+
+// Fills `chunk` for the request; a request outside `stores` or for another
+// path, or a file that cannot be read, gets an `error` naming it.
+void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader request,
+                    wire::FileChunk::Builder chunk);
+
+}  // namespace portico

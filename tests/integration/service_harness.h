@@ -1,0 +1,194 @@
+// Helpers of the integration tests that start the real services: temporary
+// directories, commands run to a log, and a coordinator with N workers
+// started by hand, as a user would.
+#pragma once
+
+#include <capnp/message.h>
+#include <nlohmann/json.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <fstream>
+#include <csignal>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "common/image/image_writer.h"
+#include "common/net/client.h"
+#include "common/util/child_process.h"
+
+namespace portico::harness {
+
+namespace fs = std::filesystem;
+inline const std::string kBin = std::string(PORTICO_BINARY_DIR) + "/bin/";
+
+inline fs::path makeTempDirectory(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("portico-test-" + name + "-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+inline int runCommand(const std::vector<std::string>& argv, const fs::path& log) {
+  ChildProcess process(argv, log.string());
+  return process.wait();
+}
+
+inline std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Runs a command and returns its standard output (stderr goes to the log).
+inline std::string captureOutput(const std::vector<std::string>& argv, const fs::path& dir, const std::string& name,
+                                 int* exitCode) {
+  const fs::path out = dir / (name + ".out");
+  std::vector<std::string> shell{"/bin/sh", "-c", ""};
+  std::string command;
+  for (const std::string& a : argv) command += "'" + a + "' ";
+  shell[2] = command + "> '" + out.string() + "'";
+  *exitCode = runCommand(shell, dir / (name + ".log"));
+  return readFile(out);
+}
+
+// Every photon emitted is absorbed or escapes; nothing left queued.
+inline void expectConservation(const nlohmann::json& stats) {
+  const auto& photons = stats["photons"];
+  EXPECT_GT(photons["emitted"].get<int64_t>(), 0);
+  EXPECT_EQ(photons["emitted"].get<int64_t>(),
+            photons["absorbed"].get<int64_t>() + photons["escaped"].get<int64_t>());
+  EXPECT_EQ(photons["queued"].get<int64_t>(), 0);
+  EXPECT_GT(photons["deposits"].get<int64_t>(), photons["emitted"].get<int64_t>() / 2);
+  EXPECT_EQ(stats["rays"]["queued"].get<int64_t>(), 0);
+  EXPECT_EQ(stats["rays"]["invalid"].get<int64_t>(), 0);
+  // Every shadow ray ends exactly once: blocked, reached, or escaped.
+  EXPECT_GE(stats["rays"]["shadow"].get<int64_t>(),
+            stats["rays"]["shadow_blocked"].get<int64_t>() + stats["rays"]["shadow_reached"].get<int64_t>());
+}
+
+// Reads an EXR and counts the floats whose bits differ from another.
+inline size_t differingFloats(const fs::path& a, const fs::path& b) {
+  const LinearImage x = readImage(a.string()), y = readImage(b.string());
+  if (x.rgb.size() != y.rgb.size()) return SIZE_MAX;
+  size_t differing = 0;
+  for (size_t i = 0; i < x.rgb.size(); ++i) differing += std::memcmp(&x.rgb[i], &y.rgb[i], sizeof(float)) != 0;
+  return differing;
+}
+
+// How a LocalCluster's services are started beyond the defaults.
+struct ClusterOptions {
+  std::string listen = "tcp://127.0.0.1:*";
+  std::vector<std::string> coordinatorExtra;   // e.g. {"--keys", DIR}
+  std::string clientKeys;                      // the tests' own client: CURVE keys directory
+};
+
+// A coordinator and N workers started by hand, as a user would.
+class LocalCluster {
+ public:
+  // workerExtra[i] are extra arguments of worker i (fault injection, keys).
+  LocalCluster(const fs::path& dir, int workers, const std::vector<std::vector<std::string>>& workerExtra = {},
+               ClusterOptions options = {})
+      : dir_(dir), options_(std::move(options)) {
+    fs::create_directories(dir);
+    startCoordinator(options_.listen);
+    for (int i = 0; i < workers; ++i) addWorker(size_t(i) < workerExtra.size() ? workerExtra[i] : std::vector<std::string>{});
+  }
+  ~LocalCluster() {
+    for (auto& w : workers_) w.stop();
+    coordinator_->stop();
+  }
+  const std::string& endpoint() const { return endpoint_; }
+
+  // Starts one more worker (named w<index>, logging to worker-<index>.log).
+  // `wrap` turns the worker's command line into the one to run (e.g. inside
+  // a mount namespace that hides the scene store).
+  void addWorker(const std::vector<std::string>& extra,
+                 const std::function<std::vector<std::string>(std::vector<std::string>)>& wrap = nullptr) {
+    const std::string index = std::to_string(workers_.size());
+    std::vector<std::string> argv{kBin + "portico-worker", "--connect", endpoint_, "--name", "w" + index,
+                                  "--heartbeat-ms", "250", "--liveness-ms", "1500"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    workers_.emplace_back(wrap ? wrap(argv) : argv, (dir_ / ("worker-" + index + ".log")).string());
+  }
+  ChildProcess& worker(size_t i) { return workers_.at(i); }
+
+  // (Re)starts the coordinator on `listen` with the cluster's jobs.db.
+  void startCoordinator(const std::string& listen) {
+    fs::remove(dir_ / "endpoint");
+    std::vector<std::string> argv{kBin + "portico-coordinator", "--listen", listen, "--db", (dir_ / "jobs.db").string(),
+                                  "--endpoint-file", (dir_ / "endpoint").string(), "--liveness-ms", "2000",
+                                  "--heartbeat-ms", "250"};
+    argv.insert(argv.end(), options_.coordinatorExtra.begin(), options_.coordinatorExtra.end());
+    coordinator_ = std::make_unique<ChildProcess>(argv, (dir_ / "coordinator.log").string());
+    endpoint_.clear();
+    for (int i = 0; i < 400 && endpoint_.empty(); ++i) {
+      std::ifstream in(dir_ / "endpoint");
+      in >> endpoint_;
+      if (endpoint_.empty()) std::this_thread::sleep_for(std::chrono::milliseconds(25));
+    }
+    if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir_ / "coordinator.log"));
+  }
+  // kill -9: no chance to write anything down.
+  void killCoordinator() {
+    coordinator_->kill(SIGKILL);
+    coordinator_->wait();
+  }
+
+  uint64_t submit(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+    net::CoordinatorClient client(endpoint_, options_.clientKeys);
+    capnp::MallocMessageBuilder message;
+    auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
+    spec.setStore(store.string());
+    spec.setOutput(output.string());
+    spec.setAccel("grid");
+    spec.setPhotons(photons);
+    spec.setSpp(spp);
+    spec.setSeed(7);
+    spec.setWidth(96);
+    spec.setHeight(64);
+    spec.setLightSamples(1);
+    spec.setPhotonK(32);
+    spec.setPhotonRadius(0.5f);
+    spec.setExposure(1);
+    spec.setGather(2);   // final gathering: gather rays cross portals too
+    return client.submit(message);
+  }
+
+  nlohmann::json status(uint64_t job) {
+    net::CoordinatorClient client(endpoint_, options_.clientKeys);
+    return nlohmann::json::parse(client.statusJson(job));
+  }
+
+  nlohmann::json wait(uint64_t job) {
+    for (int i = 0; i < 1200; ++i) {
+      auto current = status(job);
+      const std::string state = current.value("state", "");
+      if (state != "photons" && state != "render") return current;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    throw std::runtime_error("job did not finish within 120 s");
+  }
+
+  // Submits and waits; returns the final status.
+  nlohmann::json render(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+    return wait(submit(store, output, photons, spp));
+  }
+
+ private:
+  fs::path dir_;
+  ClusterOptions options_;
+  std::unique_ptr<ChildProcess> coordinator_;
+  std::vector<ChildProcess> workers_;
+  std::string endpoint_;
+};
+
+}  // namespace portico::harness
