@@ -2,6 +2,7 @@
 // (Tables 1 and 2) within 10 %, is one connected graph of cells, has no
 // degenerate triangles, and the same seed writes the same bytes.
 #include "common/scene/building_generator.h"
+#include "common/scene/building_importer.h"
 
 #include <gtest/gtest.h>
 
@@ -181,6 +182,36 @@ TEST(RoomFurnisher, DetailMeetsTheTriangleBudget) {
       const double count = double(furniture::countTriangles(pieces, detail));
       EXPECT_NEAR(count, double(budget), 0.05 * double(budget)) << "budget " << budget;
     }
+}
+
+}  // namespace
+}  // namespace portico
+
+namespace portico {
+namespace {
+
+// `scene import --grid RG STORE OUT`: a generated building re-cut into voxel
+// cells keeps its materials (hidden ceilings too), its light power and every
+// triangle (each in at least one voxel).
+TEST(BuildingGenerator, AGeneratedStoreRecutIntoVoxelCells) {
+  TempDirectory temp;
+  generateBuilding(*findBuildingPreset("l-shape", 0), 2, temp / "topological");
+  ImportOptions options;
+  options.gridResolution = 4;
+  importBuilding({temp / "topological"}, temp / "voxels", options);
+  const SceneStore topological = SceneStore::open(temp / "topological"), voxels = SceneStore::open(temp / "voxels");
+  EXPECT_EQ(voxels.cells().size(), 64u);
+  EXPECT_GE(voxels.totalTriangles(), topological.totalTriangles());
+  ASSERT_EQ(voxels.materials().size(), topological.materials().size());
+  for (size_t m = 0; m < voxels.materials().size(); ++m)
+    EXPECT_EQ(voxels.materials()[m].hiddenFromCamera, topological.materials()[m].hiddenFromCamera);
+  Vec3 before(0), after(0);
+  for (const AreaLight& light : topological.lights()) before += light.power();
+  for (const AreaLight& light : voxels.lights()) after += light.power();
+  EXPECT_NEAR(after.x, before.x, 1e-3f * before.x);
+  EXPECT_EQ(voxels.meta().at("cells"), "grid 4^3");
+  // Without --grid a store is not imported again.
+  EXPECT_THROW(importBuilding({temp / "topological"}, temp / "again", {}), std::runtime_error);
 }
 
 }  // namespace
