@@ -34,6 +34,8 @@ struct ReferenceCase {
   int grid = 0;   // scene import --grid (0: the scene's own cells)
 };
 
+void PrintTo(const ReferenceCase& c, std::ostream* out) { *out << c.name << " --grid " << c.grid; }
+
 class ReferenceScene : public ::testing::TestWithParam<ReferenceCase> {};
 
 TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
