@@ -242,10 +242,13 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   uint64_t lease;
   {
     sql::Transaction tx(store_.database());
-    lease = store_.openLease(*chosen, worker.identity, options_.maxLeaseWork, wallMs(), batches);
+    lease = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
     tx.commit();
   }
   if (!lease) return true;
+  worker.leaseStartedMs = wallMs();
+  worker.leaseWork = 0;
+  for (const QueuedBatch& batch : batches) worker.leaseWork += batch.work;
   capnp::MallocMessageBuilder message;
   auto assign = message.initRoot<wire::Envelope>().initAssign();
   assign.setLease(lease);
@@ -273,6 +276,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   auto lease = store_.lease(leaseId);
   auto worker = workers_.find(identity);
   if (worker != workers_.end()) {
+    if (worker->second.leases.count(leaseId)) worker->second.recordLease(wallMs());
     worker->second.leases.erase(leaseId);
     worker->second.idle = worker->second.leases.empty();
   }

@@ -23,7 +23,7 @@ struct CoordinatorOptions {
   std::string endpointFile;        // where to write the bound endpoint (for port 0 / '*')
   int heartbeatMs = 1000;
   int livenessMs = 10000;          // silence after which a worker is presumed dead
-  int64_t maxLeaseWork = 50000;    // rays per lease: about a second of tracing
+  int64_t maxLeaseWork = 50000;    // most rays per lease; each worker's leases are sized to ~1 s of its measured speed
   int64_t maxCellFailures = 3;     // failed leases of one cell before its job fails
   std::string keysDirectory;       // CURVE keys (`portico keys generate`); required beyond loopback
 };

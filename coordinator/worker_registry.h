@@ -2,6 +2,7 @@
 // whether they are waiting for work.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <deque>
 #include <map>
@@ -21,6 +22,26 @@ struct WorkerInfo {
   std::set<uint64_t> leases;
   // Cells it recently traced, newest at the back: it likely still caches them.
   std::deque<std::pair<uint64_t, uint32_t>> recentCells;
+  // Lease sizing: about kLeaseSeconds of this worker's measured speed.
+  double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured
+  int64_t leaseStartedMs = 0;
+  int64_t leaseWork = 0;
+
+  static constexpr double kLeaseSeconds = 1.0;
+  static constexpr int64_t kMinLeaseWork = 1000;
+  // The work to put in its next lease, at most `maxWork`.
+  int64_t nextLeaseWork(int64_t maxWork) const {
+    if (workPerSecond <= 0) return std::min<int64_t>(maxWork, 10 * kMinLeaseWork);   // a first, short lease to measure
+    return std::clamp<int64_t>(int64_t(workPerSecond * kLeaseSeconds), std::min(kMinLeaseWork, maxWork), maxWork);
+  }
+  // A finished lease: fold its speed into the estimate (leases under 20 ms
+  // measure the round trip more than the tracing).
+  void recordLease(int64_t nowMs) {
+    const int64_t elapsed = nowMs - leaseStartedMs;
+    if (leaseWork <= 0 || elapsed < 20) return;
+    const double rate = double(leaseWork) * 1000.0 / double(elapsed);
+    workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
+  }
 
   bool holds(uint64_t job, uint32_t cell) const {
     for (const auto& c : recentCells)
