@@ -27,6 +27,10 @@ int main(int argc, char** argv) {
   app.add_option("--lease-rays", options.maxLeaseWork, "rays per lease")->capture_default_str();
   app.add_option("--max-cell-failures", options.maxCellFailures, "failed leases of one cell before its job fails")
       ->capture_default_str();
+  app.add_option("--keys", options.keysDirectory,
+                 "CURVE keys directory (`portico keys generate`): encrypt, and accept only the keys in "
+                 "client.public; required to listen beyond loopback")
+      ->check(CLI::ExistingDirectory);
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

@@ -5,6 +5,7 @@
 #   deploy/install-deps.sh            build, run and test dependencies
 #   deploy/install-deps.sh --slurm    also Slurm (slurmctld, slurmd, srun, sbatch) and MUNGE,
 #                                     for deploy/slurm/ and its test (tests/deploy/slurm_test.sh)
+#   deploy/install-deps.sh --fuzz     also clang and libFuzzer, for tests/fuzz (docs/fuzzing.md)
 set -euo pipefail
 
 packages=(
@@ -22,8 +23,11 @@ packages=(
 for arg in "$@"; do
   case "$arg" in
     --slurm) packages+=(slurm-wlm munge) ;;
-    -h|--help) sed -n '2,7p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "install-deps.sh: unknown option $arg (known: --slurm)" >&2; exit 2 ;;
+    # bookworm's clang is 14; its libFuzzer (libclang_rt.fuzzer) is in
+    # libclang-rt-14-dev, only recommended by clang, so named here.
+    --fuzz) packages+=(clang libclang-rt-14-dev) ;;
+    -h|--help) sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "install-deps.sh: unknown option $arg (known: --slurm, --fuzz)" >&2; exit 2 ;;
   esac
 done
 

@@ -4,23 +4,33 @@
 
 #include <stdexcept>
 
+#include "common/net/curve_keys.h"
+
 namespace portico::net {
 
-CoordinatorClient::CoordinatorClient(const std::string& endpoint)
-    : endpoint_(endpoint), context_(1), socket_(context_, zmq::socket_type::dealer) {
+CoordinatorClient::CoordinatorClient(const std::string& endpoint, const std::string& keysDirectory,
+                                     std::chrono::milliseconds timeout)
+    : endpoint_(endpoint), timeout_(timeout), context_(1), socket_(context_, zmq::socket_type::dealer) {
   socket_.set(zmq::sockopt::linger, 200);
   socket_.set(zmq::sockopt::maxmsgsize, int64_t(kMaxFrameBytes));
+  if (!keysDirectory.empty()) applyClientKeys(socket_, loadClientKeys(keysDirectory));
   socket_.connect(endpoint);
 }
 
-std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder& message,
-                                                    std::chrono::milliseconds timeout) {
-  socket_.send(encode(message), zmq::send_flags::none);
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder& message) {
+  // A DEALER whose handshake was refused has no peer left, and a blocking
+  // send would wait forever: fail at once instead.
+  if (!socket_.send(encode(message), zmq::send_flags::dontwait))
+    throw std::runtime_error(
+        fmt::format("cannot send to {}: the coordinator refused this connection (wrong --keys?)", endpoint_));
+  const auto deadline = std::chrono::steady_clock::now() + timeout_;
   for (;;) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    // A refused CURVE handshake is silent by design (no oracle for key
+    // guessing): from here it looks like a coordinator that is down.
     if (left.count() <= 0)
-      throw std::runtime_error(fmt::format("coordinator at {} did not answer within {} ms", endpoint_, timeout.count()));
+      throw std::runtime_error(fmt::format("no answer from {} within {:g} s: wrong --keys, or coordinator down",
+                                           endpoint_, timeout_.count() / 1000.0));
     zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
     zmq::poll(items, 1, left);
     if (!(items[0].revents & ZMQ_POLLIN)) continue;
@@ -65,7 +75,7 @@ std::string CoordinatorClient::cancel(uint64_t job) {
 void CoordinatorClient::shutdown() {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().setShutdown();
-  socket_.send(encode(message), zmq::send_flags::none);
+  (void)socket_.send(encode(message), zmq::send_flags::dontwait);
 }
 
 }  // namespace portico::net

@@ -1,5 +1,7 @@
 // A client of the coordinator (the `portico` command, tests): one DEALER
-// socket, one request at a time, each answered within a timeout.
+// socket, one request at a time, each answered within a timeout. With CURVE
+// keys (`--keys DIR`) a client with a wrong key is never answered: the
+// timeout is how it finds out.
 #pragma once
 
 #include <capnp/message.h>
@@ -15,11 +17,12 @@ namespace portico::net {
 
 class CoordinatorClient {
  public:
-  explicit CoordinatorClient(const std::string& endpoint);
+  // keysDirectory: where `portico keys generate` wrote the keys ("" for none).
+  explicit CoordinatorClient(const std::string& endpoint, const std::string& keysDirectory = "",
+                             std::chrono::milliseconds timeout = std::chrono::seconds(30));
   // Sends the request and returns the reply; throws std::runtime_error on
   // timeout (naming the endpoint) or when the coordinator answers with an error.
-  std::unique_ptr<Decoded> request(capnp::MallocMessageBuilder& message,
-                                   std::chrono::milliseconds timeout = std::chrono::seconds(30));
+  std::unique_ptr<Decoded> request(capnp::MallocMessageBuilder& message);
 
   uint64_t submit(capnp::MallocMessageBuilder& submitEnvelope);
   std::string statusJson(uint64_t job);   // job 0: all jobs
@@ -28,6 +31,7 @@ class CoordinatorClient {
 
  private:
   std::string endpoint_;
+  std::chrono::milliseconds timeout_;
   zmq::context_t context_;
   zmq::socket_t socket_;
 };

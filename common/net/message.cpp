@@ -2,7 +2,15 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 namespace portico::net {
+
+namespace {
+// See maxCoordinatorFrameBytes: measured and reasoned in docs/architecture.md.
+constexpr uint64_t kCoordinatorFrameFloorBytes = uint64_t(16) << 20;
+constexpr uint64_t kCoordinatorFrameBytesPerLeaseRay = 2048;
+}  // namespace
 
 zmq::message_t encode(capnp::MessageBuilder& message) {
   kj::VectorOutputStream stream;
@@ -18,13 +26,23 @@ std::string packToString(capnp::MessageBuilder& message) {
   return std::string(reinterpret_cast<const char*>(bytes.begin()), bytes.size());
 }
 
+uint64_t maxCoordinatorFrameBytes(int64_t leaseRays) {
+  return kCoordinatorFrameFloorBytes + uint64_t(std::max<int64_t>(leaseRays, 1)) * kCoordinatorFrameBytesPerLeaseRay;
+}
+
 namespace {
+constexpr unsigned kMaxSegments = 512;   // Cap'n Proto refuses more
+
 capnp::ReaderOptions optionsFor(size_t packedBytes) {
   // The traversal limit stops amplification (a small frame pointing at the
-  // same data many times). Packing compresses at most ~8x for zero-heavy
-  // data, so a legitimate message never traverses more than that.
+  // same data many times, or zero runs that unpack 2 bytes into 256 words),
+  // and it also caps what the reader allocates for the segments a frame
+  // claims. portico's messages are floats and ids, with few zero words: one
+  // word per packed byte (8x the frame) is more than any of them needs. The
+  // floor (512 KiB) is for tiny messages; it was 8 MiB, which a 10-byte
+  // garbage frame could make the coordinator allocate and zero.
   capnp::ReaderOptions options;
-  options.traversalLimitInWords = packedBytes + (size_t(1) << 20);
+  options.traversalLimitInWords = packedBytes + (size_t(1) << 16);
   options.nestingLimit = 16;
   return options;
 }
@@ -34,6 +52,14 @@ PackedReader::PackedReader(const void* data, size_t bytes)
     : input_(kj::ArrayPtr<const kj::byte>(static_cast<const kj::byte*>(data), bytes)), buffered_(input_) {
   try {
     reader_ = std::make_unique<capnp::PackedMessageReader>(buffered_, optionsFor(bytes));
+    // Read every segment now. Cap'n Proto reads the later segments of a
+    // multi-segment message lazily and skips what is left of it in its
+    // destructor: on a truncated frame that skip throws from a destructor,
+    // and the process ends (found by tests/fuzz/fuzz_ray_batch). Here the
+    // same failure is still an error we can report; and if it happens, the
+    // reader is destroyed while this exception unwinds, when it keeps quiet.
+    for (unsigned segment = 1; segment < kMaxSegments && reader_->getSegment(segment).begin() != nullptr; ++segment) {
+    }
   } catch (const kj::Exception& e) {
     throw std::runtime_error(fmt::format("malformed message: {}", e.getDescription().cStr()));
   }

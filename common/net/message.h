@@ -16,8 +16,15 @@
 
 namespace portico::net {
 
-// Largest frame accepted from the network (a big Result or photon reply).
+// Largest frame a worker or client accepts (a coordinator's photon reply can
+// hold a whole cell's photon table). The coordinator's own, smaller limit is
+// maxCoordinatorFrameBytes.
 constexpr size_t kMaxFrameBytes = size_t(512) << 20;
+
+// The largest frame a coordinator accepts (ZMQ_MAXMSGSIZE): a worker's Result
+// for a lease of `leaseRays` rays, with room for the fan-out of final
+// gathering, shadow rays and photon deposits (docs/architecture.md, "Message limits").
+uint64_t maxCoordinatorFrameBytes(int64_t leaseRays);
 
 zmq::message_t encode(capnp::MessageBuilder& message);
 

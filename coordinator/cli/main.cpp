@@ -16,11 +16,11 @@ int main(int argc, char** argv) {
   scene->require_subcommand(1);
   std::string preset, store;
   uint64_t seed = 1;
-  uint32_t floors = 1;
+  uint32_t floors = 0;
   auto* generate = scene->add_subcommand("generate", "generate a building into a scene store");
-  generate->add_option("--preset", preset, "building preset: demo")->required();
+  generate->add_option("--preset", preset, "building preset: demo, l-shape, z-building, octagon, soda-hall, tower")->required();
   generate->add_option("--seed", seed, "random seed of the furnishing")->capture_default_str();
-  generate->add_option("--floors", floors, "floors (presets that have several)")->capture_default_str();
+  generate->add_option("--floors", floors, "floors of the tower preset (default 1); the other presets have their own");
   generate->add_option("STORE", store, "scene store directory to write")->required();
   std::vector<std::string> importInputs;
   portico::ImportOptions importOptions;
@@ -38,6 +38,16 @@ int main(int argc, char** argv) {
   auto* info = scene->add_subcommand("info", "describe a scene store");
   info->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   info->add_flag("--json", json, "one JSON object on stdout");
+  bool noCompress = false;
+  info->add_flag("--no-compress", noCompress, "skip the zlib-compressed size (slow on large stores)");
+  ScenePlanOptions planOptions;
+  auto* plan = scene->add_subcommand("plan", "draw top-down floor plans of a scene store as a PNG");
+  plan->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  plan->add_option("-o,--output", planOptions.output, "PNG file to write")->required();
+  plan->add_option("--floor", planOptions.floor, "draw only this floor (0 = lowest)")->check(CLI::NonNegativeNumber);
+  plan->add_option("--size", planOptions.panelSize, "pixels along the longer side of each floor's panel")
+      ->capture_default_str()
+      ->check(CLI::Range(64, 8192));
 
   RenderOptions render;
   LocalRunOptions local;
@@ -47,24 +57,33 @@ int main(int argc, char** argv) {
   renderCommand->add_option("--memory", local.memory, "cache budget per worker")->capture_default_str();
   renderCommand->add_flag("--keep-logs", local.keepLogs, "keep the services' logs and jobs.db");
   renderCommand->add_option("--log-level", local.logLevel, "services' log level")->capture_default_str();
+  renderCommand->add_option("--keys", local.keys, "CURVE keys directory for the local services (`portico keys generate`)")
+      ->check(CLI::ExistingDirectory);
 
-  std::string endpoint;
+  ConnectOptions connect;
   uint64_t job = 0;
   auto* submit = app.add_subcommand("submit", "submit a job to a running coordinator; prints its id");
-  submit->add_option("--coordinator", endpoint, "coordinator endpoint")->required();
+  addConnectOptions(*submit, connect);
   addRenderOptions(*submit, render);
   auto* status = app.add_subcommand("status", "show a job's progress (or every job)");
-  status->add_option("--coordinator", endpoint, "coordinator endpoint")->required();
+  addConnectOptions(*status, connect);
   status->add_option("JOB", job, "job id");
   status->add_flag("--json", json, "one JSON object on stdout");
   bool quiet = false;
   auto* wait = app.add_subcommand("wait", "block until a job ends; exit 0 if it is done");
-  wait->add_option("--coordinator", endpoint, "coordinator endpoint")->required();
+  addConnectOptions(*wait, connect);
   wait->add_option("JOB", job, "job id")->required();
   wait->add_flag("--quiet", quiet, "no progress lines");
   auto* cancel = app.add_subcommand("cancel", "cancel a job");
-  cancel->add_option("--coordinator", endpoint, "coordinator endpoint")->required();
+  addConnectOptions(*cancel, connect);
   cancel->add_option("JOB", job, "job id")->required();
+
+  std::string keysDirectory;
+  auto* keys = app.add_subcommand("keys", "ZeroMQ CURVE keys for services listening beyond loopback");
+  keys->require_subcommand(1);
+  auto* keysGenerate = keys->add_subcommand(
+      "generate", "write coordinator.{public,secret} and client.{public,secret} (Z85; secrets mode 0600) into DIR");
+  keysGenerate->add_option("DIR", keysDirectory, "directory to write the four key files into")->required();
 
   BenchAccelOptions benchAccel;
   auto* bench = app.add_subcommand("bench", "measure portico's parts");
@@ -92,17 +111,43 @@ int main(int argc, char** argv) {
                    "threads of Embree's builder (0: every core); 1 compares like with like")
       ->capture_default_str();
 
+  BenchPipelineOptions benchPipeline;
+  auto* benchPipelineCommand = bench->add_subcommand(
+      "pipeline", "one photon pass over a generated building: in-core Embree (2 threads) vs portico (1, 2 workers)");
+  benchPipelineCommand->add_option("--preset", benchPipeline.preset, "building preset: l-shape, z-building, octagon, soda-hall, tower")
+      ->required();
+  benchPipelineCommand->add_option("--photons", benchPipeline.photons, "photons of the pass")->capture_default_str();
+  benchPipelineCommand->add_option("--store", benchPipeline.store,
+                                   "scene store to reuse, or to generate the building into and keep (default: a temporary one)");
+  benchPipelineCommand->add_option("--floors", benchPipeline.floors, "floors of the tower preset");
+  benchPipelineCommand->add_option("--scene-seed", benchPipeline.sceneSeed, "furnishing seed of the building")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--seed", benchPipeline.seed, "seed of the photon pass")->capture_default_str();
+  benchPipelineCommand->add_option("--modes", benchPipeline.modes, "modes, comma-separated (portico-Nw for any N)")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--accel", benchPipeline.accel, "portico's accelerator spec")->capture_default_str();
+  benchPipelineCommand->add_option("--memory", benchPipeline.memory, "cache budget per portico worker")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--runs", benchPipeline.runs, "runs per mode, interleaved (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchPipelineCommand->add_option("--csv", benchPipeline.csv, "write one row per mode");
+  benchPipelineCommand->add_option("--plot", benchPipeline.plot, "write a PNG bar chart of photons/s");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
     if (*import) return runSceneImport(importInputs, importOptions, store);
-    if (*info) return runSceneInfo(store, json);
+    if (*info) return runSceneInfo(store, SceneInfoOptions{json, !noCompress});
+    if (*plan) return runScenePlan(store, planOptions);
     if (*renderCommand) return runRender(render, local);
-    if (*submit) return runSubmit(endpoint, render);
-    if (*status) return runStatus(endpoint, job, json);
-    if (*wait) return runWait(endpoint, job, quiet);
-    if (*cancel) return runCancel(endpoint, job);
+    if (*submit) return runSubmit(connect, render);
+    if (*status) return runStatus(connect, job, json);
+    if (*wait) return runWait(connect, job, quiet);
+    if (*cancel) return runCancel(connect, job);
+    if (*keysGenerate) return runKeysGenerate(keysDirectory);
     if (*benchAccelCommand) return runBenchAccel(benchAccel);
+    if (*benchPipelineCommand) return runBenchPipeline(benchPipeline);
   } catch (const std::exception& e) {
     std::cerr << "portico: " << e.what() << "\n";
     return 1;

@@ -50,21 +50,27 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
   const std::string coordinatorLog = (work / "coordinator.log").string();
   const std::string endpointFile = (work / "endpoint").string();
 
-  ChildProcess coordinator({findProgram("portico-coordinator"), "--listen", "tcp://127.0.0.1:*", "--db",
-                            (work / "jobs.db").string(), "--endpoint-file", endpointFile, "--log-level",
-                            local.logLevel},
-                           coordinatorLog);
+  // --keys goes to every child, and to this process's own client.
+  std::vector<std::string> keys;
+  if (!local.keys.empty()) keys = {"--keys", std::filesystem::absolute(local.keys).string()};
+  std::vector<std::string> coordinatorArgv{findProgram("portico-coordinator"), "--listen", "tcp://127.0.0.1:*", "--db",
+                                           (work / "jobs.db").string(), "--endpoint-file", endpointFile,
+                                           "--log-level", local.logLevel};
+  coordinatorArgv.insert(coordinatorArgv.end(), keys.begin(), keys.end());
+  ChildProcess coordinator(coordinatorArgv, coordinatorLog);
   const std::string endpoint = readEndpoint(endpointFile, coordinator, coordinatorLog);
   std::vector<ChildProcess> workers;
   const std::string workerProgram = findProgram("portico-worker");
-  for (uint32_t i = 0; i < local.workers; ++i)
-    workers.emplace_back(std::vector<std::string>{workerProgram, "--connect", endpoint, "--memory", local.memory,
-                                                  "--name", fmt::format("local-{}", i), "--log-level", local.logLevel},
-                         (work / fmt::format("worker-{}.log", i)).string());
+  for (uint32_t i = 0; i < local.workers; ++i) {
+    std::vector<std::string> argv{workerProgram, "--connect", endpoint, "--memory", local.memory,
+                                  "--name", fmt::format("local-{}", i), "--log-level", local.logLevel};
+    argv.insert(argv.end(), keys.begin(), keys.end());
+    workers.emplace_back(argv, (work / fmt::format("worker-{}.log", i)).string());
+  }
 
   signal(SIGINT, onInterrupt);
   signal(SIGTERM, onInterrupt);
-  net::CoordinatorClient client(endpoint);
+  net::CoordinatorClient client(endpoint, local.keys);
   const uint64_t job = client.submit(submit);
   ProgressDisplay display(false);
   std::string state;

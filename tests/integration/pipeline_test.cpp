@@ -25,10 +25,7 @@ class Pipeline : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = makeTempDirectory("pipeline");
     store_ = dir_ / "demo";
-    ASSERT_EQ(runCommand({kBin + "portico", "scene", "generate", "--preset", "demo", "--seed", "3", store_.string()},
-                         dir_ / "generate.log"),
-              0)
-        << readFile(dir_ / "generate.log");
+    ASSERT_EQ(generateDemoStore(store_, 3), "");
   }
   static fs::path dir_, store_;
 };

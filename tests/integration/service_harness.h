@@ -84,6 +84,15 @@ inline size_t differingFloats(const fs::path& a, const fs::path& b) {
   return differing;
 }
 
+// Writes the demo building into `store` (`portico scene generate`); returns
+// "" on success, else the command's log, for the assertion's message.
+inline std::string generateDemoStore(const fs::path& store, int seed) {
+  const fs::path log = store.string() + ".generate.log";
+  const int code = runCommand(
+      {kBin + "portico", "scene", "generate", "--preset", "demo", "--seed", std::to_string(seed), store.string()}, log);
+  return code == 0 ? std::string() : "portico scene generate failed: " + readFile(log);
+}
+
 // How a LocalCluster's services are started beyond the defaults.
 struct ClusterOptions {
   std::string listen = "tcp://127.0.0.1:*";

@@ -1,0 +1,14 @@
+// Whether a ZeroMQ endpoint can be reached only from this machine: the
+// coordinator listens beyond it only with CURVE keys.
+#pragma once
+
+#include <string_view>
+
+namespace portico::net {
+
+// True for ipc:// and inproc://, and for tcp:// on 127.x.x.x, localhost or
+// [::1]. Everything else (tcp://*, tcp://0.0.0.0, an interface name, a
+// host name, another transport) may be reachable from other machines.
+bool isLoopbackEndpoint(std::string_view endpoint);
+
+}  // namespace portico::net

@@ -1,0 +1,237 @@
+// The coordinator's socket against the network, through real processes:
+// CURVE keys (a worker or client with a wrong key is refused), no listening
+// beyond loopback without keys, and garbage, truncated, oversized and
+// wrong-version frames dropped while jobs still complete.
+#include <capnp/message.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <random>
+#include <regex>
+#include <thread>
+
+#include "common/net/client.h"
+#include "common/net/message.h"
+#include "tests/integration/service_harness.h"
+
+namespace portico {
+namespace {
+
+using namespace harness;
+
+class Security : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = makeTempDirectory("security");
+    store_ = dir_ / "demo";
+    ASSERT_EQ(generateDemoStore(store_, 3), "");
+    // The right keys, and a client pair the coordinator does not know that
+    // still pins the right coordinator key (so it is the client key that fails).
+    keys_ = dir_ / "keys";
+    wrongKeys_ = dir_ / "wrong-keys";
+    ASSERT_EQ(runCommand({kBin + "portico", "keys", "generate", keys_.string()}, dir_ / "keys.log"), 0)
+        << readFile(dir_ / "keys.log");
+    ASSERT_EQ(runCommand({kBin + "portico", "keys", "generate", (dir_ / "other").string()}, dir_ / "keys.log"), 0);
+    fs::create_directories(wrongKeys_);
+    fs::copy_file(keys_ / "coordinator.public", wrongKeys_ / "coordinator.public");
+    fs::copy_file(dir_ / "other" / "client.secret", wrongKeys_ / "client.secret");
+  }
+  static fs::path dir_, store_, keys_, wrongKeys_;
+};
+fs::path Security::dir_, Security::store_, Security::keys_, Security::wrongKeys_;
+
+// Polls a log until it holds `text` (a line libzmq's events produce a moment later).
+bool waitForLog(const fs::path& log, const std::string& text, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (readFile(log).find(text) != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return false;
+}
+
+size_t countOccurrences(const std::string& text, const std::string& what) {
+  size_t count = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+  return count;
+}
+
+TEST_F(Security, WorkersWithAWrongKeyOrNoKeyAreRefusedAndOneWithTheRightKeyFinishesTheJob) {
+  const fs::path dir = dir_ / "workers";
+  ClusterOptions options;
+  options.coordinatorExtra = {"--keys", keys_.string()};
+  options.clientKeys = keys_.string();
+  LocalCluster cluster(dir, 2, {{"--keys", wrongKeys_.string()}, {}}, options);
+  const uint64_t job = cluster.submit(store_, dir / "keyed.png", 5000, 1);
+  // Longer than the workers' liveness (1.5 s): the wrong-key one has given up once.
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  auto status = cluster.status(job);
+  EXPECT_EQ(status.value("state", ""), "photons") << status.dump(2);
+  EXPECT_EQ(status["leases"].get<int64_t>(), 0) << status.dump(2);
+  EXPECT_EQ(status["workers"].size(), 0u) << status.dump(2);
+  const std::string coordinatorLog = readFile(dir / "coordinator.log");
+  EXPECT_NE(coordinatorLog.find("is not in " + (keys_ / "client.public").string()), std::string::npos)
+      << coordinatorLog;
+  // The keyless worker: whichever side notices the mismatch first decides the line.
+  EXPECT_TRUE(coordinatorLog.find("security mechanism mismatch") != std::string::npos ||
+              coordinatorLog.find("a peer with --keys on one side only") != std::string::npos)
+      << coordinatorLog;
+  EXPECT_NE(readFile(dir / "worker-0.log").find("wrong --keys, or coordinator down"), std::string::npos)
+      << readFile(dir / "worker-0.log");
+
+  cluster.addWorker({"--keys", keys_.string()});
+  status = cluster.wait(job);
+  EXPECT_EQ(status.value("state", ""), "done") << status.dump(2);
+  ASSERT_EQ(status["workers"].size(), 1u) << status.dump(2);
+  EXPECT_EQ(status["workers"][0].value("name", ""), "w2") << status.dump(2);
+}
+
+TEST_F(Security, AClientWithAWrongKeyGetsNoAnswerAndSaysSoClearly) {
+  const fs::path dir = dir_ / "clients";
+  ClusterOptions options;
+  options.coordinatorExtra = {"--keys", keys_.string()};
+  LocalCluster cluster(dir, 0, {}, options);
+  const auto statusWith = [&](const std::vector<std::string>& keys, const std::string& name, int* code) {
+    std::vector<std::string> argv{kBin + "portico", "status", "--coordinator", cluster.endpoint(), "--timeout", "2"};
+    argv.insert(argv.end(), keys.begin(), keys.end());
+    return captureOutput(argv, dir, name, code);
+  };
+  int code = -1;
+  EXPECT_NE(statusWith({"--keys", keys_.string()}, "right", &code).find("no jobs"), std::string::npos);
+  EXPECT_EQ(code, 0) << readFile(dir / "right.log");
+  for (const auto& [name, keys] : {std::pair<std::string, std::vector<std::string>>{"wrong", {"--keys", wrongKeys_.string()}},
+                                   {"none", {}}}) {
+    const auto started = std::chrono::steady_clock::now();
+    EXPECT_EQ(statusWith(keys, name, &code), "");
+    EXPECT_NE(code, 0) << name;
+    EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(10)) << name;
+    const std::string log = readFile(dir / (name + ".log"));
+    EXPECT_NE(log.find("no answer from " + cluster.endpoint() + " within 2 s: wrong --keys, or coordinator down"),
+              std::string::npos)
+        << name << ": " << log;
+  }
+  // A key file that is not one fails at once, naming the file.
+  fs::create_directories(dir / "bad-keys");
+  fs::copy_file(keys_ / "coordinator.public", dir / "bad-keys" / "coordinator.public");
+  std::ofstream(dir / "bad-keys" / "client.secret") << "not a key\n";
+  statusWith({"--keys", (dir / "bad-keys").string()}, "bad", &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(readFile(dir / "bad.log").find("client.secret: line 1 is not a 40-character Z85 CURVE key"),
+            std::string::npos)
+      << readFile(dir / "bad.log");
+}
+
+TEST_F(Security, TheCoordinatorListensBeyondLoopbackOnlyWithKeys) {
+  const fs::path dir = dir_ / "listen";
+  fs::create_directories(dir);
+  const fs::path refusedLog = dir / "refused.log";
+  EXPECT_NE(runCommand({kBin + "portico-coordinator", "--listen", "tcp://0.0.0.0:*", "--db", (dir / "refused.db").string()},
+                       refusedLog),
+            0);
+  const std::string refused = readFile(refusedLog);
+  EXPECT_EQ(countOccurrences(refused, "\n"), 1u) << refused;   // one clear line
+  EXPECT_NE(refused.find("refusing to listen on tcp://0.0.0.0:* without --keys"), std::string::npos) << refused;
+  EXPECT_FALSE(fs::exists(dir / "refused.db"));
+
+  ClusterOptions options;
+  options.listen = "tcp://0.0.0.0:*";
+  options.coordinatorExtra = {"--keys", keys_.string()};
+  LocalCluster cluster(dir, 0, {}, options);
+  // Bound to every interface; reached here through loopback.
+  const std::string loopback = std::regex_replace(cluster.endpoint(), std::regex("0\\.0\\.0\\.0"), "127.0.0.1");
+  ASSERT_NE(loopback, cluster.endpoint());
+  net::CoordinatorClient client(loopback, keys_.string(), std::chrono::seconds(10));
+  EXPECT_EQ(nlohmann::json::parse(client.statusJson(0))["jobs"].size(), 0u);
+}
+
+TEST_F(Security, GarbageTruncatedOversizedAndWrongVersionFramesAreDroppedAndAJobCompletes) {
+  const fs::path dir = dir_ / "garbage";
+  // A small lease keeps the coordinator's frame limit small enough to overrun cheaply.
+  const int64_t leaseRays = 2000;
+  ClusterOptions options;
+  options.coordinatorExtra = {"--lease-rays", std::to_string(leaseRays)};
+  LocalCluster cluster(dir, 1, {}, options);
+  const fs::path log = dir / "coordinator.log";
+  zmq::context_t context(1);
+  zmq::socket_t rogue(context, zmq::socket_type::dealer);
+  rogue.set(zmq::sockopt::linger, 0);
+  rogue.connect(cluster.endpoint());
+
+  // Oversized: libzmq drops it unread and closes the connection (the rogue reconnects).
+  {
+    const std::string huge(net::maxCoordinatorFrameBytes(leaseRays) + 1, '\x55');
+    rogue.send(zmq::buffer(huge), zmq::send_flags::none);
+    EXPECT_TRUE(waitForLog(log, "closed (the peer left, or ZeroMQ dropped it for a frame over the size limit",
+                           std::chrono::seconds(10)))
+        << readFile(log);
+  }
+  // Wrong protocol version: an error naming both versions, and no worker joins.
+  {
+    capnp::MallocMessageBuilder message;
+    auto hello = message.initRoot<wire::Envelope>().initHello();
+    hello.setVersion(wire::PROTOCOL_VERSION + 97);
+    hello.setName("time-traveller");
+    rogue.send(net::encode(message), zmq::send_flags::none);
+    zmq::pollitem_t items[] = {{rogue.handle(), 0, ZMQ_POLLIN, 0}};
+    ASSERT_EQ(zmq::poll(items, 1, std::chrono::seconds(10)), 1) << readFile(log);
+    zmq::message_t reply;
+    ASSERT_TRUE(rogue.recv(reply));
+    net::Decoded decoded(reply);
+    ASSERT_EQ(decoded.envelope().which(), wire::Envelope::ERROR);
+    const std::string error = decoded.envelope().getError();
+    EXPECT_NE(error.find(std::to_string(wire::PROTOCOL_VERSION + 97)), std::string::npos) << error;
+    EXPECT_NE(error.find("speaks " + std::to_string(wire::PROTOCOL_VERSION)), std::string::npos) << error;
+  }
+  // Truncated: a real Result and a real Submit cut short at several lengths.
+  // The Result spans several segments, as a big one does: Cap'n Proto reads
+  // those lazily, and a truncated one used to end the coordinator.
+  size_t truncatedFrames = 0;
+  {
+    capnp::MallocMessageBuilder result(64, capnp::AllocationStrategy::FIXED_SIZE);
+    auto body = result.initRoot<wire::Envelope>().initResult();
+    body.setLease(1);
+    auto crossings = body.initCrossings(16);
+    for (unsigned c = 0; c < crossings.size(); ++c) {
+      auto rays = crossings[c].initRays(4);
+      for (unsigned i = 0; i < rays.size(); ++i) rays[i].setDx(1.0f + float(i));
+    }
+    capnp::MallocMessageBuilder submit;
+    submit.initRoot<wire::Envelope>().initSubmit().initSpec().setStore(store_.string());
+    for (capnp::MallocMessageBuilder* message : {&result, &submit}) {
+      const zmq::message_t whole = net::encode(*message);
+      for (size_t length : {size_t(1), size_t(7), whole.size() / 3, whole.size() / 2, whole.size() - 1}) {
+        rogue.send(zmq::buffer(whole.data(), length), zmq::send_flags::none);
+        ++truncatedFrames;
+      }
+    }
+  }
+  // Garbage: random bytes, an empty frame, several frames, a Result for a lease never given.
+  std::mt19937 random(99);
+  for (int i = 0; i < 300; ++i) {
+    std::string bytes(1 + random() % 300, '\0');
+    for (char& c : bytes) c = static_cast<char>(random());
+    rogue.send(zmq::buffer(bytes), zmq::send_flags::none);
+  }
+  rogue.send(zmq::message_t(), zmq::send_flags::none);
+  rogue.send(zmq::str_buffer("a"), zmq::send_flags::sndmore);
+  rogue.send(zmq::str_buffer("b"), zmq::send_flags::none);
+  {
+    capnp::MallocMessageBuilder message;
+    message.initRoot<wire::Envelope>().initResult().setLease(424242);
+    rogue.send(net::encode(message), zmq::send_flags::none);
+  }
+
+  const auto status = cluster.render(store_, dir / "after.png", 5000, 1);
+  EXPECT_EQ(status.value("state", ""), "done") << status.dump(2);
+  ASSERT_EQ(status["workers"].size(), 1u) << status.dump(2);   // the rogue never joined
+  const std::string text = readFile(log);
+  EXPECT_NE(text.find("refused worker time-traveller: protocol version"), std::string::npos) << text;
+  EXPECT_GE(countOccurrences(text, "malformed message"), truncatedFrames) << text;
+  EXPECT_NE(text.find("malformed message: empty frame"), std::string::npos) << text;
+  EXPECT_NE(text.find("unexpected frame layout"), std::string::npos) << text;
+  EXPECT_NE(text.find("dropped a result for lease 424242"), std::string::npos) << text;
+}
+
+}  // namespace
+}  // namespace portico
