@@ -18,14 +18,20 @@ namespace {
 constexpr uint32_t kExpectedCell = 0;
 constexpr size_t kMaterialCount = 64;
 
+// Removed when libFuzzer exits (it calls exit(), so static destructors run).
+struct TemporaryFile {
+  std::string path;
+  ~TemporaryFile() { ::unlink(path.c_str()); }
+};
+
 const std::string& cellPath() {
-  static const std::string path = [] {
+  static const TemporaryFile file{[] {
     // /dev/shm when there is one: a file per execution, a million times.
     const std::filesystem::path base =
         std::filesystem::exists("/dev/shm") ? std::filesystem::path("/dev/shm") : std::filesystem::temp_directory_path();
     return (base / ("portico-fuzz-cell-" + std::to_string(getpid()) + ".cell")).string();
-  }();
-  return path;
+  }()};
+  return file.path;
 }
 }  // namespace
 

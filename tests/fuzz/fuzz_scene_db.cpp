@@ -16,14 +16,23 @@ using namespace portico;
 namespace fs = std::filesystem;
 
 namespace {
+// Removed when libFuzzer exits (it calls exit(), so static destructors run).
+struct TemporaryDirectory {
+  fs::path path;
+  ~TemporaryDirectory() {
+    std::error_code ignored;
+    fs::remove_all(path, ignored);
+  }
+};
+
 const fs::path& storeDirectory() {
-  static const fs::path dir = [] {
+  static const TemporaryDirectory dir{[] {
     const fs::path base = fs::exists("/dev/shm") ? fs::path("/dev/shm") : fs::temp_directory_path();
     fs::path d = base / ("portico-fuzz-store-" + std::to_string(getpid()));
     fs::create_directories(d);
     return d;
-  }();
-  return dir;
+  }()};
+  return dir.path;
 }
 }  // namespace
 
