@@ -26,10 +26,7 @@ class Resilience : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = makeTempDirectory("resilience");
     store_ = dir_ / "demo";
-    ASSERT_EQ(runCommand({kBin + "portico", "scene", "generate", "--preset", "demo", "--seed", "5", store_.string()},
-                         dir_ / "generate.log"),
-              0)
-        << readFile(dir_ / "generate.log");
+    ASSERT_EQ(generateDemoStore(store_, 5), "");
     LocalCluster cluster(dir_ / "reference", 1);
     const auto started = std::chrono::steady_clock::now();
     const auto status = cluster.render(store_, dir_ / "reference.exr", kPhotons, 1);
