@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/net/message.h"
+#include "common/transport/photon_shares.h"
 #include "common/transport/sampling.h"
 
 namespace portico {
@@ -37,23 +38,7 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
   // The cell and portal pictures need no light: the photon phase is empty.
   if (spec.getAov() != wire::Aov::RADIANCE) return;
   const auto& lights = scene.lights();
-  const uint64_t total = spec.getPhotons();
-  std::vector<double> power(lights.size());
-  for (size_t i = 0; i < lights.size(); ++i) power[i] = luminance(lights[i].power());
-  const double sum = std::accumulate(power.begin(), power.end(), 0.0);
-  // Largest-remainder apportionment: shares sum exactly to `total`.
-  std::vector<uint64_t> share(lights.size());
-  std::vector<std::pair<double, size_t>> remainders;
-  uint64_t given = 0;
-  for (size_t i = 0; i < lights.size(); ++i) {
-    const double exact = sum > 0 ? total * power[i] / sum : double(total) / lights.size();
-    share[i] = static_cast<uint64_t>(std::floor(exact));
-    given += share[i];
-    remainders.push_back({exact - share[i], i});
-  }
-  std::sort(remainders.begin(), remainders.end(),
-            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
-  for (size_t k = 0; given < total; ++k, ++given) share[remainders[k % remainders.size()].second]++;
+  const std::vector<uint64_t> share = photonSharesOfLights(lights, spec.getPhotons());
 
   uint64_t nextPath = 0;
   for (size_t i = 0; i < lights.size(); ++i) {

@@ -162,11 +162,9 @@ Sample runInCore(const SceneStore& scene, const BenchPipelineOptions& options) {
   sample.bytesRead = int64_t(r.bytesMapped);
   std::cout << fmt::format(
       "  embree-incore-2t: {} cells, {} triangles, BVH {:.0f} MiB; load {:.2f} s, build {:.2f} s (device {:.3f} s), "
-      "trace {:.2f} s; "
-      "{} rays; CPU {:.2f} s\n",
+      "trace {:.2f} s; {} rays; CPU {:.2f} s\n",
       r.cells, r.triangles, double(r.bvhBytes) / (1 << 20), r.loadSeconds, r.buildSeconds, r.deviceSeconds,
-      r.traceSeconds, r.rays,
-      sample.cpuSeconds);
+      r.traceSeconds, r.rays, sample.cpuSeconds);
   return sample;
 }
 
@@ -175,15 +173,13 @@ Sample runPortico(const std::string& store, uint32_t workers, const BenchPipelin
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
   const std::filesystem::path output = work / fmt::format("portico-{}w-{}.exr", workers, runIndex);
   const std::filesystem::path log = work / fmt::format("portico-{}w-{}.log", workers, runIndex);
-  std::vector<std::string> argv{self,        "render",    store,
-                                "-o",        output.string(), "--workers",
-                                std::to_string(workers), "--photons", std::to_string(options.photons),
-                                "--seed",    std::to_string(options.seed), "--spp",
-                                "1",         "--gather",  "0",
-                                "--width",   "8",         "--height",
-                                "8",         "--accel",   options.accel,
-                                "--memory",  options.memory, "--log-level",
-                                "warn"};
+  // The photon pass, and the smallest render a job can have.
+  const std::vector<std::string> argv{self, "render", store, "-o", output.string(),
+                                      "--workers", std::to_string(workers),
+                                      "--photons", std::to_string(options.photons),
+                                      "--seed", std::to_string(options.seed),
+                                      "--spp", "1", "--gather", "0", "--width", "8", "--height", "8",
+                                      "--accel", options.accel, "--memory", options.memory, "--log-level", "warn"};
   const auto start = Clock::now();
   const double cpuStart = cpuSeconds(RUSAGE_CHILDREN);
   ChildProcess child(argv, log.string());
@@ -218,8 +214,8 @@ Sample runPortico(const std::string& store, uint32_t workers, const BenchPipelin
   // and their shadow rays: near enough the photon segments.
   sample.rays = jsonInt(stats, "rays", "traced");
   std::cout << fmt::format(
-      "  portico-{}w: photon phase {:.2f} s (process {:.2f} s, CPU {:.2f} s); {} cells loaded, {} cache hits, {:.0f} MiB read, "
-      "accelerators {:.2f} s (all workers); {} leases, {} portal crossings, {} portal copies\n",
+      "  portico-{}w: photon phase {:.2f} s (process {:.2f} s, CPU {:.2f} s); {} cells loaded, {} cache hits, "
+      "{:.0f} MiB read, accelerators {:.2f} s (all workers); {} leases, {} portal crossings, {} portal copies\n",
       workers, sample.seconds, sample.wallSeconds, sample.cpuSeconds, sample.cellsLoaded, sample.cacheHits,
       double(sample.bytesRead) / (1 << 20), sample.buildSeconds, sample.leases, sample.crossings,
       sample.portalCopies);
@@ -241,9 +237,11 @@ void writeBarPlot(const std::string& path, const std::string& title, const std::
   std::vector<double> rates;
   for (const ModeResult& r : results) rates.push_back(r.seconds() > 0 ? double(photons) / r.seconds() : 0.0);
   const double maxRate = std::max(1.0, *std::max_element(rates.begin(), rates.end()));
-  // A 1-2-5 step giving 4 to 10 ticks.
-  double step = std::pow(10.0, std::floor(std::log10(maxRate)));
-  while (maxRate / step < 4) step /= (std::fmod(std::log10(step) + 100, 1.0) < 0.01 ? 2.0 : 2.5);
+  // The largest 1-2-5 step that gives at least 4 ticks.
+  double step = 0;
+  for (double decade = std::pow(10.0, std::floor(std::log10(maxRate))); step == 0; decade /= 10)
+    for (double mantissa : {5.0, 2.0, 1.0})
+      if (step == 0 && maxRate / (mantissa * decade) >= 4) step = mantissa * decade;
   const double top = std::ceil(maxRate * 1.15 / step) * step;
   const int plotWidth = kWidth - kLeft - kRight, plotHeight = kHeight - kTop - kBottom;
   const auto yOf = [&](double value) { return kTop + plotHeight - int(std::lround(value / top * plotHeight)); };
@@ -421,7 +419,6 @@ int runBenchPipeline(const BenchPipelineOptions& options) {
     writeBarPlot(options.plot, title, results, options.photons, embreeRate);
     std::cout << "wrote " << options.plot << "\n";
   }
-  if (options.store.empty()) std::filesystem::remove_all(store);
   return status;
 }
 

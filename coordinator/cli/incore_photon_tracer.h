@@ -9,6 +9,8 @@
 // so it does the same work as portico's photon phase, without cells.
 #pragma once
 
+#include "common/transport/photon_shares.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -41,10 +43,5 @@ struct InCorePhotonResult {
 // Throws std::runtime_error (Embree's message, or a cell file's problem).
 InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePhotonOptions& options);
 
-// Each light's photons: `total` shared in proportion to luminance(power),
-// by largest remainders (ties to the lower light id), summing exactly to
-// `total` — the apportionment of coordinator/job_planner.cpp
-// (queuePhotonEmission), which the `portico` command does not link.
-std::vector<uint64_t> photonSharesOfLights(const std::vector<AreaLight>& lights, uint64_t total);
 
 }  // namespace portico::cli
