@@ -140,7 +140,6 @@ int WorkerSession::run() {
     // then it starts tracing.
     const auto advanceLease = [&]() {
       auto assign = lease->assign->envelope().getAssign();
-      if (!lease->waitingForFile) cache_.beginLease();
       if (mirror_) {
         std::optional<std::string> file;
         try {
@@ -220,6 +219,7 @@ int WorkerSession::run() {
                 }
                 lease.emplace();
                 lease->assign = std::make_unique<net::Decoded>(frame);
+                cache_.beginLease();   // what the previous lease pinned may go now
                 advanceLease();
                 break;
               }

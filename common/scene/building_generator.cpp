@@ -14,6 +14,7 @@
 #include "common/scene/demo_furniture.h"
 #include "common/scene/mesh_builder.h"
 #include "common/scene/scene_store.h"
+#include "common/util/apportion.h"
 
 namespace portico {
 
@@ -146,7 +147,6 @@ class FloorPlanner {
         if (!firstJunction) firstJunction = junction;
         direction = element.out;
         cursor = cursor + element.in * halfWidth_ + element.out * halfWidth_;
-        lastJunction_ = junction;
       } else {
         openCorridor = addWing(cursor, element.direction, lengths[wing], roomsPerWing[wing], wing);
         cursor = cursor + element.direction * lengths[wing];
@@ -278,7 +278,7 @@ class FloorPlanner {
   DemoRandom& random_;
   float c_ = 1.0f, halfWidth_ = 6.0f;
   FloorTemplate floor_;
-  std::optional<size_t> pendingExit_, lastJunction_;
+  std::optional<size_t> pendingExit_;
   std::map<size_t, std::vector<Vec3>> usedFaces_;
 };
 
@@ -347,27 +347,6 @@ std::vector<AreaLight> lightGrid(const FloorRect& r, float ceilingY, uint32_t n,
     lights.push_back(light);
   }
   return lights;
-}
-
-// Largest-remainder shares of `total` by weight, each at most cap[i].
-std::vector<uint64_t> apportion(uint64_t total, const std::vector<double>& weights, const std::vector<uint64_t>& caps) {
-  std::vector<uint64_t> shares(weights.size(), 0);
-  const double sum = std::accumulate(weights.begin(), weights.end(), 0.0);
-  if (sum <= 0) return shares;
-  std::vector<std::pair<double, size_t>> remainders;
-  uint64_t given = 0;
-  for (size_t i = 0; i < weights.size(); ++i) {
-    const double exact = double(total) * weights[i] / sum;
-    shares[i] = std::min<uint64_t>(caps[i], uint64_t(exact));
-    given += shares[i];
-    remainders.push_back({exact - double(shares[i]), i});
-  }
-  std::stable_sort(remainders.begin(), remainders.end(), [](auto& a, auto& b) { return a.first > b.first; });
-  for (size_t k = 0; given < total && k < remainders.size() * 4; ++k) {
-    const size_t i = remainders[k % remainders.size()].second;
-    if (shares[i] < caps[i]) ++shares[i], ++given;
-  }
-  return shares;
 }
 
 // Which face of `box` a portal lies on, and its rectangle there in
@@ -506,7 +485,7 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
       lightWeights[i] = area(cells[i].source->rect);
       lightCaps[i] = uint64_t(std::max(1.0f, area(cells[i].source->lightArea) / 1.0f));
     }
-  const std::vector<uint64_t> lightCounts = apportion(preset.lights, lightWeights, lightCaps);
+  const std::vector<uint64_t> lightCounts = largestRemainderShares(preset.lights, lightWeights, lightCaps);
   uint32_t lightTotal = 0;
   for (size_t i = 0; i < cells.size(); ++i) {
     if (!cells[i].source) continue;
@@ -571,7 +550,7 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
   std::vector<double> otherWeights = weights;
   otherWeights[heaviest] = 0.0;
   std::vector<uint64_t> caps(rooms.size(), uint64_t(0.9 * double(preset.maxTrianglesPerCell)));
-  std::vector<uint64_t> budgets = apportion(roomBudget - heaviestBudget, otherWeights, caps);
+  std::vector<uint64_t> budgets = largestRemainderShares(roomBudget - heaviestBudget, otherWeights, caps);
   budgets[heaviest] = heaviestBudget;
 
   for (size_t k = 0; k < rooms.size(); ++k) {
