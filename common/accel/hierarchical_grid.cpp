@@ -27,6 +27,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/accel/grid_traversal.h"
 #include "common/accel/triangle_intersect.h"
 #include "common/triangle_box_overlap.h"
 #include "common/accel/uniform_grid.h"
@@ -47,9 +48,6 @@ constexpr double kReferenceMargin = 1e-5;
 constexpr double kGridPadding = 1e-4;
 // No sub-grid has voxels narrower than this many reference margins.
 constexpr double kMinimumVoxelInMargins = 8;
-// Mailbox entries per query: a direct-mapped cache of the primitives tested
-// last. On the stack, so concurrent queries share nothing.
-constexpr uint32_t kMailboxSize = 64;
 
 uint64_t voxelCountOf(const std::array<int, 3>& resolution) {
   return uint64_t(resolution[0]) * uint64_t(resolution[1]) * uint64_t(resolution[2]);
@@ -359,31 +357,20 @@ bool HierarchicalGrid::traverse(const Ray& ray, Hit& best) const {
                                       direction[1] != 0.0 ? 1.0 / direction[1] : 0.0,
                                       direction[2] != 0.0 ? 1.0 / direction[2] : 0.0};
 
-  // Clip [tMin, tMax] to the top grid box (slabs), as `grid` does.
+  // Clip [tMin, tMax] to the top grid box, as `grid` does.
   const GridRecord& top = grids_[0];
+  double low[3], high[3];
+  for (int axis = 0; axis < 3; ++axis)
+    low[axis] = top.low[axis], high[axis] = top.low[axis] + top.resolution[axis] * top.voxelSize[axis];
   double tEnter = ray.tMin, tExit = ray.tMax;
-  if (!(tEnter < tExit)) return false;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double low = top.low[axis], high = top.low[axis] + top.resolution[axis] * top.voxelSize[axis];
-    if (direction[axis] == 0.0) {
-      if (origin[axis] < low || origin[axis] > high) return false;
-      continue;
-    }
-    double tNear = (low - origin[axis]) / direction[axis];
-    double tFar = (high - origin[axis]) / direction[axis];
-    if (tNear > tFar) std::swap(tNear, tFar);
-    tEnter = std::max(tEnter, tNear);
-    tExit = std::min(tExit, tFar);
-  }
-  if (tEnter > tExit) return false;
+  if (!grid_traversal::clipToBox(origin, direction, low, high, tEnter, tExit)) return false;
 
   DdaState stack[kMaxLevels];
   int level = 0;
   stack[0].start(top, origin, direction, inverseDirection, tEnter, tExit);
 
   const WatertightRay frame(ray.direction);
-  uint32_t mailbox[kMailboxSize];
-  std::memset(mailbox, 0xff, sizeof(mailbox));  // kNoPrimitive everywhere
+  grid_traversal::Mailbox mailbox;
   const uint32_t* const references = references_.data();
   const Node* const nodes = nodes_.data();
   const uint64_t* const occupied = occupied_.data();
@@ -402,20 +389,9 @@ bool HierarchicalGrid::traverse(const Ray& ray, Hit& best) const {
         ++level;
         continue;
       }
-      for (uint32_t r = node.first, end = node.first + node.count; r < end; ++r) {
-        const uint32_t primitive = references[r];
-        // A triangle spanning several voxels is tested once: its result does
-        // not depend on the voxel, and was already folded into best.
-        uint32_t& slot = mailbox[primitive & (kMailboxSize - 1)];
-        if (slot == primitive) continue;
-        slot = primitive;
-        Vec3 v0, v1, v2;
-        mesh_.triangle(primitive, v0, v1, v2);
-        float t, u, v;
-        if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
-        if constexpr (AnyHit) return true;
-        if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
-      }
+      if (grid_traversal::testReferences<AnyHit>(references, node.first, node.first + node.count, mailbox, mesh_,
+                                                 frame, ray, best))
+        return true;
     }
     // Nothing in a later voxel can be nearer than a hit within this one.
     if constexpr (!AnyHit) {

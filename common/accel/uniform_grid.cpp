@@ -27,6 +27,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/accel/grid_traversal.h"
 #include "common/accel/triangle_intersect.h"
 #include "common/triangle_box_overlap.h"
 
@@ -42,9 +43,6 @@ constexpr double kReferenceMargin = 1e-5;
 // The grid box is the mesh bounds grown by this fraction of its longest side,
 // so that no triangle (with its margin) touches the grid's faces.
 constexpr double kGridPadding = 1e-4;
-// Mailbox entries per query: a direct-mapped cache of the primitives tested
-// last. On the stack, so concurrent queries share nothing.
-constexpr uint32_t kMailboxSize = 64;
 
 
 }  // namespace
@@ -238,22 +236,9 @@ bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
   const double direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
   if (direction[0] == 0.0 && direction[1] == 0.0 && direction[2] == 0.0) return false;
 
-  // Clip [tMin, tMax] to the grid box (slabs). An axis the ray runs parallel
-  // to only decides whether the ray is inside the slab at all.
+  // Clip [tMin, tMax] to the grid box.
   double tEnter = ray.tMin, tExit = ray.tMax;
-  if (!(tEnter < tExit)) return false;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (direction[axis] == 0.0) {
-      if (origin[axis] < low_[axis] || origin[axis] > high_[axis]) return false;
-      continue;
-    }
-    double tNear = (low_[axis] - origin[axis]) / direction[axis];
-    double tFar = (high_[axis] - origin[axis]) / direction[axis];
-    if (tNear > tFar) std::swap(tNear, tFar);
-    tEnter = std::max(tEnter, tNear);
-    tExit = std::min(tExit, tFar);
-  }
-  if (tEnter > tExit) return false;
+  if (!grid_traversal::clipToBox(origin, direction, low_.data(), high_.data(), tEnter, tExit)) return false;
 
   // DDA set-up: the voxel at the entry point, and per axis the distance to
   // the next voxel boundary (tNext) and between boundaries (tDelta).
@@ -282,8 +267,7 @@ bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
   }
 
   const WatertightRay frame(ray.direction);
-  uint32_t mailbox[kMailboxSize];
-  std::memset(mailbox, 0xff, sizeof(mailbox));  // kNoPrimitive everywhere
+  grid_traversal::Mailbox mailbox;
   const uint32_t strideY = uint32_t(resolution_[0]);
   const uint32_t strideZ = uint32_t(resolution_[0]) * uint32_t(resolution_[1]);
   const uint32_t* const references = references_.data();
@@ -292,21 +276,9 @@ bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
     const uint32_t index = uint32_t(voxel[0]) + strideY * uint32_t(voxel[1]) + strideZ * uint32_t(voxel[2]);
     const double tVoxelExit = std::min({tNext[0], tNext[1], tNext[2]});
     const bool occupied = (occupied_[index / 64] >> (index % 64)) & 1;
-    for (uint32_t r = occupied ? voxelStart_[index] : 0, end = occupied ? voxelStart_[index + 1] : 0;
-         r < end; ++r) {
-      const uint32_t primitive = references[r];
-      // A triangle spanning several voxels is tested once: its result does
-      // not depend on the voxel, and was already folded into best.
-      uint32_t& slot = mailbox[primitive & (kMailboxSize - 1)];
-      if (slot == primitive) continue;
-      slot = primitive;
-      Vec3 v0, v1, v2;
-      mesh_.triangle(primitive, v0, v1, v2);
-      float t, u, v;
-      if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
-      if constexpr (AnyHit) return true;
-      if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
-    }
+    if (occupied && grid_traversal::testReferences<AnyHit>(references, voxelStart_[index], voxelStart_[index + 1],
+                                                            mailbox, mesh_, frame, ray, best))
+      return true;
     // Nothing in a later voxel can be nearer than a hit within this one.
     // (Hits beyond it are kept, not re-tested: the mailbox would skip them.)
     if constexpr (!AnyHit) {
