@@ -5,10 +5,10 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
-#include <fstream>
 #include <set>
 
 #include "common/transport/photon_record.h"
+#include "common/util/atomic_file.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
@@ -52,9 +52,7 @@ Coordinator::Coordinator(CoordinatorOptions options)
   router_.bind(options_.listen);
   endpoint_ = router_.get(zmq::sockopt::last_endpoint);
   if (!options_.endpointFile.empty()) {
-    const std::string temporary = options_.endpointFile + ".tmp";
-    std::ofstream(temporary) << endpoint_ << "\n";
-    std::rename(temporary.c_str(), options_.endpointFile.c_str());
+    writeFileAtomically(options_.endpointFile, endpoint_ + "\n");
   }
   const int requeued = store_.requeueAllOpenLeases();
   const auto active = store_.jobs(true);
@@ -257,6 +255,8 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
   assign.setCell(chosen->cell);
   assign.setSpec(job->reader());
+  assign.setLeaseWork(worker.leaseWork);
+  assign.setCellWork(std::max(chosen->work, worker.leaseWork));
   auto list = assign.initBatches(static_cast<unsigned>(batches.size()));
   for (size_t i = 0; i < batches.size(); ++i) {
     net::PackedReader reader(batches[i].payload.data(), batches[i].payload.size());

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "common/accel/accelerator.h"
 #include "common/net/message.h"
 #include "common/transport/photon_shares.h"
 #include "common/transport/sampling.h"
@@ -29,6 +30,9 @@ void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
   if (spec.getPhotonK() == 0) spec.setPhotonK(64);
   if (!(spec.getPhotonRadius() > 0) || !std::isfinite(spec.getPhotonRadius()))
     throw std::invalid_argument(fmt::format("photon radius {} must be a positive number", spec.getPhotonRadius()));
+  // A bad --accel is refused here, naming the problem, rather than failing
+  // every cell's lease in the workers.
+  if (spec.getAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getAccel().cStr()));
   if (scene.camera().cell >= scene.cells().size())
     throw std::invalid_argument(fmt::format("scene {}: the camera's cell {} does not exist", scene.directory(),
                                             scene.camera().cell));

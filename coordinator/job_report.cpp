@@ -1,11 +1,12 @@
 #include "coordinator/job_report.h"
 
+#include <cmath>
 #include <fmt/format.h>
 
 #include <filesystem>
-#include <fstream>
 
 #include "common/image/image_writer.h"
+#include "common/util/atomic_file.h"
 
 namespace portico {
 
@@ -13,6 +14,27 @@ namespace {
 int64_t get(const std::map<std::string, int64_t>& counters, const std::string& name) {
   auto it = counters.find(name);
   return it == counters.end() ? 0 : it->second;
+}
+
+// The structures built, from the workers' "accel.built.<spec>" and
+// "accel.cell.<id>.<spec>" counters: builds per spec, and per cell the specs
+// it was built with (more than one when `auto` rebuilt it, or when several
+// workers loaded it with different choices).
+void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohmann::json& stats) {
+  nlohmann::json builds = nlohmann::json::object(), cells = nlohmann::json::object();
+  const std::string builtPrefix = "accel.built.", cellPrefix = "accel.cell.";
+  for (const auto& [name, value] : counters) {
+    if (name.rfind(builtPrefix, 0) == 0) {
+      builds[name.substr(builtPrefix.size())] = value;
+    } else if (name.rfind(cellPrefix, 0) == 0) {
+      const std::string rest = name.substr(cellPrefix.size());
+      const size_t dot = rest.find('.');
+      if (dot == std::string::npos) continue;
+      cells[rest.substr(0, dot)].push_back(rest.substr(dot + 1));
+    }
+  }
+  stats["accelerators"] = builds;
+  stats["cell_accelerators"] = cells;
 }
 }  // namespace
 
@@ -57,14 +79,16 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["leases"] = get(counters, "leases.completed");
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
                       {"render", get(counters, "time.render_ms")},
-                      {"accelerator_build", get(counters, "time.accel_build_ms")},
+                      {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},
                       {"total", (job.finishedMs ? job.finishedMs : job.phaseStartedMs) - job.createdMs}};
   stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
+  addAcceleratorChoices(counters, stats);
   return stats;
 }
 
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs) {
   nlohmann::json status = jobStatistics(store, job, spec);
+  status.erase("cell_accelerators");   // one entry per cell: the statistics file has it
   const auto counters = store.counters(job.id);
   const int64_t photonsDone = get(counters, "photons.absorbed") + get(counters, "photons.escaped");
   const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp();
@@ -122,13 +146,7 @@ void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reade
     std::filesystem::create_directories(parent);
   writeImage(output, image, spec.getExposure() > 0 ? spec.getExposure() : 1.0f);
   const std::string statsPath = output + ".json";
-  const std::string temporary = statsPath + ".tmp";
-  {
-    std::ofstream out(temporary);
-    out << jobStatistics(store, job, spec).dump(2) << "\n";
-    if (!out) throw std::runtime_error(fmt::format("cannot write {}", statsPath));
-  }
-  std::filesystem::rename(temporary, statsPath);
+  writeFileAtomically(statsPath, jobStatistics(store, job, spec).dump(2) + "\n");
 }
 
 }  // namespace portico

@@ -132,6 +132,11 @@ struct Assign {
   cell @4 :UInt32;
   spec @5 :JobSpec;
   batches @6 :List(RayBatch);
+  # The scheduler's work measure (rays held or to be generated): this lease's
+  # batches, and everything the cell had pending in this phase when it was
+  # leased (this lease included). `--accel auto` predicts a cell's rays from them.
+  leaseWork @7 :Int64;
+  cellWork @8 :Int64;
 }
 
 struct Result {

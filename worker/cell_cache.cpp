@@ -48,7 +48,8 @@ void CellCache::makeRoom(uint64_t bytes) {
   if (evicted) ::malloc_trim(0);
 }
 
-const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const std::string& acceleratorSpec) {
+LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const std::string& acceleratorSpec,
+                            const std::function<std::string()>& resolve) {
   CellKey key{directory, cellId, acceleratorSpec};
   if (auto it = cells_.find(key); it != cells_.end()) {
     touch(it->second);
@@ -62,14 +63,9 @@ const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId,
   makeRoom(uint64_t(loadedBytesPerFileByte_ * double(fileBytes)));
   auto loaded = std::make_unique<LoadedCell>();
   loaded->geometry = CellGeometry::load(store.cellPath(cellId), cellId, store.materials().size());
-  loaded->accelerator = buildAccelerator(parseAcceleratorSpec(acceleratorSpec), loaded->geometry->mesh());
-  loaded->tracer = std::make_unique<CellTracer>(*loaded->geometry, *loaded->accelerator);
+  buildAccelerator(*loaded, resolve ? resolve() : acceleratorSpec);
   ++statistics_.cellsLoaded;
   statistics_.bytesRead += loaded->geometry->bytes();
-  statistics_.acceleratorBuildMs += loaded->accelerator->stats().buildMs;
-  spdlog::debug("loaded cell {} ({} triangles, {} bytes), {} built in {:.2f} ms", cellId,
-                loaded->geometry->mesh().triangleCount, loaded->geometry->bytes(), acceleratorSpec,
-                loaded->accelerator->stats().buildMs);
   // Learn the ratio (with a margin for the build's scratch memory).
   if (fileBytes > (64u << 10))
     loadedBytesPerFileByte_ = std::max(loadedBytesPerFileByte_, 1.5 * double(loaded->bytes()) / double(fileBytes));
@@ -79,6 +75,32 @@ const LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId,
   entry.cellKey = key;
   insert(entry);
   return *entry.cell;
+}
+
+void CellCache::buildAccelerator(LoadedCell& cell, const std::string& spec) {
+  cell.tracer.reset();
+  cell.accelerator.reset();
+  cell.accelerator = portico::buildAccelerator(parseAcceleratorSpec(spec), cell.geometry->mesh());
+  cell.tracer = std::make_unique<CellTracer>(*cell.geometry, *cell.accelerator);
+  cell.builtSpec = spec;
+  const uint32_t id = cell.geometry->id();
+  statistics_.acceleratorBuildMs += cell.accelerator->stats().buildMs;
+  statistics_.builds.emplace_back(id, spec);
+  spdlog::debug("cell {} ({} triangles, {} bytes): {} built in {:.2f} ms", id, cell.geometry->mesh().triangleCount,
+                cell.geometry->bytes(), spec, cell.accelerator->stats().buildMs);
+}
+
+void CellCache::rebuildAccelerator(LoadedCell& cell, const std::string& spec) {
+  for (auto& [key, entry] : cells_) {
+    if (entry.cell.get() != &cell) continue;
+    makeRoom(entry.bytes);   // the new structure is of the old one's order; this cell is pinned
+    held_ -= entry.bytes;
+    buildAccelerator(cell, spec);
+    entry.bytes = cell.bytes();
+    held_ += entry.bytes;
+    return;
+  }
+  throw std::logic_error("rebuildAccelerator: the cell is not in the cache");
 }
 
 const PhotonMap* CellCache::photonMap(uint64_t job, uint32_t cell) {

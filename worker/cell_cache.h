@@ -3,12 +3,15 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <tuple>
+#include <utility>
+#include <vector>
 
 #include "common/accel/accelerator.h"
 #include "common/scene/cell_geometry.h"
@@ -22,12 +25,15 @@ struct LoadedCell {
   std::unique_ptr<CellGeometry> geometry;
   std::unique_ptr<Accelerator> accelerator;
   std::unique_ptr<CellTracer> tracer;
+  std::string builtSpec;     // what was built: the requested spec, or auto's choice
+  int64_t raysTraced = 0;    // since it was loaded (auto's evidence for a rebuild)
   uint64_t bytes() const { return geometry->bytes() + accelerator->stats().bytes; }
 };
 
 struct CacheStatistics {
   int64_t cellsLoaded = 0, cellHits = 0, bytesRead = 0, photonMapsBuilt = 0;
   double acceleratorBuildMs = 0;
+  std::vector<std::pair<uint32_t, std::string>> builds;   // (cell, spec) of each accelerator built
 };
 
 // The budget bounds what the cache holds *and* what it is about to load:
@@ -43,7 +49,13 @@ class CellCache {
   // A new lease: what the previous one pinned may go again.
   void beginLease() { ++epoch_; }
   // Loads (or finds) the cell and its accelerator for the given spec; pinned.
-  const LoadedCell& cell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec);
+  // When the cell must be loaded and `resolve` is given, the accelerator
+  // built is resolve()'s spec (`auto`'s choice); the entry stays keyed by
+  // acceleratorSpec.
+  LoadedCell& cell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec,
+                   const std::function<std::string()>& resolve = {});
+  // Replaces a loaded cell's accelerator with one built from `spec`.
+  void rebuildAccelerator(LoadedCell& cell, const std::string& spec);
   // The photon map of (job, cell), or nullptr when not cached; pinned.
   const PhotonMap* photonMap(uint64_t job, uint32_t cell);
   const PhotonMap& storePhotonMap(uint64_t job, uint32_t cell, std::unique_ptr<PhotonMap> map);
@@ -70,6 +82,7 @@ class CellCache {
   void touch(Entry& entry);
   void insert(Entry& entry);
   void evict(Entry* victim);
+  void buildAccelerator(LoadedCell& cell, const std::string& spec);
 
   uint64_t budget_;
   uint64_t held_ = 0;

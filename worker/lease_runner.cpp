@@ -1,9 +1,11 @@
 #include "worker/lease_runner.h"
 
+#include <cmath>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <deque>
 
 #include "common/net/message.h"
 #include "common/transport/photon_record.h"
@@ -31,7 +33,34 @@ std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool i
   return photons;
 }
 
-std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
+// `--accel auto`: the cell with the structure the cost model picks for the
+// rays it is expected to trace, rebuilt when a busy cell makes another pay.
+LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneStore& scene,
+                     wire::Assign::Reader assign, bool renderPhase) {
+  const uint32_t cellId = assign.getCell();
+  const CellInfo& info = scene.cells()[cellId];
+  const CellShape shape = cellShape(double(info.triangleCount), info.bounds);
+  const double expected = chooser.expectedRays(renderPhase, assign.getCellWork());
+  bool loadedNow = false;
+  LoadedCell& cell = cache.cell(scene.directory(), cellId, "auto", [&] {
+    loadedNow = true;
+    const CostPrediction choice = chooser.firstChoice(shape, expected);
+    spdlog::info("cell {} ({} triangles): auto chose {} for ~{:.0f} rays (predicted build {:.1f} ms, {:.0f} ns/ray)",
+                 cellId, info.triangleCount, choice.candidate.spec, expected, choice.buildMs, choice.traceNsPerRay);
+    return choice.candidate.spec;
+  });
+  if (loadedNow) return cell;
+  const double future = std::max(expected, double(cell.raysTraced));
+  if (auto better = chooser.betterChoice(cell.builtSpec, shape, future)) {
+    spdlog::info("cell {} ({} triangles): auto rebuilds {} as {} for ~{:.0f} more rays ({} traced so far)", cellId,
+                 info.triangleCount, cell.builtSpec, better->candidate.spec, future, cell.raysTraced);
+    cache.rebuildAccelerator(cell, better->candidate.spec);
+  }
+  return cell;
+}
+
+std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
+                                                      wire::Assign::Reader assign,
                                                       std::optional<std::vector<StoredPhoton>> photons,
                                                       const std::string& storeDirectory) {
   const auto started = std::chrono::steady_clock::now();
@@ -46,10 +75,13 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
     const auto cells = scene.meta().find("cells");
     parameters.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
   }
-  const LoadedCell& cell = cache.cell(store, cellId, spec.getAccel().size() ? spec.getAccel().cStr() : "grid");
+  const bool renderPhase = assign.getPhase() == wire::Phase::RENDER;
+  const std::string accel = spec.getAccel().size() ? spec.getAccel().cStr() : "grid";
+  LoadedCell& cell = accel == "auto" ? autoCell(cache, chooser, scene, assign, renderPhase)
+                                     : cache.cell(store, cellId, accel);
 
   const PhotonMap* indirect = nullptr;
-  if (assign.getPhase() == wire::Phase::RENDER) {
+  if (renderPhase) {
     indirect = cache.photonMap(assign.getJob(), cellId);
     if (!indirect) {
       if (!photons) throw std::logic_error("render lease without photons");
@@ -82,6 +114,9 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
         break;
     }
   }
+
+  cell.raysTraced += out.counters.raySegments;
+  chooser.learn(renderPhase, assign.getLeaseWork(), out.counters.raySegments);
 
   auto message = std::make_unique<capnp::MallocMessageBuilder>();
   auto result = message->initRoot<wire::Envelope>().initResult();
@@ -118,7 +153,15 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::As
   named.push_back({"cells.cache_hits", cacheStats.cellHits});
   named.push_back({"cells.bytes_read", cacheStats.bytesRead});
   named.push_back({"photon_maps.built", cacheStats.photonMapsBuilt});
-  named.push_back({"time.accel_build_ms", static_cast<int64_t>(cacheStats.acceleratorBuildMs)});
+  // Microseconds: most builds take well under a millisecond.
+  named.push_back({"time.accel_build_us", std::llround(cacheStats.acceleratorBuildMs * 1e3)});
+  // Which structure each cell got (auto's choices): the job's statistics
+  // list them per cell and count them per spec.
+  std::deque<std::string> buildNames;   // owns the names `named` views
+  for (const auto& [builtCell, builtSpec] : cacheStats.builds) {
+    named.push_back({buildNames.emplace_back("accel.built." + builtSpec), 1});
+    named.push_back({buildNames.emplace_back(fmt::format("accel.cell.{}.{}", builtCell, builtSpec)), 1});
+  }
   auto counters = result.initCounters(static_cast<unsigned>(named.size()));
   for (size_t i = 0; i < named.size(); ++i) {
     counters[static_cast<unsigned>(i)].setName(std::string(named[i].first));

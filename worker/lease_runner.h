@@ -10,6 +10,7 @@
 
 #include "common/transport/cell_kernel.h"
 #include "proto/wire.capnp.h"
+#include "worker/accelerator_choice.h"
 #include "worker/cell_cache.h"
 
 namespace portico {
@@ -24,7 +25,8 @@ std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool i
 // Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
 // The scene is read from `storeDirectory` (the job's store, or the worker's
 // local copy of it).
-std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, wire::Assign::Reader assign,
+std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
+                                                      wire::Assign::Reader assign,
                                                       std::optional<std::vector<StoredPhoton>> photons,
                                                       const std::string& storeDirectory);
 

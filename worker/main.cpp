@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   app.add_option("--cache-dir", options.cacheDirectory,
                  "fetch scene stores from the coordinator into this disk cache (no shared file system needed)");
+  app.add_option("--calibration", options.calibrationPath,
+                 "the accelerator cost model's calibration for --accel auto (`portico bench calibrate`; default: "
+                 "$PORTICO_CALIBRATION, else ~/.cache/portico/calibration.json when present, else built-in)");
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

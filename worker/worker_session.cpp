@@ -74,11 +74,15 @@ uint64_t cacheBudgetFor(const WorkerOptions& options) {
 }
 
 WorkerSession::WorkerSession(WorkerOptions options)
-    : options_(std::move(options)), cache_(cacheBudgetFor(options_)), leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
+    : options_(std::move(options)),
+      cache_(cacheBudgetFor(options_)),
+      chooser_(options_.calibrationPath.empty() ? CostModel::loadDefault() : CostModel::load(options_.calibrationPath)),
+      leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   if (leaseDone_ < 0) throw std::runtime_error("cannot create an eventfd");
   // Read now: a bad key file stops the worker at start, not at its first connection.
   if (!options_.keysDirectory.empty()) keys_ = net::loadClientKeys(options_.keysDirectory);
   if (!options_.cacheDirectory.empty()) mirror_ = std::make_unique<StoreMirror>(options_.cacheDirectory);
+  spdlog::debug("accelerator cost model (for --accel auto): {}", chooser_.model().origin);
 }
 
 WorkerSession::~WorkerSession() { ::close(leaseDone_); }
@@ -97,7 +101,7 @@ std::future<std::unique_ptr<capnp::MallocMessageBuilder>> WorkerSession::startLe
       }
     } notify{leaseDone_};
     const std::string store = assign.getSpec().getStore();
-    return runLease(cache_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store);
+    return runLease(cache_, chooser_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store);
   });
 }
 

@@ -17,6 +17,7 @@
 #include "common/net/curve_keys.h"
 #include "proto/wire.capnp.h"
 
+#include "worker/accelerator_choice.h"
 #include "worker/cell_cache.h"
 #include "worker/store_mirror.h"
 
@@ -36,6 +37,9 @@ struct WorkerOptions {
   // Fetch scene stores from the coordinator into this directory instead of
   // reading them where the job says ("" : read them in place).
   std::string cacheDirectory;
+  // The cost model's calibration for `--accel auto` ("": CostModel::defaultPath()
+  // when it exists, else the built-in one).
+  std::string calibrationPath;
 };
 
 class WorkerSession {
@@ -55,6 +59,7 @@ class WorkerSession {
   std::unique_ptr<StoreMirror> mirror_;
   std::optional<net::ClientKeys> keys_;
   CellCache cache_;
+  AcceleratorChooser chooser_;
   int leaseDone_;   // eventfd
   std::atomic<bool> stopping_{false};
 };

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/accel/brute_force.h"
+#include "common/accel/cost_model.h"
 #include "common/accel/embree_accelerator.h"
 #include "common/accel/hierarchical_grid.h"
 #include "common/accel/kd_tree.h"
@@ -72,6 +73,20 @@ constexpr AcceleratorKind kKinds[] = {
        parameters.reportUnused();
        if (!mesh) return nullptr;
        return std::make_unique<KdTree>(*mesh, options, text);
+     }},
+    // Resolved to a concrete spec by the cost model (cost_model.h). Workers
+    // resolve `auto` themselves, per cell, from the rays the cell is expected
+    // to trace; this entry serves direct builds (benchmarks, tests), where
+    // rays=N says how many rays to plan for.
+    {"auto",
+     [](AcceleratorParameters& parameters, const MeshView* mesh,
+        std::string_view) -> std::unique_ptr<Accelerator> {
+       const double rays = parameters.positiveNumber("rays", 1e5);
+       parameters.reportUnused();
+       if (!mesh) return nullptr;
+       const CostModel model = CostModel::loadDefault();
+       const CostPrediction choice = model.choose(cellShape(*mesh), rays);
+       return buildAccelerator(parseAcceleratorSpec(choice.candidate.spec), *mesh);
      }},
     {"embree",
      [](AcceleratorParameters& parameters, const MeshView* mesh,

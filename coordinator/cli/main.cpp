@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "common/scene/building_importer.h"
+#include "coordinator/cli/bench_calibrate.h"
 #include "coordinator/cli/commands.h"
 
 int main(int argc, char** argv) {
@@ -134,6 +135,24 @@ int main(int argc, char** argv) {
   benchPipelineCommand->add_option("--csv", benchPipeline.csv, "write one row per mode");
   benchPipelineCommand->add_option("--plot", benchPipeline.plot, "write a PNG bar chart of photons/s");
 
+  CalibrateOptions calibrate;
+  auto* calibrateCommand = bench->add_subcommand(
+      "calibrate", "fit the --accel auto cost model to this machine and store it where workers look");
+  calibrateCommand->add_option("-o,--out", calibrate.output,
+                               "calibration file (default: $PORTICO_CALIBRATION, else ~/.cache/portico/calibration.json)");
+  calibrateCommand->add_option("--preset", calibrate.preset, "building whose cells are measured")->capture_default_str();
+  calibrateCommand->add_option("--store", calibrate.store, "measure this scene store's cells instead");
+  calibrateCommand->add_option("--max-cells", calibrate.maxCells, "cells of the building, spread over its sizes")
+      ->capture_default_str();
+  calibrateCommand->add_option("--sizes", calibrate.sizes, "triangle counts of the furnished halls also measured")
+      ->capture_default_str();
+  calibrateCommand->add_option("--rays", calibrate.rays, "photon-like rays per cell")->capture_default_str()
+      ->check(CLI::Range(uint64_t(100), uint64_t(100000000)));
+  calibrateCommand->add_option("--runs", calibrate.runs, "timed passes per measurement (median)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  calibrateCommand->add_option("--csv", calibrate.csv, "write every measurement beside the model's prediction");
+
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
@@ -148,6 +167,7 @@ int main(int argc, char** argv) {
     if (*keysGenerate) return runKeysGenerate(keysDirectory);
     if (*benchAccelCommand) return runBenchAccel(benchAccel);
     if (*benchPipelineCommand) return runBenchPipeline(benchPipeline);
+    if (*calibrateCommand) return runBenchCalibrate(calibrate);
   } catch (const std::exception& e) {
     std::cerr << "portico: " << e.what() << "\n";
     return 1;

@@ -129,7 +129,7 @@ TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
             0)
       << readFile(dir_ / "import-grid.log");
   const std::vector<std::string> specs{"grid", "grid:res=7", "hgrid:res=4,max=8", "kd:median", "kd:sah", "kd:bbox",
-                                       "brute"};
+                                       "brute", "auto"};
   for (const fs::path& store : {store_, voxels}) {
     auto imageOf = [&](size_t i) { return dir_ / (store.filename().string() + "-accel" + std::to_string(i) + ".exr"); };
     for (size_t i = 0; i < specs.size(); ++i) {
@@ -147,6 +147,53 @@ TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
       EXPECT_EQ(a["photons"], b["photons"]) << specs[i] << " on " << store;
     }
   }
+}
+
+TEST_F(Pipeline, AutoPicksPerCellRebuildsBusyCellsAndKeepsTheBits) {
+  // A calibration under which a grid is free to build and slow to trace and
+  // kd:sah costs 5 ms to build and traces 10x faster: cells start with a grid
+  // while few rays are expected, and the busy ones are rebuilt as kd-trees
+  // once the rays they keep taking pay for the build. Neither changes a bit.
+  nlohmann::json families;
+  for (const char* family : {"hgrid", "kd:median", "kd:bbox"})
+    families[family] = {{"build", {1e6, 0, 0}}, {"trace", {1e6, 0}}};
+  families["grid"] = {{"build", {0, 0, 0}}, {"trace", {1000, 0, 0}}};
+  families["kd:sah"] = {{"build", {5, 0, 0}}, {"trace", {100, 0}}};
+  const fs::path calibration = dir_ / "calibration.json";
+  std::ofstream(calibration) << nlohmann::json{{"version", 1}, {"origin", "test"}, {"families", families}}.dump();
+  ::setenv("PORTICO_CALIBRATION", calibration.c_str(), 1);
+  auto render = [&](const std::string& accel, const fs::path& image) {
+    const fs::path log = fs::path(image.string() + ".log");
+    EXPECT_EQ(runCommand({kBin + "portico", "render", store_.string(), "-o", image.string(), "--workers", "2",
+                          "--accel", accel, "--photons", "40000", "--spp", "1", "--gather", "4", "--width", "64",
+                          "--height", "48"},
+                         log),
+              0)
+        << readFile(log);
+    return nlohmann::json::parse(readFile(fs::path(image.string() + ".json")));
+  };
+  const auto chosen = render("auto", dir_ / "auto.exr");
+  ::unsetenv("PORTICO_CALIBRATION");
+  const auto fixed = render("grid", dir_ / "auto-reference.exr");
+  EXPECT_EQ(differingFloats(dir_ / "auto.exr", dir_ / "auto-reference.exr"), 0u);
+  EXPECT_EQ(chosen["photons"], fixed["photons"]);
+  // Every loaded cell is listed with what it was built with; some started
+  // as grids and were rebuilt as kd-trees.
+  const auto& cells = chosen["cell_accelerators"];
+  ASSERT_TRUE(cells.is_object()) << chosen.dump(2);
+  EXPECT_GT(cells.size(), 0u);
+  int rebuilt = 0;
+  for (const auto& [cell, specs] : cells.items()) {
+    bool grid = false, kd = false;
+    for (const auto& spec : specs) {
+      grid |= spec.get<std::string>().rfind("grid:res=", 0) == 0;
+      kd |= spec.get<std::string>() == "kd:sah";
+      EXPECT_TRUE(spec.get<std::string>().rfind("grid:res=", 0) == 0 || spec.get<std::string>() == "kd:sah") << spec;
+    }
+    rebuilt += grid && kd;
+  }
+  EXPECT_GT(rebuilt, 0) << cells.dump();
+  EXPECT_GT(chosen["accelerators"].value("kd:sah", 0), 0) << chosen["accelerators"].dump();
 }
 
 TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
