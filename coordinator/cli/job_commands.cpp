@@ -16,7 +16,9 @@ namespace portico::cli {
 void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
-  command.add_option("--accel", o.accel, "per-cell accelerator: grid, grid:res=N, brute")->capture_default_str();
+  command.add_option("--accel", o.accel,
+                     "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
+                     "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
   command.add_option("--photons", o.photons, "photons emitted in all")->capture_default_str();
   command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str();
   command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
