@@ -38,42 +38,16 @@
 #include "common/scene/building_generator.h"
 #include "common/scene/building_presets.h"
 #include "common/scene/scene_store.h"
-#include "common/util/child_process.h"
+#include "common/util/temporary_directory.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/incore_photon_tracer.h"
-#include "coordinator/cli/png_canvas.h"
+#include "coordinator/cli/accel_measure.h"
+#include "coordinator/cli/bench_plot.h"
+#include "coordinator/cli/pipeline_run.h"
 
 namespace portico::cli {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-// CPU seconds (user + system) used so far by this process (RUSAGE_SELF: all
-// its threads) or by its waited-for descendants (RUSAGE_CHILDREN: `portico
-// render` and the coordinator and workers it waited for).
-double cpuSeconds(int who) {
-  rusage usage{};
-  getrusage(who, &usage);
-  const auto seconds = [](const timeval& t) { return double(t.tv_sec) + double(t.tv_usec) * 1e-6; };
-  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
-}
-
-// The 1-minute load average ("?" where /proc/loadavg cannot be read): a
-// shared machine's other work shows up here, and in the timings.
-std::string loadAverage() {
-  std::ifstream in("/proc/loadavg");
-  std::string first;
-  return in >> first ? first : "?";
-}
-
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const size_t n = values.size();
-  return n == 0 ? 0.0 : (n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]));
-}
 
 struct Mode {
   std::string name;
@@ -133,11 +107,6 @@ struct ModeResult {
   }
 };
 
-int64_t jsonInt(const nlohmann::json& j, const char* section, const char* key) {
-  if (!j.contains(section) || !j[section].contains(key)) return 0;
-  return j[section][key].get<int64_t>();
-}
-
 Sample runInCore(const SceneStore& scene, const BenchPipelineOptions& options) {
   InCorePhotonOptions incore;
   incore.photons = options.photons;
@@ -170,111 +139,60 @@ Sample runInCore(const SceneStore& scene, const BenchPipelineOptions& options) {
 
 Sample runPortico(const std::string& store, uint32_t workers, const BenchPipelineOptions& options,
                   const std::filesystem::path& work, size_t runIndex) {
-  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-  const std::filesystem::path output = work / fmt::format("portico-{}w-{}.exr", workers, runIndex);
-  const std::filesystem::path log = work / fmt::format("portico-{}w-{}.log", workers, runIndex);
-  // The photon pass, and the smallest render a job can have.
-  const std::vector<std::string> argv{self, "render", store, "-o", output.string(),
-                                      "--workers", std::to_string(workers),
-                                      "--photons", std::to_string(options.photons),
-                                      "--seed", std::to_string(options.seed),
-                                      "--spp", "1", "--gather", "0", "--width", "8", "--height", "8",
-                                      "--accel", options.accel, "--memory", options.memory, "--log-level", "warn"};
-  const auto start = Clock::now();
-  const double cpuStart = cpuSeconds(RUSAGE_CHILDREN);
-  ChildProcess child(argv, log.string());
-  const int status = child.wait();
+  PipelineRunSpec spec;
+  spec.store = store;
+  spec.workers = workers;
+  spec.photons = options.photons;
+  spec.seed = options.seed;
+  spec.accel = options.accel;
+  spec.memory = options.memory;
+  const PipelineRunStats stats = runPipeline(spec, work, fmt::format("portico-{}w-{}", workers, runIndex));
   Sample sample;
-  sample.wallSeconds = secondsSince(start);
-  sample.cpuSeconds = cpuSeconds(RUSAGE_CHILDREN) - cpuStart;
-  if (status != 0) {
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    throw std::runtime_error(fmt::format("portico render with {} worker(s) failed (status {}); its output ({}):\n{}",
-                                         workers, status, log.string(), text.str()));
-  }
-  const std::string statisticsPath = output.string() + ".json";
-  std::ifstream in(statisticsPath);
-  if (!in) throw std::runtime_error("portico render wrote no statistics at " + statisticsPath);
-  const nlohmann::json stats = nlohmann::json::parse(in);
-  sample.seconds = double(jsonInt(stats, "time_ms", "photons")) / 1e3;
-  sample.buildSeconds = double(jsonInt(stats, "time_ms", "accelerator_build")) / 1e3;
-  sample.emitted = jsonInt(stats, "photons", "emitted");
-  sample.deposits = jsonInt(stats, "photons", "deposits");
-  sample.absorbed = jsonInt(stats, "photons", "absorbed");
-  sample.escaped = jsonInt(stats, "photons", "escaped");
-  sample.crossings = jsonInt(stats, "photons", "crossings");
-  sample.portalCopies = jsonInt(stats, "photons", "portal_copies");
-  sample.cellsLoaded = jsonInt(stats, "cells", "loaded");
-  sample.cacheHits = jsonInt(stats, "cells", "cache_hits");
-  sample.bytesRead = jsonInt(stats, "cells", "bytes_read");
-  sample.leases = stats.contains("leases") ? stats["leases"].get<int64_t>() : 0;
+  sample.seconds = stats.photonSeconds;
+  sample.buildSeconds = stats.buildSeconds;
+  sample.wallSeconds = stats.wallSeconds;
+  sample.cpuSeconds = stats.cpuSeconds;
+  sample.emitted = stats.emitted;
+  sample.deposits = stats.deposits;
+  sample.absorbed = stats.absorbed;
+  sample.escaped = stats.escaped;
+  sample.crossings = stats.crossings;
+  sample.portalCopies = stats.portalCopies;
+  sample.cellsLoaded = stats.cellsLoaded;
+  sample.cacheHits = stats.cacheHits;
+  sample.bytesRead = stats.bytesRead;
+  sample.leases = stats.leases;
   // Rays traced counts camera rays too, but the token render has 64 of them
   // and their shadow rays: near enough the photon segments.
-  sample.rays = jsonInt(stats, "rays", "traced");
+  sample.rays = stats.raysTraced;
   std::cout << fmt::format(
       "  portico-{}w: photon phase {:.2f} s (process {:.2f} s, CPU {:.2f} s); {} cells loaded, {} cache hits, "
       "{:.0f} MiB read, accelerators {:.2f} s (all workers); {} leases, {} portal crossings, {} portal copies\n",
       workers, sample.seconds, sample.wallSeconds, sample.cpuSeconds, sample.cellsLoaded, sample.cacheHits,
       double(sample.bytesRead) / (1 << 20), sample.buildSeconds, sample.leases, sample.crossings,
       sample.portalCopies);
-  std::error_code ignored;
-  std::filesystem::remove(output, ignored);
-  std::filesystem::remove(statisticsPath, ignored);
-  std::filesystem::remove(log, ignored);
   return sample;
 }
 
 // Bars of photons/s per mode, each labelled with its value and its ratio to
-// the in-core Embree tracer; drawn on the canvas of `portico bench --plot`.
+// the in-core Embree tracer (bench_plot.h).
 void writeBarPlot(const std::string& path, const std::string& title, const std::vector<ModeResult>& results,
                   uint64_t photons, double embreeRate) {
-  constexpr int kWidth = 760, kHeight = 480;
-  constexpr int kLeft = 110, kRight = 30, kTop = 60, kBottom = 70;
-  Canvas canvas(kWidth, kHeight);
-  canvas.text((kWidth - textWidth(title)) / 2, 16, title, kBlack);
-  std::vector<double> rates;
-  for (const ModeResult& r : results) rates.push_back(r.seconds() > 0 ? double(photons) / r.seconds() : 0.0);
-  const double maxRate = std::max(1.0, *std::max_element(rates.begin(), rates.end()));
-  // The largest 1-2-5 step that gives at least 4 ticks.
-  double step = 0;
-  for (double decade = std::pow(10.0, std::floor(std::log10(maxRate))); step == 0; decade /= 10)
-    for (double mantissa : {5.0, 2.0, 1.0})
-      if (step == 0 && maxRate / (mantissa * decade) >= 4) step = mantissa * decade;
-  const double top = std::ceil(maxRate * 1.15 / step) * step;
-  const int plotWidth = kWidth - kLeft - kRight, plotHeight = kHeight - kTop - kBottom;
-  const auto yOf = [&](double value) { return kTop + plotHeight - int(std::lround(value / top * plotHeight)); };
-  for (double tick = 0; tick <= top * 1.0001; tick += step) {
-    const int y = yOf(tick);
-    canvas.line(kLeft, y, kLeft + plotWidth, y, kLightGrey, 1, false);
-    const std::string label = tick >= 1e6 ? fmt::format("{:g}M", tick / 1e6)
-                              : tick >= 1e3 ? fmt::format("{:g}k", tick / 1e3)
-                                            : fmt::format("{:g}", tick);
-    canvas.text(kLeft - 8 - textWidth(label), y - kTextHeight / 2, label, kBlack);
+  static constexpr std::array<uint8_t, 3> kColors[] = {
+      {90, 90, 90}, {31, 119, 180}, {44, 160, 44}, {255, 127, 14}, {148, 103, 189}};
+  BarPanel panel;
+  panel.title = title;
+  panel.yLabel = "photons/s";
+  for (const ModeResult& r : results) {
+    const double rate = r.seconds() > 0 ? double(photons) / r.seconds() : 0.0;
+    Bar bar;
+    bar.value = rate;
+    bar.color = r.mode.workers == 0 ? kColors[0] : kColors[1 + (r.mode.workers - 1) % 4];
+    bar.above = rate >= 1e6 ? fmt::format("{:.2f}M", rate / 1e6) : fmt::format("{:.0f}k", rate / 1e3);
+    bar.aboveNote = embreeRate > 0 ? fmt::format("x{:.2f}", rate / embreeRate) : "";
+    panel.groups.push_back({r.mode.name, fmt::format("{:.1f} s", r.seconds()), {bar}});
   }
-  canvas.line(kLeft, kTop, kLeft, kTop + plotHeight, kBlack, 1, false);
-  canvas.line(kLeft, kTop + plotHeight, kLeft + plotWidth, kTop + plotHeight, kBlack, 1, false);
-  canvas.text(12, kTop + plotHeight / 2 + textWidth("photons/s") / 2, "photons/s", kBlack, true);
-  static constexpr Color kColors[] = {{90, 90, 90}, {31, 119, 180}, {44, 160, 44}, {255, 127, 14}, {148, 103, 189}};
-  const int slot = plotWidth / int(results.size());
-  const int barWidth = std::min(140, slot * 3 / 5);
-  for (size_t i = 0; i < results.size(); ++i) {
-    const int x0 = kLeft + int(i) * slot + (slot - barWidth) / 2;
-    const int y = yOf(rates[i]);
-    canvas.fill(x0, y, x0 + barWidth, kTop + plotHeight - 1,
-                results[i].mode.workers == 0 ? kColors[0] : kColors[1 + (results[i].mode.workers - 1) % 4]);
-    const std::string value = rates[i] >= 1e6 ? fmt::format("{:.2f}M", rates[i] / 1e6)
-                                              : fmt::format("{:.0f}k", rates[i] / 1e3);
-    const std::string ratio = embreeRate > 0 ? fmt::format("x{:.2f}", rates[i] / embreeRate) : "";
-    canvas.text(x0 + (barWidth - textWidth(value)) / 2, y - 2 * kTextHeight - 10, value, kBlack);
-    canvas.text(x0 + (barWidth - textWidth(ratio)) / 2, y - kTextHeight - 4, ratio, kGrey);
-    const std::string& name = results[i].mode.name;
-    canvas.text(x0 + (barWidth - textWidth(name)) / 2, kTop + plotHeight + 12, name, kBlack);
-    const std::string seconds = fmt::format("{:.1f} s", results[i].seconds());
-    canvas.text(x0 + (barWidth - textWidth(seconds)) / 2, kTop + plotHeight + 12 + kTextHeight + 8, seconds, kGrey);
-  }
-  writePng(path, canvas, "pipeline benchmark plot");
+  writeBarPlotPng(path, {panel}, 760, 480);
 }
 
 }  // namespace
@@ -288,16 +206,8 @@ int runBenchPipeline(const BenchPipelineOptions& options) {
     throw std::invalid_argument(fmt::format("unknown preset '{}' (known: {})", options.preset,
                                             fmt::join(buildingPresetNames(), ", ")));
 
-  char pattern[] = "/tmp/portico-bench-pipeline-XXXXXX";
-  if (!mkdtemp(pattern)) throw std::runtime_error("cannot create a temporary directory under /tmp");
-  const std::filesystem::path work(pattern);
-  struct RemoveOnExit {
-    std::filesystem::path path;
-    ~RemoveOnExit() {
-      std::error_code ignored;
-      std::filesystem::remove_all(path, ignored);
-    }
-  } removeWork{work};
+  const TemporaryDirectory temporary("portico-bench-pipeline");
+  const std::filesystem::path& work = temporary.path();
 
   // The store: --store reused if it holds one, else generated there (and
   // kept), else generated into the temporary directory.

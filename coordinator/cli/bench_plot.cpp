@@ -82,6 +82,16 @@ std::vector<std::string> wrapLabel(const std::string& label, int width) {
   return lines;
 }
 
+// A ring round a point and its x value above it: the best of a sweep.
+void drawMark(Canvas& canvas, int x, int y, const Color& color, const std::string& label) {
+  constexpr int kRing = 8;
+  canvas.line(x - kRing, y - kRing, x + kRing, y - kRing, color, 2, false);
+  canvas.line(x + kRing, y - kRing, x + kRing, y + kRing, color, 2, false);
+  canvas.line(x + kRing, y + kRing, x - kRing, y + kRing, color, 2, false);
+  canvas.line(x - kRing, y + kRing, x - kRing, y - kRing, color, 2, false);
+  canvas.text(x - textWidth(label) / 2, y - kRing - 4 - kTextHeight, label, color);
+}
+
 void drawPanel(Canvas& canvas, int originX, int width, int height, const PlotPanel& panel) {
   constexpr int kLeft = 90, kRight = 170, kTop = 44, kBottom = 64;
   const int x0 = originX + kLeft, x1 = originX + width - kRight, y0 = kTop, y1 = height - kBottom;
@@ -135,6 +145,7 @@ void drawPanel(Canvas& canvas, int originX, int width, int height, const PlotPan
       const double x = px(series.x[i]), y = py(series.y[i]);
       if (previous) canvas.line(lastX, lastY, x, y, series.color, 2, series.dashed);
       canvas.fill(int(x) - 3, int(y) - 3, int(x) + 3, int(y) + 3, series.color);
+      if (int(i) == series.marked) drawMark(canvas, int(x), int(y), series.color, tickLabel(series.x[i]));
       previous = true, lastX = x, lastY = y;
     }
     if (series.label.empty()) continue;
@@ -155,6 +166,90 @@ void writePlotPng(const std::string& path, const std::vector<PlotPanel>& panels,
   canvas.fill(0, 0, canvas.width() - 1, canvas.height() - 1, kWhite);
   for (size_t i = 0; i < panels.size(); ++i) drawPanel(canvas, int(i) * panelWidth, panelWidth, panelHeight, panels[i]);
   writePng(path, canvas, "plot");
+}
+
+// ---------------------------------------------------------------------------
+// Bar charts
+
+namespace {
+
+// The value axis: from 0 to a 1-2-5 tick above the tallest bar, with room
+// left over it for the bar's text (written upright, or turned when the bar
+// is too narrow for it).
+Axis barAxis(const BarPanel& panel, int plotHeight) {
+  double tallest = 0;
+  for (const BarGroup& group : panel.groups)
+    for (const Bar& bar : group.bars)
+      if (std::isfinite(bar.value)) tallest = std::max(tallest, bar.value);
+  const double headroom = double(plotHeight) / std::max(1, plotHeight - 90);
+  return makeAxis(false, 0.0, std::max(tallest, 1e-9) * headroom);
+}
+
+void drawBarText(Canvas& canvas, int x0, int barWidth, int y, const Bar& bar) {
+  const bool fits = std::max(textWidth(bar.above), textWidth(bar.aboveNote)) <= barWidth + 8;
+  if (fits) {
+    canvas.text(x0 + (barWidth - textWidth(bar.above)) / 2, y - 2 * kTextHeight - 10, bar.above, kBlack);
+    canvas.text(x0 + (barWidth - textWidth(bar.aboveNote)) / 2, y - kTextHeight - 4, bar.aboveNote, kGrey);
+    return;
+  }
+  // Too narrow: turned, reading upwards from just above the bar.
+  const std::string text = bar.aboveNote.empty() ? bar.above : bar.above + " " + bar.aboveNote;
+  canvas.text(x0 + (barWidth - kTextHeight) / 2, y - 4, text, kBlack, true);
+}
+
+void drawBarPanel(Canvas& canvas, int originX, int width, int height, const BarPanel& panel) {
+  const int kLeft = 90, kRight = panel.legend.empty() ? 30 : 170, kTop = 44, kBottom = 70;
+  const int x0 = originX + kLeft, x1 = originX + width - kRight, y0 = kTop, y1 = height - kBottom;
+  const Axis axis = barAxis(panel, y1 - y0);
+  const auto py = [&](double v) { return int(std::lround(y1 - axis.position(v) * (y1 - y0))); };
+  for (double tick : axis.ticks) {
+    const int y = py(tick);
+    canvas.line(x0, y, x1, y, kLightGrey, 1, false);
+    const std::string label = tickLabel(tick);
+    canvas.text(x0 - 9 - textWidth(label), y - 7, label, kBlack);
+  }
+  canvas.line(x0, y0, x0, y1, kBlack, 1, false);
+  canvas.line(x0, y1, x1, y1, kBlack, 1, false);
+  canvas.text(originX + (kLeft + width - kRight) / 2 - textWidth(panel.title) / 2, 14, panel.title, kBlack);
+  canvas.text(originX + 12, (y0 + y1) / 2 + textWidth(panel.yLabel) / 2, panel.yLabel, kGrey, true);
+
+  const int slot = (x1 - x0) / std::max<int>(1, int(panel.groups.size()));
+  for (size_t g = 0; g < panel.groups.size(); ++g) {
+    const BarGroup& group = panel.groups[g];
+    const int bars = std::max<int>(1, int(group.bars.size()));
+    const int barWidth = std::max(2, std::min(140 / bars, slot * 4 / (5 * bars)));
+    const int groupX = x0 + int(g) * slot + (slot - barWidth * bars) / 2;
+    for (int b = 0; b < int(group.bars.size()); ++b) {
+      const Bar& bar = group.bars[size_t(b)];
+      const int bx = groupX + b * barWidth;
+      const bool present = std::isfinite(bar.value) && bar.value >= 0;
+      const int y = present ? py(bar.value) : y1;
+      if (present) canvas.fill(bx + 1, y, bx + barWidth - 2, y1 - 1, bar.color);
+      drawBarText(canvas, bx, barWidth, y, bar);
+    }
+    const int center = x0 + int(g) * slot + slot / 2;
+    canvas.text(center - textWidth(group.label) / 2, y1 + 12, group.label, kBlack);
+    canvas.text(center - textWidth(group.sublabel) / 2, y1 + 12 + kTextHeight + 8, group.sublabel, kGrey);
+  }
+  int legendY = y0 + 4;
+  for (const auto& [label, color] : panel.legend) {
+    canvas.fill(x1 + 12, legendY + 1, x1 + 36, legendY + 13, color);
+    for (const std::string& line : wrapLabel(label, (kRight - 50) / kCharAdvance)) {
+      canvas.text(x1 + 44, legendY, line, kBlack);
+      legendY += 20;
+    }
+    legendY += 2;
+  }
+}
+
+}  // namespace
+
+void writeBarPlotPng(const std::string& path, const std::vector<BarPanel>& panels, int panelWidth, int panelHeight) {
+  Canvas canvas(std::max(1, panelWidth * int(panels.size())), panelHeight);
+  canvas.fill(0, 0, canvas.width() - 1, canvas.height() - 1, kWhite);
+  for (size_t i = 0; i < panels.size(); ++i)
+    drawBarPanel(canvas, int(i) * panelWidth, panelWidth, panelHeight, panels[i]);
+  writePng(path, canvas, "bar chart");
 }
 
 }  // namespace portico::cli

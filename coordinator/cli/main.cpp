@@ -6,6 +6,7 @@
 
 #include "common/scene/building_importer.h"
 #include "coordinator/cli/bench_calibrate.h"
+#include "coordinator/cli/bench_paper.h"
 #include "coordinator/cli/commands.h"
 
 int main(int argc, char** argv) {
@@ -135,6 +136,35 @@ int main(int argc, char** argv) {
   benchPipelineCommand->add_option("--csv", benchPipeline.csv, "write one row per mode");
   benchPipelineCommand->add_option("--plot", benchPipeline.plot, "write a PNG bar chart of photons/s");
 
+  BenchPaperOptions benchPaper;
+  auto* benchPaperCommand = bench->add_subcommand(
+      "paper", "rerun every experiment of Fradin & Meneveaux 2006 section 6 through the pipeline (docs/paper-benchmark.md)");
+  benchPaperCommand->add_flag("--quick", benchPaper.quick, "a reduced version of every experiment (a few minutes)");
+  benchPaperCommand->add_flag("--smoke", benchPaper.smoke, "the smallest version, l-shape only (the ctest)")
+      ->group("");   // hidden
+  benchPaperCommand->add_option("--out", benchPaper.out, "directory of the CSVs, PNGs, summary.json and stores/")
+      ->capture_default_str();
+  benchPaperCommand->add_option("--buildings", benchPaper.buildings,
+                                "buildings, comma-separated (l-shape, z-building, octagon, soda-hall, tower); "
+                                "default: the mode's");
+  benchPaperCommand->add_option("--experiments", benchPaper.experiments,
+                                "experiments, comma-separated (default: all; fig4_5_grid_resolution, fig6_hgrid_init, "
+                                "table3_kd_depth, fig7_8_kd_heuristics, fig9_best_topological, table4_uniform_cells, "
+                                "fig11_topological_vs_uniform, auto_vs_fixed)");
+  benchPaperCommand->add_option("--photons-per-light", benchPaper.photonsPerLight,
+                                "photons per light of the passes (default: quick 300, otherwise 1000; the 'few' "
+                                "count is 2/5 of it)");
+  benchPaperCommand->add_option("--workers", benchPaper.workers, "workers of each render")->capture_default_str();
+  benchPaperCommand->add_option("--runs", benchPaper.runs, "runs per measurement (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchPaperCommand->add_option("--seed", benchPaper.seed, "seed of the photon passes")->capture_default_str();
+  benchPaperCommand->add_option("--scene-seed", benchPaper.sceneSeed, "furnishing seed of the buildings")
+      ->capture_default_str();
+  benchPaperCommand->add_option("--memory", benchPaper.memory, "cache budget per worker")->capture_default_str();
+  benchPaperCommand->add_option("--timeout", benchPaper.timeoutSeconds,
+                                "seconds a run may take before it is stopped and marked failed (default: the mode's)");
+
   CalibrateOptions calibrate;
   auto* calibrateCommand = bench->add_subcommand(
       "calibrate", "fit the --accel auto cost model to this machine and store it where workers look");
@@ -167,6 +197,7 @@ int main(int argc, char** argv) {
     if (*keysGenerate) return runKeysGenerate(keysDirectory);
     if (*benchAccelCommand) return runBenchAccel(benchAccel);
     if (*benchPipelineCommand) return runBenchPipeline(benchPipeline);
+    if (*benchPaperCommand) return runBenchPaper(benchPaper);
     if (*calibrateCommand) return runBenchCalibrate(calibrate);
   } catch (const std::exception& e) {
     std::cerr << "portico: " << e.what() << "\n";
