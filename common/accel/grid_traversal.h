@@ -1,14 +1,24 @@
-// The pieces `grid` and `hgrid` traverse with alike: the ray clipped to the
-// grid's box, and a voxel's triangle references tested through a mailbox.
-// Inline: both sit in the innermost loop of tracing.
+// The pieces `grid` and `hgrid` share: the ray clipped to the grid's box, a
+// voxel's triangles tested through a mailbox (as references into the mesh,
+// or as 4-wide packets of copied vertices), and for the builds the
+// triangle-voxel overlap test and an allocator for large arrays. Inline:
+// the tests sit in the innermost loop of tracing.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <new>
+#include <utility>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 #include "common/accel/triangle_intersect.h"
 #include "common/mesh_view.h"
+#include "common/triangle_box_overlap.h"
 #include "common/ray.h"
 
 namespace portico::grid_traversal {
@@ -51,6 +61,183 @@ class Mailbox {
   static constexpr uint32_t kSize = 64;
   uint32_t slots_[kSize];
 };
+
+// Four triangles as a grid stores them, side by side per coordinate
+// (vertex, axis, lane), with their primitive ids: a voxel's triangles are
+// copied (bit for bit) from the mesh into its own run of packets, the last
+// one padded with copies of the voxel's last triangle.
+struct TrianglePacket {
+  float v[3][3][4];
+  uint32_t primitive[4];
+};
+static_assert(sizeof(TrianglePacket) == 160);
+
+// For the builds of `grid` and `hgrid`: the separating-axis test of
+// triangleOverlapsBoxBeyondBounds (the 9 edge cross products and the
+// triangle's plane), set up once per triangle so that each voxel costs a dot
+// product per axis: the triangle's projections and the
+// box's radius on each axis do not depend on the voxel. In double, from float
+// vertices; the rounding (far below 1e-12 of the coordinates) is nothing
+// beside the reference margin the box is grown by, so the test stays
+// conservative in the sense the exactness argument needs.
+struct TriangleVoxelOverlap {
+  static constexpr int kAxes = 10;
+  double axis[kAxes][3];
+  double low[kAxes], high[kAxes];  // the triangle's projection, minus the box radius / plus it
+
+  TriangleVoxelOverlap() = default;
+  TriangleVoxelOverlap(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Double3& halfSize) {
+    const Double3 a = toDouble(v0), b = toDouble(v1), c = toDouble(v2);
+    const Double3 edges[3] = {b - a, c - b, a - c};
+    int k = 0;
+    for (const Double3& e : edges) {
+      set(k++, 0.0, -e.z, e.y);
+      set(k++, e.z, 0.0, -e.x);
+      set(k++, -e.y, e.x, 0.0);
+    }
+    const Double3 normal = cross(edges[0], edges[1]);
+    set(k, normal.x, normal.y, normal.z);
+    for (k = 0; k < kAxes; ++k) {
+      const double pa = axis[k][0] * a.x + axis[k][1] * a.y + axis[k][2] * a.z;
+      const double pb = axis[k][0] * b.x + axis[k][1] * b.y + axis[k][2] * b.z;
+      const double pc = axis[k][0] * c.x + axis[k][1] * c.y + axis[k][2] * c.z;
+      const double radius = halfSize.x * std::fabs(axis[k][0]) + halfSize.y * std::fabs(axis[k][1]) +
+                            halfSize.z * std::fabs(axis[k][2]);
+      low[k] = std::min({pa, pb, pc}) - radius;
+      high[k] = std::max({pa, pb, pc}) + radius;
+    }
+  }
+  void set(int k, double x, double y, double z) { axis[k][0] = x, axis[k][1] = y, axis[k][2] = z; }
+
+  // Whether the box centred at `center` (of the half size given above)
+  // overlaps the triangle: no axis separates them.
+  bool overlaps(double x, double y, double z) const {
+    for (int k = 0; k < kAxes; ++k) {
+      const double d = axis[k][0] * x + axis[k][1] * y + axis[k][2] * z;
+      if (d < low[k] || d > high[k]) return false;
+    }
+    return true;
+  }
+};
+
+// Allocator for a grid's large arrays: elements are left uninitialised (the
+// build writes every one), and arrays of 2 MiB or more are aligned to 2 MiB
+// and offered to the kernel as huge pages, which spares most page faults in
+// the build and most TLB misses in traversal.
+template <typename T>
+struct LargeArrayAllocator {
+  using value_type = T;
+  static constexpr size_t kHugePage = size_t(2) << 20;
+
+  LargeArrayAllocator() = default;
+  template <typename U>
+  LargeArrayAllocator(const LargeArrayAllocator<U>&) noexcept {}
+
+  T* allocate(size_t count) {
+    const size_t bytes = count * sizeof(T);
+    if (bytes < kHugePage) return static_cast<T*>(::operator new(bytes));
+    const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
+    void* memory = std::aligned_alloc(kHugePage, rounded);
+    if (!memory) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+    madvise(memory, rounded, MADV_HUGEPAGE);
+#endif
+    return static_cast<T*>(memory);
+  }
+  void deallocate(T* pointer, size_t count) noexcept {
+    if (count * sizeof(T) < kHugePage)
+      ::operator delete(pointer);
+    else
+      std::free(pointer);
+  }
+  template <typename U>
+  void construct(U* pointer) noexcept {
+    ::new (static_cast<void*>(pointer)) U;
+  }
+  template <typename U, typename... Arguments>
+  void construct(U* pointer, Arguments&&... arguments) {
+    ::new (static_cast<void*>(pointer)) U(std::forward<Arguments>(arguments)...);
+  }
+  template <typename U>
+  bool operator==(const LargeArrayAllocator<U>&) const noexcept { return true; }
+};
+
+// The ray as the packet test needs it: its origin and shear broadcast to the
+// four lanes, in the watertight test's frame.
+struct PacketRay {
+  using Float4 = float __attribute__((vector_size(16)));
+  Float4 originX, originY, originZ;  // origin[kx], origin[ky], origin[kz]
+  Float4 shearX, shearY;             // Sx, Sy
+  int kx, ky, kz;
+
+  PacketRay(const WatertightRay& frame, const Ray& ray) : kx(frame.kx), ky(frame.ky), kz(frame.kz) {
+    const float origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+    const auto broadcast = [](float x) { return Float4{x, x, x, x}; };  // bit for bit, -0 included
+    originX = broadcast(origin[kx]);
+    originY = broadcast(origin[ky]);
+    originZ = broadcast(origin[kz]);
+    shearX = broadcast(frame.Sx);
+    shearY = broadcast(frame.Sy);
+  }
+};
+
+// Tests the triangles of packets[first, end), folding hits into `best`; with
+// AnyHit, returns true at the first hit. Four at a time, the first steps of
+// intersectTriangle (translation, shear, edge functions, sign test) run on
+// all four lanes with the very operations of the scalar test, so each lane
+// gets the scalar test's U, V, W bit for bit: a lane is dropped only where
+// intersectTriangle would return false on that same sign test. The others
+// (a hit, or an edge function exactly zero, which the scalar test
+// re-decides in double) go to intersectTriangle itself, once per primitive
+// (the mailbox), which alone decides hits.
+template <bool AnyHit>
+inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t end, Mailbox& mailbox,
+                        const PacketRay& packetRay, const WatertightRay& frame, const Ray& ray, Hit& best) {
+  using Float4 = PacketRay::Float4;
+  using Int4 = int32_t __attribute__((vector_size(16)));
+  const auto load = [](const float* p) {
+    Float4 value;
+    std::memcpy(&value, p, sizeof(value));
+    return value;
+  };
+  const int kx = packetRay.kx, ky = packetRay.ky, kz = packetRay.kz;
+  for (uint32_t p = first; p < end; ++p) {
+    const TrianglePacket& packet = packets[p];
+    const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
+    const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
+    const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
+    const Float4 Ax = (load(packet.v[0][kx]) - packetRay.originX) - packetRay.shearX * az;
+    const Float4 Ay = (load(packet.v[0][ky]) - packetRay.originY) - packetRay.shearY * az;
+    const Float4 Bx = (load(packet.v[1][kx]) - packetRay.originX) - packetRay.shearX * bz;
+    const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
+    const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
+    const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
+    const Float4 U = Cx * By - Cy * Bx;
+    const Float4 V = Ax * Cy - Ay * Cx;
+    const Float4 W = Bx * Ay - By * Ax;
+    const Float4 zero{};
+    const Int4 negative = (U < zero) | (V < zero) | (W < zero);
+    const Int4 positive = (U > zero) | (V > zero) | (W > zero);
+    const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
+    const Int4 candidate = ~(negative & positive) | anyZero;
+    unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
+                    unsigned(candidate[3] & 8);
+    while (mask != 0) {
+      const int lane = __builtin_ctz(mask);
+      mask &= mask - 1;
+      const uint32_t primitive = packet.primitive[lane];
+      if (!mailbox.firstVisit(primitive)) continue;
+      const Vec3 v0{packet.v[0][0][lane], packet.v[0][1][lane], packet.v[0][2][lane]};
+      const Vec3 v1{packet.v[1][0][lane], packet.v[1][1][lane], packet.v[1][2][lane]};
+      const Vec3 v2{packet.v[2][0][lane], packet.v[2][1][lane], packet.v[2][2][lane]};
+      float t, u, v;
+      if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
+      if constexpr (AnyHit) return true;
+      if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
+    }
+  }
+  return false;
+}
 
 // Tests the triangles references[first, end) not tested yet, folding hits
 // into `best`. With AnyHit, returns true at the first hit.

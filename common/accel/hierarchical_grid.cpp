@@ -46,6 +46,10 @@ constexpr double kReferenceMargin = 1e-5;
 // The top grid box is the mesh bounds grown by this fraction of its longest
 // side, so that no triangle (with its margin) touches the grid's faces.
 constexpr double kGridPadding = 1e-4;
+// A triangle whose grown bounding box spans at most this many voxels is
+// referenced in all of them, without the triangle-box overlap test (as in
+// uniform_grid.cpp).
+constexpr uint64_t kBoxOnlyVoxels = 8;
 // No sub-grid has voxels narrower than this many reference margins.
 constexpr double kMinimumVoxelInMargins = 8;
 
@@ -104,19 +108,22 @@ struct HierarchicalGrid::Builder {
     }
     // A box one voxel thick on two axes is a row of voxels, and a connected
     // triangle spanning the row overlaps all of them: no overlap test needed.
-    const bool refine = spannedAxes >= 2;
-    const Double3 a = toDouble(v0), b = toDouble(v1), c = toDouble(v2);
+    // Nor for a box of a few voxels: referencing the triangle in all of them
+    // costs a few tests at most, never exactness (as `grid` does).
+    const uint64_t boxVoxels =
+        uint64_t(last[0] - first[0] + 1) * uint64_t(last[1] - first[1] + 1) * uint64_t(last[2] - first[2] + 1);
+    const bool refine = spannedAxes >= 2 && boxVoxels > kBoxOnlyVoxels;
+    const grid_traversal::TriangleVoxelOverlap overlap =
+        refine ? grid_traversal::TriangleVoxelOverlap(v0, v1, v2, halfSize) : grid_traversal::TriangleVoxelOverlap();
     const uint32_t strideY = uint32_t(record.resolution[0]);
     const uint32_t strideZ = strideY * uint32_t(record.resolution[1]);
     for (int z = first[2]; z <= last[2]; ++z)
       for (int y = first[1]; y <= last[1]; ++y)
         for (int x = first[0]; x <= last[0]; ++x) {
-          if (refine) {
-            const Double3 center{record.low[0] + (x + 0.5) * record.voxelSize[0],
-                                 record.low[1] + (y + 0.5) * record.voxelSize[1],
-                                 record.low[2] + (z + 0.5) * record.voxelSize[2]};
-            if (!triangleOverlapsBoxBeyondBounds(center, halfSize, a, b, c)) continue;
-          }
+          if (refine && !overlap.overlaps(record.low[0] + (x + 0.5) * record.voxelSize[0],
+                                          record.low[1] + (y + 0.5) * record.voxelSize[1],
+                                          record.low[2] + (z + 0.5) * record.voxelSize[2]))
+            continue;
           visit(uint32_t(x) + strideY * uint32_t(y) + strideZ * uint32_t(z));
         }
   }

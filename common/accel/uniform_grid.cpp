@@ -1,5 +1,10 @@
-// Uniform grid: build (two passes over the triangles, count then fill, into
-// compressed rows) and traversal (3D-DDA with mailboxing).
+// Uniform grid: build (one pass over the triangles listing (voxel, triangle)
+// pairs and counting them per voxel, a counting sort of the triangles by
+// voxel, then one sequential pass that copies each voxel's triangles'
+// vertices into its run of 4-wide packets) and
+// traversal (3D-DDA that walks a few occupied voxels ahead of the tests and
+// prefetches them; 4-wide sign test in front of the scalar triangle test;
+// mailboxing).
 //
 // Why the grid returns exactly brute force's hit. Traversal keeps the best
 // hit over every triangle tested so far (by closerThan) and stops after the
@@ -12,14 +17,27 @@
 // vertices moved by a few float ulps of their distance to the ray origin).
 // So each triangle is referenced in every voxel within a margin of its
 // bounding box (and of the triangle itself, when the overlap test refines
-// it), the margin being 1e-5 of the grid's size: well above that error for
-// ray origins up to several grid diagonals away.
+// it: boxes of more than kBoxOnlyVoxels voxels), the margin being 1e-5 of
+// the grid's size: well above that error for ray origins up to several grid
+// diagonals away. The overlap test's own rounding (double, ~1e-16 of the
+// coordinates) moves that margin by nothing that matters. Referencing a
+// triangle in more voxels than that only costs tests.
+//
+// What traversal adds keeps this. The walk runs ahead of the tests, but the
+// voxels are tested in its order, and a voxel is skipped only when the best
+// hit so far is at or before its entry (then it lies in an earlier voxel,
+// which the walk's rule above would have stopped after). The 4-wide test
+// drops a triangle only where intersectTriangle itself would return false
+// (the same operations, IEEE single precision, lane by lane); every other
+// triangle goes through intersectTriangle, which alone decides hits. The
+// vertices tested are the mesh's, copied bit for bit.
 //
 // Ties (equal t, smaller primitive wins) follow from the same argument: two
 // triangles hit at the same t share P, so both are referenced where P is.
 #include "common/accel/uniform_grid.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -43,7 +61,21 @@ constexpr double kReferenceMargin = 1e-5;
 // The grid box is the mesh bounds grown by this fraction of its longest side,
 // so that no triangle (with its margin) touches the grid's faces.
 constexpr double kGridPadding = 1e-4;
+// A triangle whose grown bounding box spans at most this many voxels is
+// referenced in all of them, without the triangle-box overlap test.
+constexpr uint32_t kBoxOnlyVoxels = 8;
+// Traversal: occupied voxels the walk gathers ahead of the tests, and cache
+// lines of triangles prefetched per voxel.
+constexpr int kWalkAhead = 4;
+constexpr int kPrefetchLines = 8;
 
+
+// Whether all six coordinates are finite, as isFinite(a) && isFinite(b),
+// branch-free: x - x is 0 exactly when x is finite (NaN otherwise).
+inline bool finite(const Vec3& a, const Vec3& b) {
+  return (a.x - a.x == 0.0f) & (a.y - a.y == 0.0f) & (a.z - a.z == 0.0f) & (b.x - b.x == 0.0f) &
+         (b.y - b.y == 0.0f) & (b.z - b.z == 0.0f);
+}
 
 }  // namespace
 
@@ -98,6 +130,13 @@ UniformGridOptions readUniformGridOptions(AcceleratorParameters& parameters) {
 // ---------------------------------------------------------------------------
 // Build
 
+namespace {
+
+using grid_traversal::TrianglePacket;
+using grid_traversal::TriangleVoxelOverlap;
+
+}  // namespace
+
 UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options,
                          std::string_view spec)
     : mesh_(mesh) {
@@ -112,7 +151,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // refused at import).
   for (uint32_t primitive = 0; primitive < triangleCount; ++primitive) {
     const Bounds3 box = mesh.triangleBounds(primitive);
-    if (isFinite(box.lo) && isFinite(box.hi)) meshBounds_.extend(box);
+    if (finite(box.lo, box.hi)) meshBounds_.extend(box);
   }
 
   stats_.spec = std::string(spec);
@@ -151,69 +190,137 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   const Double3 voxelHalfSize{0.5 * voxelSize_[0] + margin, 0.5 * voxelSize_[1] + margin,
                               0.5 * voxelSize_[2] + margin};
 
-  const auto voxelIndex = [&](int axis, double coordinate) {
-    const double index = std::floor((coordinate - low_[axis]) * inverseVoxelSize_[axis]);
-    return static_cast<int>(std::clamp(index, 0.0, double(resolution_[axis] - 1)));
-  };
   const uint64_t voxelCount = uint64_t(resolution_[0]) * resolution_[1] * resolution_[2];
   const uint32_t strideY = uint32_t(resolution_[0]);
   const uint32_t strideZ = uint32_t(resolution_[0]) * uint32_t(resolution_[1]);
-
-  // Calls visit(voxel) for every voxel the triangle (grown by the margin)
-  // overlaps. The same function drives both passes, so they agree.
-  const auto forEachVoxelOf = [&](uint32_t primitive, auto&& visit) {
-    Vec3 v0, v1, v2;
-    mesh.triangle(primitive, v0, v1, v2);
-    const Bounds3 box = mesh.triangleBounds(primitive);
-    if (!isFinite(box.lo) || !isFinite(box.hi)) return;
-    int first[3], last[3], spannedAxes = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      first[axis] = voxelIndex(axis, double(box.lo[axis]) - margin);
-      last[axis] = voxelIndex(axis, double(box.hi[axis]) + margin);
-      spannedAxes += last[axis] > first[axis];
-    }
-    // A box one voxel thick on two axes is a row of voxels, and a connected
-    // triangle spanning the row overlaps all of them: no overlap test needed.
-    const bool refine = spannedAxes >= 2;
-    const Double3 a = toDouble(v0), b = toDouble(v1), c = toDouble(v2);
-    for (int z = first[2]; z <= last[2]; ++z)
-      for (int y = first[1]; y <= last[1]; ++y)
-        for (int x = first[0]; x <= last[0]; ++x) {
-          if (refine) {
-            const Double3 center{low_[0] + (x + 0.5) * voxelSize_[0],
-                                 low_[1] + (y + 0.5) * voxelSize_[1],
-                                 low_[2] + (z + 0.5) * voxelSize_[2]};
-            if (!triangleOverlapsBoxBeyondBounds(center, voxelHalfSize, a, b, c)) continue;
-          }
-          visit(uint32_t(x) + strideY * uint32_t(y) + strideZ * uint32_t(z));
-        }
+  const double lowX = low_[0], lowY = low_[1], lowZ = low_[2];
+  const double inverseX = inverseVoxelSize_[0], inverseY = inverseVoxelSize_[1], inverseZ = inverseVoxelSize_[2];
+  const double lastX = resolution_[0] - 1, lastY = resolution_[1] - 1, lastZ = resolution_[2] - 1;
+  // floor((coordinate - low) * inverse) clamped to [0, last], by truncation
+  // of the clamped value (the same for values >= 0; cheaper than floor).
+  const auto voxelIndex = [](double coordinate, double low, double inverse, double last) {
+    return static_cast<uint32_t>(std::min(std::max((coordinate - low) * inverse, 0.0), last));
   };
 
-  // Pass 1: count the references of each voxel, then turn the counts into
-  // each voxel's end offset (inclusive prefix sum).
+  // Pass 1: the voxels of every triangle, as (voxel, primitive) pairs in
+  // increasing primitive order, counted per voxel (in voxelStart_[voxel + 1]).
+  // A triangle is referenced in every voxel its bounding box, grown by the
+  // margin, touches; where that box spans more than kBoxOnlyVoxels voxels
+  // and at least two axes, only in those the triangle itself (grown by the
+  // margin) overlaps. Referencing more voxels than the triangle touches costs
+  // only tests, never exactness (see the top of the file).
   voxelStart_.assign(voxelCount + 1, 0);
-  for (uint32_t primitive = 0; primitive < triangleCount; ++primitive)
-    forEachVoxelOf(primitive, [&](uint32_t voxel) { ++voxelStart_[voxel]; });
-  uint64_t total = 0;
-  occupied_.assign((voxelCount + 63) / 64, 0);
-  for (uint64_t voxel = 0; voxel < voxelCount; ++voxel) {
-    if (voxelStart_[voxel] > 0) {
-      ++stats_.leaves;
-      occupied_[voxel / 64] |= uint64_t(1) << (voxel % 64);
+  uint32_t* const counts = voxelStart_.data() + 1;
+  // Uninitialised, grown by hand: push_back's checks cost more than the rest
+  // of a one-voxel triangle's work.
+  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> pairVoxel, pairPrimitive;
+  size_t pairCount = 0;
+  pairVoxel.resize(2 * size_t(triangleCount) + 1024);
+  pairPrimitive.resize(pairVoxel.size());
+  const auto add = [&](uint32_t voxel, uint32_t primitive) {
+    if (pairCount == pairVoxel.size()) [[unlikely]] {
+      pairVoxel.resize(2 * pairCount);
+      pairPrimitive.resize(2 * pairCount);
     }
-    total += voxelStart_[voxel];
-    if (total > std::numeric_limits<uint32_t>::max())
-      throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
-    voxelStart_[voxel] = static_cast<uint32_t>(total);
+    ++counts[voxel];
+    pairVoxel[pairCount] = voxel;
+    pairPrimitive[pairCount] = primitive;
+    ++pairCount;
+  };
+  for (uint32_t primitive = 0; primitive < triangleCount; ++primitive) {
+    Vec3 v0, v1, v2;
+    mesh.triangle(primitive, v0, v1, v2);
+    const Vec3 lo = min(v0, min(v1, v2)), hi = max(v0, max(v1, v2));
+    if (!finite(lo, hi)) continue;
+    const uint32_t x0 = voxelIndex(double(lo.x) - margin, lowX, inverseX, lastX);
+    const uint32_t x1 = voxelIndex(double(hi.x) + margin, lowX, inverseX, lastX);
+    const uint32_t y0 = voxelIndex(double(lo.y) - margin, lowY, inverseY, lastY);
+    const uint32_t y1 = voxelIndex(double(hi.y) + margin, lowY, inverseY, lastY);
+    const uint32_t z0 = voxelIndex(double(lo.z) - margin, lowZ, inverseZ, lastZ);
+    const uint32_t z1 = voxelIndex(double(hi.z) + margin, lowZ, inverseZ, lastZ);
+    if (x0 == x1 && y0 == y1 && z0 == z1) {  // the common case: one voxel
+      add(x0 + strideY * y0 + strideZ * z0, primitive);
+      continue;
+    }
+    const uint32_t boxVoxels = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
+    const int spannedAxes = (x1 > x0) + (y1 > y0) + (z1 > z0);
+    // A box one voxel thick on two axes is a row of voxels, and a connected
+    // triangle spanning the row overlaps all of them.
+    if (spannedAxes < 2 || boxVoxels <= kBoxOnlyVoxels) {
+      for (uint32_t z = z0; z <= z1; ++z)
+        for (uint32_t y = y0; y <= y1; ++y)
+          for (uint32_t x = x0; x <= x1; ++x) add(x + strideY * y + strideZ * z, primitive);
+      continue;
+    }
+    const TriangleVoxelOverlap overlap(v0, v1, v2, voxelHalfSize);
+    for (uint32_t z = z0; z <= z1; ++z) {
+      const double centerZ = lowZ + (z + 0.5) * voxelSize_[2];
+      for (uint32_t y = y0; y <= y1; ++y) {
+        const double centerY = lowY + (y + 0.5) * voxelSize_[1];
+        for (uint32_t x = x0; x <= x1; ++x)
+          if (overlap.overlaps(lowX + (x + 0.5) * voxelSize_[0], centerY, centerZ))
+            add(x + strideY * y + strideZ * z, primitive);
+      }
+    }
   }
-  voxelStart_[voxelCount] = static_cast<uint32_t>(total);
 
-  // Pass 2: fill from each voxel's end backwards. Going through the
-  // primitives in decreasing order leaves each voxel's list increasing, and
-  // leaves voxelStart_[i] at voxel i's first reference.
-  references_.resize(total);
-  for (uint32_t primitive = triangleCount; primitive-- > 0;)
-    forEachVoxelOf(primitive, [&](uint32_t voxel) { references_[--voxelStart_[voxel]] = primitive; });
+  // Each voxel's run of packets: voxelStart_[voxel + 1] becomes its end (a
+  // prefix sum of the counts stored there), firstReference[voxel] its first
+  // place in `sorted` below; and the occupancy bits.
+  const uint64_t total = pairCount;
+  if (total > std::numeric_limits<uint32_t>::max())
+    throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
+  std::vector<uint32_t> firstReference(voxelCount);
+  occupied_.assign((voxelCount + 63) / 64, 0);
+  uint64_t packetTotal = 0;
+  uint32_t referenceTotal = 0;
+  for (uint64_t word = 0; word < occupied_.size(); ++word) {
+    const uint64_t end = std::min<uint64_t>(voxelCount, (word + 1) * 64);
+    uint64_t bits = 0;
+    for (uint64_t voxel = word * 64; voxel < end; ++voxel) {
+      const uint32_t count = counts[voxel];
+      bits |= uint64_t(count != 0) << (voxel % 64);
+      firstReference[voxel] = referenceTotal;
+      referenceTotal += count;
+      packetTotal += (count + 3) / 4;
+      counts[voxel] = uint32_t(packetTotal);
+    }
+    occupied_[word] = bits;
+    stats_.leaves += uint64_t(std::popcount(bits));
+  }
+  if (packetTotal > std::numeric_limits<uint32_t>::max())
+    throw std::invalid_argument("grid: more than 2^32 triangle packets; use a lower res");
+
+  // Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
+  // array small enough to stay in cache). Pairs come in increasing primitive
+  // order, so each voxel's list is increasing. After it, firstReference[v]
+  // is voxel v's end in `sorted`.
+  std::vector<uint32_t> sorted(total);
+  for (uint64_t pair = 0; pair < total; ++pair) sorted[firstReference[pairVoxel[pair]]++] = pairPrimitive[pair];
+
+  // Pass 3: the packets, written in order, voxel by voxel; each voxel's last
+  // packet padded with copies of its last triangle (tested once: the mailbox).
+  packets_.resize(packetTotal);
+  TrianglePacket* packet = packets_.data();
+  uint32_t reference = 0;
+  for (uint64_t word = 0; word < occupied_.size(); ++word) {
+    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1) {
+      const uint64_t voxel = word * 64 + uint64_t(std::countr_zero(bits));
+      const uint32_t end = firstReference[voxel];
+      for (; reference < end; reference += 4, ++packet) {
+        for (uint32_t lane = 0; lane < 4; ++lane) {
+          const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
+          Vec3 v0, v1, v2;
+          mesh.triangle(primitive, v0, v1, v2);
+          packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
+          packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
+          packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
+          packet->primitive[lane] = primitive;
+        }
+      }
+      reference = end;
+    }
+  }
 
   stats_.nodes = voxelCount;
   stats_.emptyLeaves = voxelCount - stats_.leaves;
@@ -221,7 +328,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   stats_.averageDepth = 1;
   stats_.maxDepth = 1;
   stats_.bytes = sizeof(*this) + voxelStart_.capacity() * sizeof(uint32_t) +
-                 references_.capacity() * sizeof(uint32_t) + occupied_.capacity() * sizeof(uint64_t);
+                 packets_.capacity() * sizeof(TrianglePacket) + occupied_.capacity() * sizeof(uint64_t);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -229,9 +336,11 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
 // ---------------------------------------------------------------------------
 // Traversal
 
+// Flattened: the triangle test is inlined into the walk (GCC otherwise calls
+// it), which keeps the walk's state in registers.
 template <bool AnyHit>
-bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
-  if (references_.empty() || !hasFiniteOriginAndDirection(ray)) return false;
+[[gnu::flatten]] bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
+  if (packets_.empty() || !hasFiniteOriginAndDirection(ray)) return false;
   const double origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
   const double direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
   if (direction[0] == 0.0 && direction[1] == 0.0 && direction[2] == 0.0) return false;
@@ -241,55 +350,113 @@ bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
   if (!grid_traversal::clipToBox(origin, direction, low_.data(), high_.data(), tEnter, tExit)) return false;
 
   // DDA set-up: the voxel at the entry point, and per axis the distance to
-  // the next voxel boundary (tNext) and between boundaries (tDelta).
-  int voxel[3], step[3], outside[3];
+  // the next voxel boundary (tNext), between boundaries (tDelta), the step
+  // of the voxel index, and the steps left before the ray leaves the grid.
+  const int32_t strides[3] = {1, resolution_[0], resolution_[0] * resolution_[1]};
+  int32_t indexStep[3], stepsLeft[3];
   double tNext[3], tDelta[3];
+  int32_t index = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const double entry = origin[axis] + tEnter * direction[axis];
-    const double index = std::floor((entry - low_[axis]) * inverseVoxelSize_[axis]);
-    voxel[axis] = static_cast<int>(std::clamp(index, 0.0, double(resolution_[axis] - 1)));
+    const double cell = std::floor((entry - low_[axis]) * inverseVoxelSize_[axis]);
+    const int voxel = static_cast<int>(std::clamp(cell, 0.0, double(resolution_[axis] - 1)));
+    index += voxel * strides[axis];
     if (direction[axis] > 0.0) {
-      step[axis] = 1;
-      outside[axis] = resolution_[axis];
-      tNext[axis] = (low_[axis] + (voxel[axis] + 1) * voxelSize_[axis] - origin[axis]) / direction[axis];
+      indexStep[axis] = strides[axis];
+      stepsLeft[axis] = resolution_[axis] - 1 - voxel;
+      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) / direction[axis];
       tDelta[axis] = voxelSize_[axis] / direction[axis];
     } else if (direction[axis] < 0.0) {
-      step[axis] = -1;
-      outside[axis] = -1;
-      tNext[axis] = (low_[axis] + voxel[axis] * voxelSize_[axis] - origin[axis]) / direction[axis];
+      indexStep[axis] = -strides[axis];
+      stepsLeft[axis] = voxel;
+      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) / direction[axis];
       tDelta[axis] = -voxelSize_[axis] / direction[axis];
     } else {
-      step[axis] = 0;
-      outside[axis] = -2;  // never reached
+      indexStep[axis] = 0;
+      stepsLeft[axis] = std::numeric_limits<int32_t>::max();  // never stepped
       tNext[axis] = std::numeric_limits<double>::infinity();
       tDelta[axis] = 0.0;
     }
   }
+  // In scalars, so that the walk's state stays in registers.
+  double tx = tNext[0], ty = tNext[1], tz = tNext[2];
+  const uint64_t deltaX = std::bit_cast<uint64_t>(tDelta[0]), deltaY = std::bit_cast<uint64_t>(tDelta[1]),
+                 deltaZ = std::bit_cast<uint64_t>(tDelta[2]);
+  const int64_t stepX = indexStep[0], stepY = indexStep[1], stepZ = indexStep[2];
+  int64_t leftX = stepsLeft[0], leftY = stepsLeft[1], leftZ = stepsLeft[2];
 
   const WatertightRay frame(ray.direction);
+  const grid_traversal::PacketRay packetRay(frame, ray);
   grid_traversal::Mailbox mailbox;
-  const uint32_t strideY = uint32_t(resolution_[0]);
-  const uint32_t strideZ = uint32_t(resolution_[0]) * uint32_t(resolution_[1]);
-  const uint32_t* const references = references_.data();
+  const TrianglePacket* const packets = packets_.data();
+  const uint32_t* const voxelStart = voxelStart_.data();
+  const uint64_t* const occupied = occupied_.data();
 
-  for (;;) {
-    const uint32_t index = uint32_t(voxel[0]) + strideY * uint32_t(voxel[1]) + strideZ * uint32_t(voxel[2]);
-    const double tVoxelExit = std::min({tNext[0], tNext[1], tNext[2]});
-    const bool occupied = (occupied_[index / 64] >> (index % 64)) & 1;
-    if (occupied && grid_traversal::testReferences<AnyHit>(references, voxelStart_[index], voxelStart_[index + 1],
-                                                            mailbox, mesh_, frame, ray, best))
-      return true;
-    // Nothing in a later voxel can be nearer than a hit within this one.
-    // (Hits beyond it are kept, not re-tested: the mailbox would skip them.)
-    if constexpr (!AnyHit) {
-      if (best.found() && double(best.t) <= tVoxelExit) return true;
+  // The walk runs ahead of the tests: it gathers the next few occupied
+  // voxels along the ray and prefetches their rows and triangles, so that
+  // their cache misses overlap instead of following one another (the
+  // triangles are tested in the walk's order all the same).
+  uint32_t aheadIndex[kWalkAhead + 1];
+  double aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
+  double tVoxelEnter = tEnter;
+  bool walking = true;
+  while (walking) {
+    int count = 0;
+    for (;;) {
+      const double tVoxelExit = std::min(tx, std::min(ty, tz));
+      // Recorded always, kept only if occupied: no branch to mispredict.
+      aheadIndex[count] = uint32_t(index);
+      aheadEnter[count] = tVoxelEnter;
+      aheadExit[count] = tVoxelExit;
+      count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
+      if (tVoxelExit >= tExit) {
+        walking = false;
+        break;
+      }
+      // Step along the axis whose boundary comes first (ties: x, then y),
+      // chosen by masks rather than branches. tDelta masked to +0 adds
+      // nothing (and keeps an infinite tNext infinite).
+      const uint64_t maskX = -uint64_t((tx <= ty) & (tx <= tz));
+      const uint64_t maskY = ~maskX & -uint64_t(ty <= tz);
+      const uint64_t maskZ = ~(maskX | maskY);
+      index += int32_t((uint64_t(stepX) & maskX) | (uint64_t(stepY) & maskY) | (uint64_t(stepZ) & maskZ));
+      tx += std::bit_cast<double>(deltaX & maskX);
+      ty += std::bit_cast<double>(deltaY & maskY);
+      tz += std::bit_cast<double>(deltaZ & maskZ);
+      leftX += int64_t(maskX);
+      leftY += int64_t(maskY);
+      leftZ += int64_t(maskZ);
+      if ((leftX | leftY | leftZ) < 0) {  // out of the grid
+        walking = false;
+        break;
+      }
+      tVoxelEnter = tVoxelExit;
+      if (count == kWalkAhead) break;
     }
-    if (tVoxelExit >= tExit) break;
-    const int axis = tNext[0] <= tNext[1] ? (tNext[0] <= tNext[2] ? 0 : 2)
-                                          : (tNext[1] <= tNext[2] ? 1 : 2);
-    voxel[axis] += step[axis];
-    if (voxel[axis] == outside[axis]) break;
-    tNext[axis] += tDelta[axis];
+    uint32_t first[kWalkAhead], end[kWalkAhead];
+    for (int k = 0; k < count; ++k) {
+      first[k] = voxelStart[aheadIndex[k]];
+      end[k] = voxelStart[aheadIndex[k] + 1];
+      const char* const line = reinterpret_cast<const char*>(packets + first[k]);
+      const char* const last = reinterpret_cast<const char*>(packets + end[k]) - 1;
+      for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
+    }
+    for (int k = 0; k < count; ++k) {
+      // A voxel entered at or beyond the best hit cannot hold a nearer one;
+      // nor can any voxel after the one holding it. (Hits beyond the current
+      // voxel are kept, not re-tested: the mailbox would skip them.)
+      if constexpr (!AnyHit) {
+        if (best.found() && double(best.t) <= aheadEnter[k]) return true;
+      }
+      if (grid_traversal::testPackets<AnyHit>(packets, first[k], end[k], mailbox, packetRay, frame, ray, best))
+        return true;
+      if constexpr (!AnyHit) {
+        if (best.found() && double(best.t) <= aheadExit[k]) return true;
+      }
+    }
+    if constexpr (!AnyHit) {
+      if (best.found()) tExit = std::min(tExit, double(best.t));
+    }
   }
   return best.found();
 }
