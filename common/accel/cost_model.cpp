@@ -136,14 +136,15 @@ std::vector<double> fitNonNegativeRelative(const std::vector<std::vector<double>
 
 CostModel CostModel::builtIn() {
   // `portico bench calibrate` on the 2-core development machine (Debian
-  // bookworm VM, AVX-512), 2026-11-22.
+  // bookworm VM, AVX-512), 2026-11-22, with the packet grid of that day:
+  // 25 cells (24 of l-shape, 3 halls), 20 000 photon-like rays each.
   CostModel model;
   model.origin = "built-in (development machine)";
-  model.families["grid"] = {{0.05, 2.0e-4, 2.0e-5}, {150, 12, 120}};
-  model.families["hgrid"] = {{0.1, 1.0e-3, 4.0e-5}, {300, 40}};
-  model.families["kd:median"] = {{0.1, 1.0e-3, 6.0e-5}, {300, 60}};
-  model.families["kd:sah"] = {{0.2, 2.0e-3, 2.0e-4}, {200, 30}};
-  model.families["kd:bbox"] = {{0.2, 2.0e-3, 2.0e-4}, {300, 60}};
+  model.families["grid"] = {{0.003103, 3.852e-05, 1.373e-05}, {273.3, 11.13, 5.862}};
+  model.families["hgrid"] = {{0, 0.0002083, 3.631e-05}, {102.5, 50.15}};
+  model.families["kd:median"] = {{0, 0.0007726, 0}, {0, 99.54}};
+  model.families["kd:sah"] = {{0.001267, 0.0006668, 0.0001704}, {44.56, 31.45}};
+  model.families["kd:bbox"] = {{0, 0, 0.0001865}, {0, 74.9}};
   return model;
 }
 
