@@ -13,6 +13,8 @@
 // Every candidate returns the same hits, so rebuilding never changes a bit.
 #pragma once
 
+#include <algorithm>
+#include <cstdint>
 #include <optional>
 #include <string>
 

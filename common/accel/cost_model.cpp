@@ -157,10 +157,10 @@ void CostModel::check(const std::string& where) const {
     const auto& c = it->second;
     if (c.build.size() != buildFeatures(probe, cell).size() || c.trace.size() != traceFeatures(probe, cell).size())
       throw std::runtime_error(where + ": wrong number of coefficients for " + family);
-    for (double v : c.build)
-      if (!std::isfinite(v) || v < 0) throw std::runtime_error(where + ": negative or non-finite coefficient for " + family);
-    for (double v : c.trace)
-      if (!std::isfinite(v) || v < 0) throw std::runtime_error(where + ": negative or non-finite coefficient for " + family);
+    for (const std::vector<double>* coefficients : {&c.build, &c.trace})
+      for (double v : *coefficients)
+        if (!std::isfinite(v) || v < 0)
+          throw std::runtime_error(where + ": negative or non-finite coefficient for " + family);
   }
 }
 

@@ -28,6 +28,7 @@
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/accel_measure.h"
 #include "coordinator/cli/bench_calibrate.h"
+#include "coordinator/cli/csv_field.h"
 
 namespace portico::cli {
 
@@ -190,7 +191,7 @@ int runBenchCalibrate(const CalibrateOptions& options) {
            "predicted_trace_ns_per_ray\n";
     for (const Measurement& m : measurements) {
       const CostPrediction p = model.predict(m.candidate, m.shape);
-      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{:.4f},{:.1f},{:.4f},{:.1f}\n", m.cell, m.candidate.spec,
+      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{:.4f},{:.1f},{:.4f},{:.1f}\n", m.cell, csvField(m.candidate.spec),
                          m.shape.triangles, m.shape.extent[0], m.shape.extent[1], m.shape.extent[2], m.buildMs,
                          m.traceNsPerRay, p.buildMs, p.traceNsPerRay);
     }

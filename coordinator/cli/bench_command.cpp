@@ -32,6 +32,7 @@
 #include "common/scene/furnished_hall.h"
 #include "coordinator/cli/accel_measure.h"
 #include "coordinator/cli/bench_plot.h"
+#include "coordinator/cli/csv_field.h"
 #include "coordinator/cli/commands.h"
 
 namespace portico::cli {
@@ -80,14 +81,6 @@ struct StructureResult {
   double buildMs = 0;
   std::vector<TraceResult> traces;  // one per ray set
 };
-
-// A CSV field, quoted when it holds a comma or a quote (specs with parameters do).
-std::string csvField(const std::string& text) {
-  if (text.find_first_of(",\"") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return quoted + "\"";
-}
 
 std::string ratio(double value, double reference) {
   return reference > 0 && value > 0 ? fmt::format("{:.2f}", value / reference) : "";

@@ -41,6 +41,7 @@
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/accel_measure.h"
 #include "coordinator/cli/bench_plot.h"
+#include "coordinator/cli/csv_field.h"
 #include "coordinator/cli/pipeline_run.h"
 
 namespace portico::cli {
@@ -209,19 +210,9 @@ class Csv {
   }
 
  private:
-  // Commas and quotes inside a cell (accelerator specs such as
-  // "hgrid:res=64,max=8") are quoted as RFC 4180 says.
   static std::string join(const std::vector<std::string>& cells) {
     std::string line;
-    for (size_t i = 0; i < cells.size(); ++i) {
-      std::string cell = cells[i];
-      if (cell.find_first_of(",\"\n") != std::string::npos) {
-        std::string quoted = "\"";
-        for (char c : cell) quoted += c == '"' ? std::string("\"\"") : std::string(1, c);
-        cell = quoted + "\"";
-      }
-      line += (i ? "," : "") + cell;
-    }
+    for (size_t i = 0; i < cells.size(); ++i) line += (i ? "," : "") + csvField(cells[i]);
     return line + "\n";
   }
   std::string text_;
