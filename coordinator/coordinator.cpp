@@ -237,12 +237,13 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
     return true;
   }
   std::vector<QueuedBatch> batches;
-  uint64_t lease;
+  LeaseRecord opened;
   {
     sql::Transaction tx(store_.database());
-    lease = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
+    opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
     tx.commit();
   }
+  const uint64_t lease = opened.id;
   if (!lease) return true;
   worker.leaseStartedMs = wallMs();
   worker.leaseWork = 0;
@@ -250,7 +251,7 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   capnp::MallocMessageBuilder message;
   auto assign = message.initRoot<wire::Envelope>().initAssign();
   assign.setLease(lease);
-  assign.setAttempt(1);
+  assign.setAttempt(opened.attempt);
   assign.setJob(chosen->job);
   assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
   assign.setCell(chosen->cell);
@@ -266,8 +267,12 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   worker.idle = false;
   worker.leases.insert(lease);
   worker.remember(chosen->job, chosen->cell);
-  spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches)", lease, worker.name, chosen->job,
-                chosen->cell, chosen->phase, batches.size());
+  if (opened.attempt > 1)
+    spdlog::info("lease {} -> {}: job {} cell {} phase {}, attempt {} ({} batches)", lease, worker.name, chosen->job,
+                 chosen->cell, chosen->phase, opened.attempt, batches.size());
+  else
+    spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches)", lease, worker.name, chosen->job,
+                  chosen->cell, chosen->phase, batches.size());
   return true;
 }
 
@@ -468,11 +473,20 @@ void Coordinator::releaseWorker(const std::string& identity, const std::string& 
   auto it = workers_.find(identity);
   if (it == workers_.end()) return;
   for (const LeaseRecord& lease : store_.openLeasesOf(identity)) {
-    sql::Transaction tx(store_.database());
-    store_.requeueLease(lease.id);
-    tx.commit();
-    spdlog::warn("lease {} (job {} cell {}) requeued: worker {} {}", lease.id, lease.job, lease.cell,
-                 it->second.name, reason);
+    {
+      sql::Transaction tx(store_.database());
+      store_.requeueLease(lease.id, true);
+      store_.addCounter(lease.job, "leases.lost", 1);
+      tx.commit();
+    }
+    spdlog::warn("lease {} (job {} cell {}, attempt {}) requeued: worker {} {}", lease.id, lease.job, lease.cell,
+                 lease.attempt, it->second.name, reason);
+    // A cell whose work has been lost with its worker this many times is
+    // likely what kills them (a crash in its geometry, memory it exhausts):
+    // stop rather than feed it workers forever.
+    if (lease.attempt >= uint32_t(options_.maxCellFailures))
+      failJob(lease.job, fmt::format("cell {}: its lease was lost {} times, each time with its worker (last: {} {})",
+                                     lease.cell, lease.attempt, it->second.name, reason));
   }
   spdlog::info("worker {} {}", it->second.name, reason);
   workers_.erase(it);
@@ -534,6 +548,8 @@ void Coordinator::finishJob(uint64_t jobId) {
 }
 
 void Coordinator::failJob(uint64_t jobId, const std::string& error) {
+  // The first reason stands: a job fails once.
+  if (auto job = store_.job(jobId); !job || !isActive(job->state)) return;
   sql::Transaction tx(store_.database());
   store_.dropJobWork(jobId);
   store_.setJobState(jobId, JobState::Failed, wallMs(), error);

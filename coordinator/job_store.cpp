@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 
@@ -99,6 +100,13 @@ void JobStore::migrate() {
     db_.setUserVersion(1);
     tx.commit();
   }
+  if (version < 2) {
+    // Attempt numbers: how many lost leases each queued batch has been in.
+    sql::Transaction tx(db_);
+    db_.exec("ALTER TABLE batches ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0");
+    db_.setUserVersion(2);
+    tx.commit();
+  }
 }
 
 uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
@@ -184,25 +192,31 @@ std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
   return result;
 }
 
-uint64_t JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
-                             std::vector<QueuedBatch>& batches) {
+LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
+                                std::vector<QueuedBatch>& batches) {
   batches.clear();
   auto& select = db_.prepare(
-      "SELECT id, work, payload FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL ORDER BY id");
+      "SELECT id, work, payload, attempts FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL "
+      "ORDER BY id");
   select.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.phase)).bind(3, int64_t(cell.cell));
   int64_t total = 0;
+  uint32_t attempt = 1;
   while (select.step()) {
     const int64_t work = select.columnInt(1);
     if (!batches.empty() && total + work > maxWork) break;
     auto blob = select.columnBlob(2);
-    batches.push_back({select.columnInt(0), work, std::string(reinterpret_cast<const char*>(blob.data()), blob.size())});
+    const uint32_t attempts = uint32_t(select.columnInt(3));
+    batches.push_back(
+        {select.columnInt(0), work, std::string(reinterpret_cast<const char*>(blob.data()), blob.size()), attempts});
+    attempt = std::max(attempt, attempts + 1);
     total += work;
   }
   select.reset();
-  if (batches.empty()) return 0;
+  if (batches.empty()) return {};
   auto& insert = db_.prepare(
-      "INSERT INTO leases(job, cell, phase, worker, attempt, started_ms, state) VALUES (?, ?, ?, ?, 1, ?, 'open')");
-  insert.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.cell)).bind(3, int64_t(cell.phase)).bind(4, worker).bind(5, nowMs);
+      "INSERT INTO leases(job, cell, phase, worker, attempt, started_ms, state) VALUES (?, ?, ?, ?, ?, ?, 'open')");
+  insert.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.cell)).bind(3, int64_t(cell.phase)).bind(4, worker);
+  insert.bind(5, int64_t(attempt)).bind(6, nowMs);
   insert.run();
   const uint64_t lease = db_.lastInsertRowId();
   auto& mark = db_.prepare("UPDATE batches SET lease = ? WHERE id = ?");
@@ -210,7 +224,7 @@ uint64_t JobStore::openLease(const PendingCell& cell, const std::string& worker,
     mark.bind(1, int64_t(lease)).bind(2, b.id);
     mark.run();
   }
-  return lease;
+  return {lease, cell.job, cell.cell, cell.phase, worker, attempt, "open"};
 }
 
 namespace {
@@ -248,9 +262,9 @@ void JobStore::completeLease(uint64_t lease) {
   close.run();
 }
 
-void JobStore::requeueLease(uint64_t lease) {
-  auto& release = db_.prepare("UPDATE batches SET lease = NULL WHERE lease = ?");
-  release.bind(1, int64_t(lease));
+void JobStore::requeueLease(uint64_t lease, bool lost) {
+  auto& release = db_.prepare("UPDATE batches SET lease = NULL, attempts = attempts + ? WHERE lease = ?");
+  release.bind(1, int64_t(lost ? 1 : 0)).bind(2, int64_t(lease));
   release.run();
   auto& close = db_.prepare("UPDATE leases SET state = 'requeued' WHERE id = ? AND state = 'open'");
   close.bind(1, int64_t(lease));

@@ -44,6 +44,7 @@ struct QueuedBatch {
   int64_t id = 0;
   int64_t work = 0;
   std::string payload;         // packed wire::RayBatch
+  uint32_t attempts = 0;       // leases it was in that were lost (their worker died or left)
 };
 
 struct LeaseRecord {
@@ -58,7 +59,7 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 1;
+  static constexpr int kSchemaVersion = 2;
   explicit JobStore(const std::string& path);
 
   sql::Database& database() { return db_; }
@@ -75,15 +76,21 @@ class JobStore {
   std::vector<PendingCell> pendingCells(size_t limit);
   // Leases up to maxWork of the oldest unleased batches of (job, cell, phase)
   // (always at least one batch). Returns the lease id, fills `batches`.
-  uint64_t openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
-                     std::vector<QueuedBatch>& batches);
+  // The lease's attempt is 1 + the most times any of its batches was in a
+  // lost lease: a batch that keeps killing workers shows in the attempt.
+  // Returns the lease (id 0: nothing queued for the cell).
+  LeaseRecord openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
+                        std::vector<QueuedBatch>& batches);
   std::optional<LeaseRecord> lease(uint64_t id);
   std::vector<LeaseRecord> openLeasesOf(const std::string& worker);
   // The lease's batches are consumed (deleted) and the lease closed.
   void completeLease(uint64_t lease);
-  // The lease's batches go back to the queue.
-  void requeueLease(uint64_t lease);
-  // Startup: leases held by workers of a previous run go back to the queue.
+  // The lease's batches go back to the queue. `lost`: its worker died or
+  // left holding it, which counts against the batches' attempts (a failure
+  // the worker reported does not: the job's failure counters track those).
+  void requeueLease(uint64_t lease, bool lost = false);
+  // Startup: leases held by workers of a previous run go back to the queue
+  // (not an attempt of theirs: the coordinator, not the cell, was lost).
   int requeueAllOpenLeases();
   int64_t remainingWork(uint64_t job, int phase);   // queued or leased batches
   int64_t openLeaseCount(uint64_t job);

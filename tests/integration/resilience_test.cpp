@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "common/net/message.h"
 #include "tests/integration/service_harness.h"
 
 namespace portico {
@@ -85,6 +86,71 @@ TEST_F(Resilience, ACoordinatorKilledMidRenderResumesWithTheSameBits) {
   const auto status = cluster.wait(job);
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
   expectSameAsReference(dir / "image.exr");
+}
+
+// A cell whose work dies with every worker that takes it (here: workers
+// that take a lease and vanish, as one that crashes on the cell's geometry
+// would) is retried with rising attempt numbers, then fails its job with a
+// message naming the cell: no endless retry.
+TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
+  const fs::path dir = dir_ / "lost-leases";
+  ClusterOptions options;
+  options.coordinatorExtra = {"--max-cell-failures", "3"};   // liveness: the harness's 2 s
+  LocalCluster cluster(dir, 0, {}, options);
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  zmq::context_t context(1);
+  std::vector<uint32_t> attempts, cells;
+  const auto sendEnvelope = [](zmq::socket_t& socket, capnp::MallocMessageBuilder& message) {
+    socket.send(net::encode(message), zmq::send_flags::none);
+  };
+  const auto receive = [](zmq::socket_t& socket, wire::Envelope::Which which) -> std::unique_ptr<net::Decoded> {
+    for (int i = 0; i < 100; ++i) {
+      zmq::pollitem_t items[] = {{socket.handle(), 0, ZMQ_POLLIN, 0}};
+      if (zmq::poll(items, 1, std::chrono::milliseconds(100)) != 1) continue;
+      zmq::message_t message;
+      if (!socket.recv(message)) continue;
+      auto decoded = std::make_unique<net::Decoded>(message);
+      if (decoded->envelope().which() == which) return decoded;
+    }
+    return nullptr;
+  };
+  for (int doomed = 0; doomed < 3; ++doomed) {
+    zmq::socket_t socket(context, zmq::socket_type::dealer);
+    socket.set(zmq::sockopt::linger, 0);
+    socket.connect(cluster.endpoint());
+    {
+      capnp::MallocMessageBuilder message;
+      auto hello = message.initRoot<wire::Envelope>().initHello();
+      hello.setVersion(wire::PROTOCOL_VERSION);
+      hello.setName("doomed-" + std::to_string(doomed));
+      hello.setCores(1);
+      hello.setMemoryBytes(uint64_t(1) << 30);
+      sendEnvelope(socket, message);
+    }
+    ASSERT_TRUE(receive(socket, wire::Envelope::WELCOME)) << readFile(dir / "coordinator.log");
+    {
+      capnp::MallocMessageBuilder message;
+      message.initRoot<wire::Envelope>().setReady();
+      sendEnvelope(socket, message);
+    }
+    auto assign = receive(socket, wire::Envelope::ASSIGN);
+    ASSERT_TRUE(assign) << readFile(dir / "coordinator.log");
+    attempts.push_back(assign->envelope().getAssign().getAttempt());
+    cells.push_back(assign->envelope().getAssign().getCell());
+    socket.close();   // gone without a word, holding the lease
+    // The next one comes once the coordinator has given up on this one.
+    const std::string requeued = "lease " + std::to_string(assign->envelope().getAssign().getLease()) + " (";
+    for (int i = 0; i < 100 && readFile(dir / "coordinator.log").find(requeued) == std::string::npos; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(attempts, (std::vector<uint32_t>{1, 2, 3})) << readFile(dir / "coordinator.log");
+  EXPECT_EQ(cells[1], cells[0]);
+  EXPECT_EQ(cells[2], cells[0]);
+  EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2);
+  const std::string error = status.value("error", "");
+  EXPECT_NE(error.find("cell " + std::to_string(cells[0]) + ":"), std::string::npos) << error;
+  EXPECT_NE(error.find("lost 3 times"), std::string::npos) << error;
 }
 
 // A worker in its own mount namespace, where an empty tmpfs hides the scene

@@ -47,7 +47,7 @@ TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
   EXPECT_EQ(pending[0].work, 500);
 
   std::vector<QueuedBatch> batches;
-  const uint64_t lease = store.openLease(pending[0], "worker-a", 250, 2, batches);
+  const uint64_t lease = store.openLease(pending[0], "worker-a", 250, 2, batches).id;
   ASSERT_NE(lease, 0u);
   ASSERT_EQ(batches.size(), 2u);
   EXPECT_EQ(batches[0].payload, "payload0");
@@ -58,7 +58,7 @@ TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
   EXPECT_EQ(store.lease(lease)->state, "requeued");
   EXPECT_EQ(store.pendingCells(10)[0].work, 500);
 
-  const uint64_t second = store.openLease(store.pendingCells(10)[0], "worker-b", 1000, 3, batches);
+  const uint64_t second = store.openLease(store.pendingCells(10)[0], "worker-b", 1000, 3, batches).id;
   EXPECT_EQ(batches.size(), 5u);
   store.completeLease(second);
   EXPECT_EQ(store.lease(second)->state, "done");
@@ -73,12 +73,56 @@ TEST_F(JobStoreTest, RestartRequeuesOpenLeases) {
     const uint64_t job = store.createJob("spec", 1);
     store.addBatch(job, 1, 0, BatchKind::Emit, 10, "x");
     std::vector<QueuedBatch> batches;
-    lease = store.openLease(store.pendingCells(1)[0], "gone", 100, 1, batches);
+    lease = store.openLease(store.pendingCells(1)[0], "gone", 100, 1, batches).id;
   }
   JobStore reopened(path_.string());
   EXPECT_EQ(reopened.requeueAllOpenLeases(), 1);
   EXPECT_EQ(reopened.lease(lease)->state, "requeued");
   EXPECT_EQ(reopened.pendingCells(1).size(), 1u);
+  // The coordinator, not the cell, was lost: the next lease is still a first attempt.
+  std::vector<QueuedBatch> batches;
+  EXPECT_EQ(reopened.openLease(reopened.pendingCells(1)[0], "next", 100, 2, batches).attempt, 1u);
+}
+
+TEST_F(JobStoreTest, LeasesLostWithTheirWorkerCountAsAttemptsOfTheirBatches) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  store.addBatch(job, 7, 0, BatchKind::Rays, 100, "a");
+  store.addBatch(job, 7, 0, BatchKind::Rays, 100, "b");
+  std::vector<QueuedBatch> batches;
+  LeaseRecord first = store.openLease(store.pendingCells(1)[0], "w1", 100, 1, batches);   // batch a only
+  EXPECT_EQ(first.attempt, 1u);
+  EXPECT_EQ(store.lease(first.id)->attempt, 1u);
+  store.requeueLease(first.id, /*lost=*/true);
+  LeaseRecord second = store.openLease(store.pendingCells(1)[0], "w2", 1000, 2, batches);   // a and b
+  ASSERT_EQ(batches.size(), 2u);
+  EXPECT_EQ(batches[0].attempts, 1u);
+  EXPECT_EQ(batches[1].attempts, 0u);
+  EXPECT_EQ(second.attempt, 2u);   // 1 + the most a batch was lost
+  EXPECT_EQ(second.cell, 7u);
+  EXPECT_EQ(second.worker, "w2");
+  EXPECT_EQ(store.lease(second.id)->attempt, 2u);
+  // A failure the worker reported is not a lost lease.
+  store.requeueLease(second.id);
+  EXPECT_EQ(store.openLease(store.pendingCells(1)[0], "w3", 1000, 3, batches).attempt, 2u);
+}
+
+TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    store.addBatch(job, 2, 0, BatchKind::Rays, 40, "queued");
+    // Back to version 1's shape: no attempts column.
+    store.database().exec("ALTER TABLE batches DROP COLUMN attempts");
+    store.database().setUserVersion(1);
+  }
+  JobStore migrated(path_.string());
+  EXPECT_EQ(migrated.database().userVersion(), JobStore::kSchemaVersion);
+  std::vector<QueuedBatch> batches;
+  const LeaseRecord lease = migrated.openLease(migrated.pendingCells(1)[0], "w", 100, 2, batches);
+  ASSERT_EQ(batches.size(), 1u);
+  EXPECT_EQ(batches[0].payload, "queued");
+  EXPECT_EQ(lease.attempt, 1u);
 }
 
 TEST_F(JobStoreTest, FilmChunksAccumulate) {
