@@ -290,6 +290,11 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     spdlog::info("dropped a result for lease {} (unknown, closed or not this worker's)", leaseId);
     return;
   }
+  // The worker's next lease goes out before this Result is committed: the
+  // commit (the coordinator's longest step) then overlaps the worker's
+  // tracing instead of idling it. The new lease cannot hold this Result's
+  // crossings, which are not queued yet; any order of leases gives the same bits.
+  if (worker != workers_.end() && worker->second.idle) assignWork(worker->second);
   auto job = store_.job(lease->job);
   const bool active = job && isActive(job->state) && phaseOf(job->state) == lease->phase;
   JobContext* context = nullptr;

@@ -12,9 +12,6 @@
 #include <cstring>
 #include <new>
 #include <utility>
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 #include "common/accel/triangle_intersect.h"
 #include "common/mesh_view.h"
@@ -121,35 +118,21 @@ struct TriangleVoxelOverlap {
 };
 
 // Allocator for a grid's large arrays: elements are left uninitialised (the
-// build writes every one), and arrays of 2 MiB or more are aligned to 2 MiB
-// and offered to the kernel as huge pages, which spares most page faults in
-// the build and most TLB misses in traversal.
+// build writes every one). No huge pages: madvise(MADV_HUGEPAGE) made a
+// build in isolation up to 2x faster (fewer TLB misses in the counting sort),
+// but in a worker, where every cell's grid lands on fresh memory, the kernel
+// zeroing 2 MiB pages took 15-20 % of the worker's CPU and the photon pass
+// ran ~20 % slower (docs/pipeline-benchmark.md).
 template <typename T>
 struct LargeArrayAllocator {
   using value_type = T;
-  static constexpr size_t kHugePage = size_t(2) << 20;
 
   LargeArrayAllocator() = default;
   template <typename U>
   LargeArrayAllocator(const LargeArrayAllocator<U>&) noexcept {}
 
-  T* allocate(size_t count) {
-    const size_t bytes = count * sizeof(T);
-    if (bytes < kHugePage) return static_cast<T*>(::operator new(bytes));
-    const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-    void* memory = std::aligned_alloc(kHugePage, rounded);
-    if (!memory) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    madvise(memory, rounded, MADV_HUGEPAGE);
-#endif
-    return static_cast<T*>(memory);
-  }
-  void deallocate(T* pointer, size_t count) noexcept {
-    if (count * sizeof(T) < kHugePage)
-      ::operator delete(pointer);
-    else
-      std::free(pointer);
-  }
+  T* allocate(size_t count) { return static_cast<T*>(::operator new(count * sizeof(T))); }
+  void deallocate(T* pointer, size_t) noexcept { ::operator delete(pointer); }
   template <typename U>
   void construct(U* pointer) noexcept {
     ::new (static_cast<void*>(pointer)) U;

@@ -3,6 +3,7 @@
 #include "common/accel/triangle_intersect.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace portico {
 
@@ -26,7 +27,9 @@ CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
     // Cells are convex regions (rooms, voxels): the outside of a portal is
     // the side away from the cell's centre.
     if (dot(normal, centroid - cellCenter) < 0) normal = -normal;
-    portalPolygons_.push_back({portal.polygon, normal, portal.neighborCell});
+    Bounds3 bounds;
+    for (const Vec3& p : portal.polygon) bounds.extend(p);
+    portalPolygons_.push_back({portal.polygon, normal, portal.neighborCell, bounds});
     for (size_t i = 1; i + 1 < portal.polygon.size(); ++i)
       portalTriangles_.push_back(
           {portal.polygon[0], portal.polygon[i], portal.polygon[i + 1], normal, portal.neighborCell});
@@ -66,7 +69,17 @@ float distanceToPolygon(const Vec3& p, const std::vector<Vec3>& polygon, const V
 
 void CellTracer::neighborsNear(const Vec3& p, float radius, std::vector<uint32_t>& neighbors) const {
   neighbors.clear();
+  // Every deposit asks; most lie far from every portal. The distance to a
+  // polygon is at least the distance to its plane and to its bounding box:
+  // reject on those first, with a margin far above rounding so that only
+  // the exact distance below ever decides a near case.
+  const float reject = radius * 1.001f + 1e-6f;
   for (const PortalPolygon& portal : portalPolygons_) {
+    if (p.x < portal.bounds.lo.x - reject || p.x > portal.bounds.hi.x + reject ||
+        p.y < portal.bounds.lo.y - reject || p.y > portal.bounds.hi.y + reject ||
+        p.z < portal.bounds.lo.z - reject || p.z > portal.bounds.hi.z + reject)
+      continue;
+    if (std::abs(dot(p - portal.points[0], portal.normal)) > reject) continue;
     if (distanceToPolygon(p, portal.points, portal.normal) > radius) continue;
     if (std::find(neighbors.begin(), neighbors.end(), portal.neighborCell) == neighbors.end())
       neighbors.push_back(portal.neighborCell);

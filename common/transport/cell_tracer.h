@@ -36,6 +36,7 @@ class CellTracer {
     std::vector<Vec3> points;
     Vec3 normal;
     uint32_t neighborCell;
+    Bounds3 bounds;   // of the points: a cheap rejection before the exact distance
   };
   const CellGeometry& cell_;
   const Accelerator& accelerator_;
