@@ -216,19 +216,30 @@ void Coordinator::dispatch() {
   }
 }
 
+bool Coordinator::heldByAnotherWorker(const WorkerInfo& worker, uint64_t job, uint32_t cell) const {
+  for (const auto& [identity, other] : workers_)
+    if (&other != &worker && other.holds(job, cell)) return true;
+  return false;
+}
+
 bool Coordinator::assignWork(WorkerInfo& worker) {
   const auto candidates = store_.pendingCells(64);
   if (candidates.empty()) return false;
   // Memory coherence: among the cells with most work, prefer one this worker
-  // already holds; otherwise take the one with the most work.
-  const PendingCell* chosen = &candidates.front();
+  // already holds; then one no other worker holds (each cell loaded and its
+  // accelerator built once, not once per worker); only when every such cell
+  // is another's, split the one with the most work.
+  const PendingCell* chosen = nullptr;
+  const PendingCell* unheld = nullptr;
   for (const PendingCell& c : candidates) {
     if (c.job != candidates.front().job) break;
     if (worker.holds(c.job, c.cell)) {
       chosen = &c;
       break;
     }
+    if (!unheld && !heldByAnotherWorker(worker, c.job, c.cell)) unheld = &c;
   }
+  if (!chosen) chosen = unheld ? unheld : &candidates.front();
   JobContext* job;
   try {
     job = &context(chosen->job);

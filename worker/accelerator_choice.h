@@ -6,11 +6,11 @@
 // rays the cell is expected to trace now (the scheduler's pending work for
 // the cell, times the rays traced per unit of work, learnt from past leases)
 // and is revisited at each later lease of the cell: when the rays still
-// expected (at least as many as it has traced so far: a cell that has been
-// busy tends to stay busy) make another structure's build pay for itself
-// with a margin, the cell is rebuilt. Like renting skis until buying them is
-// cheaper, this never spends more than about twice the best single choice.
-// Every candidate returns the same hits, so rebuilding never changes a bit.
+// expected from its pending work make another structure's build pay for
+// itself with a margin, the cell is rebuilt (in the render pass, where a
+// cell's pixels come in many leases, a busy cell is rebuilt once the rest
+// of its queue is worth it). Every candidate returns the same hits, so
+// rebuilding never changes a bit.
 #pragma once
 
 #include <algorithm>

@@ -26,7 +26,7 @@ struct LoadedCell {
   std::unique_ptr<Accelerator> accelerator;
   std::unique_ptr<CellTracer> tracer;
   std::string builtSpec;     // what was built: the requested spec, or auto's choice
-  int64_t raysTraced = 0;    // since it was loaded (auto's evidence for a rebuild)
+  int64_t raysTraced = 0;    // since it was loaded (logged with auto's rebuilds)
   uint64_t bytes() const { return geometry->bytes() + accelerator->stats().bytes; }
 };
 

@@ -50,7 +50,12 @@ LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneS
     return choice.candidate.spec;
   });
   if (loadedNow) return cell;
-  const double future = std::max(expected, double(cell.raysTraced));
+  // The rays still to come are the cell's pending work: not what it traced
+  // so far. In the photon pass a cell traces most of its rays in its
+  // emission lease and then only the few photons that wander back in;
+  // betting on its past (rebuilding a busy cell for as many rays again)
+  // paid for kd-trees that were never used.
+  const double future = expected;
   if (auto better = chooser.betterChoice(cell.builtSpec, shape, future)) {
     spdlog::info("cell {} ({} triangles): auto rebuilds {} as {} for ~{:.0f} more rays ({} traced so far)", cellId,
                  info.triangleCount, cell.builtSpec, better->candidate.spec, future, cell.raysTraced);
