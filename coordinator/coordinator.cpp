@@ -319,7 +319,8 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         if (crossing.getCell() >= cellCount)
           throw std::runtime_error(fmt::format("result for lease {} sends rays to cell {}, which does not exist",
                                                leaseId, crossing.getCell()));
-        capnp::MallocMessageBuilder batch;
+        // One first segment that holds the whole copy: no growth, no second segment.
+        capnp::MallocMessageBuilder batch(uint(crossing.getRays().totalSize().wordCount + 8));
         batch.initRoot<wire::RayBatch>().setRays(crossing.getRays());
         store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
                         net::packToString(batch));
@@ -334,7 +335,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
           throw std::runtime_error(fmt::format("result for lease {} holds a photon table of {} bytes, not whole records",
                                                leaseId, records.size()));
         store_.addPhotons(lease->job, deposits.getCell(), records.size() / sizeof(PhotonRecord),
-                          std::string(reinterpret_cast<const char*>(records.begin()), records.size()));
+                          std::string_view(reinterpret_cast<const char*>(records.begin()), records.size()));
       }
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;

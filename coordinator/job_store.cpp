@@ -159,7 +159,7 @@ void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const st
 }
 
 void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work,
-                        const std::string& payload) {
+                        std::string_view payload) {
   auto& s = db_.prepare("INSERT INTO batches(job, cell, phase, kind, work, payload) VALUES (?, ?, ?, ?, ?, ?)");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, int64_t(phase)).bind(4, int64_t(kind)).bind(5, work);
   s.bindBlob(6, payload.data(), payload.size());
@@ -334,7 +334,7 @@ std::map<std::string, int64_t> JobStore::counters(uint64_t job) {
   return result;
 }
 
-void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, const std::string& payload) {
+void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload) {
   auto& s = db_.prepare("INSERT INTO photons(job, cell, count, payload) VALUES (?, ?, ?, ?)");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bindBlob(4, payload.data(), payload.size());
   s.run();

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <vector>
 
@@ -70,7 +71,7 @@ class JobStore {
   void setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error = "");
 
   // work: rays the batch holds or will generate (the scheduler's measure).
-  void addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work, const std::string& payload);
+  void addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work, std::string_view payload);
   int64_t queuedRays(uint64_t job, int phase);   // rays in flight between cells
   // Cells with unleased work in their job's current phase, most work first.
   std::vector<PendingCell> pendingCells(size_t limit);
@@ -100,7 +101,8 @@ class JobStore {
   void addCounter(uint64_t job, std::string_view name, int64_t delta);
   std::map<std::string, int64_t> counters(uint64_t job);
 
-  void addPhotons(uint64_t job, uint32_t cell, int64_t count, const std::string& payload);
+  // `payload` is copied by SQLite: a view into a Result will do.
+  void addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload);
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
 
   static constexpr uint32_t kFilmChunkPixels = 4096;
