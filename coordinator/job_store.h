@@ -76,10 +76,10 @@ class JobStore {
   // Cells with unleased work in their job's current phase, most work first.
   std::vector<PendingCell> pendingCells(size_t limit);
   // Leases up to maxWork of the oldest unleased batches of (job, cell, phase)
-  // (always at least one batch). Returns the lease id, fills `batches`.
-  // The lease's attempt is 1 + the most times any of its batches was in a
-  // lost lease: a batch that keeps killing workers shows in the attempt.
-  // Returns the lease (id 0: nothing queued for the cell).
+  // (always at least one batch), fills `batches` and returns the lease (id
+  // 0: nothing queued for the cell). Its attempt is 1 + the most times any
+  // of its batches was in a lost lease: a batch that keeps killing workers
+  // shows in the attempt.
   LeaseRecord openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
                         std::vector<QueuedBatch>& batches);
   std::optional<LeaseRecord> lease(uint64_t id);

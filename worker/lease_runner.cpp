@@ -50,15 +50,14 @@ LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneS
     return choice.candidate.spec;
   });
   if (loadedNow) return cell;
-  // The rays still to come are the cell's pending work: not what it traced
-  // so far. In the photon pass a cell traces most of its rays in its
-  // emission lease and then only the few photons that wander back in;
-  // betting on its past (rebuilding a busy cell for as many rays again)
-  // paid for kd-trees that were never used.
-  const double future = expected;
-  if (auto better = chooser.betterChoice(cell.builtSpec, shape, future)) {
+  // The rays still to come are the cell's pending work (`expected`), not
+  // what it traced so far. In the photon pass a cell traces most of its
+  // rays in its emission lease and then only the few photons that wander
+  // back in; betting on its past (rebuilding a busy cell for as many rays
+  // again) paid for kd-trees that were never used.
+  if (auto better = chooser.betterChoice(cell.builtSpec, shape, expected)) {
     spdlog::info("cell {} ({} triangles): auto rebuilds {} as {} for ~{:.0f} more rays ({} traced so far)", cellId,
-                 info.triangleCount, cell.builtSpec, better->candidate.spec, future, cell.raysTraced);
+                 info.triangleCount, cell.builtSpec, better->candidate.spec, expected, cell.raysTraced);
     cache.rebuildAccelerator(cell, better->candidate.spec);
   }
   return cell;

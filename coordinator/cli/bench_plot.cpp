@@ -82,6 +82,27 @@ std::vector<std::string> wrapLabel(const std::string& label, int width) {
   return lines;
 }
 
+// A legend entry's label beside its swatch at (x, y), wrapped to `columns`
+// characters; returns the y of the next entry.
+int drawLegendLabel(Canvas& canvas, int x, int y, const std::string& label, int columns) {
+  for (const std::string& line : wrapLabel(label, columns)) {
+    canvas.text(x, y, line, kBlack);
+    y += 20;
+  }
+  return y + 2;
+}
+
+// Panels side by side on one white canvas, written as a PNG (`what` names
+// the kind of picture in errors).
+template <typename Panel, typename DrawPanel>
+void writePanelsPng(const std::string& path, const std::vector<Panel>& panels, int panelWidth, int panelHeight,
+                    DrawPanel drawPanel, const char* what) {
+  Canvas canvas(std::max(1, panelWidth * int(panels.size())), panelHeight);
+  canvas.fill(0, 0, canvas.width() - 1, canvas.height() - 1, kWhite);
+  for (size_t i = 0; i < panels.size(); ++i) drawPanel(canvas, int(i) * panelWidth, panelWidth, panelHeight, panels[i]);
+  writePng(path, canvas, what);
+}
+
 // A ring round a point and its x value above it: the best of a sweep.
 void drawMark(Canvas& canvas, int x, int y, const Color& color, const std::string& label) {
   constexpr int kRing = 8;
@@ -151,21 +172,14 @@ void drawPanel(Canvas& canvas, int originX, int width, int height, const PlotPan
     if (series.label.empty()) continue;
     canvas.resetDash();
     canvas.line(x1 + 12, legendY + 7, x1 + 40, legendY + 7, series.color, 3, series.dashed);
-    for (const std::string& line : wrapLabel(series.label, (kRight - 50) / kCharAdvance)) {
-      canvas.text(x1 + 46, legendY, line, kBlack);
-      legendY += 20;
-    }
-    legendY += 2;
+    legendY = drawLegendLabel(canvas, x1 + 46, legendY, series.label, (kRight - 50) / kCharAdvance);
   }
 }
 
 }  // namespace
 
 void writePlotPng(const std::string& path, const std::vector<PlotPanel>& panels, int panelWidth, int panelHeight) {
-  Canvas canvas(std::max(1, panelWidth * int(panels.size())), panelHeight);
-  canvas.fill(0, 0, canvas.width() - 1, canvas.height() - 1, kWhite);
-  for (size_t i = 0; i < panels.size(); ++i) drawPanel(canvas, int(i) * panelWidth, panelWidth, panelHeight, panels[i]);
-  writePng(path, canvas, "plot");
+  writePanelsPng(path, panels, panelWidth, panelHeight, drawPanel, "plot");
 }
 
 // ---------------------------------------------------------------------------
@@ -234,22 +248,14 @@ void drawBarPanel(Canvas& canvas, int originX, int width, int height, const BarP
   int legendY = y0 + 4;
   for (const auto& [label, color] : panel.legend) {
     canvas.fill(x1 + 12, legendY + 1, x1 + 36, legendY + 13, color);
-    for (const std::string& line : wrapLabel(label, (kRight - 50) / kCharAdvance)) {
-      canvas.text(x1 + 44, legendY, line, kBlack);
-      legendY += 20;
-    }
-    legendY += 2;
+    legendY = drawLegendLabel(canvas, x1 + 44, legendY, label, (kRight - 50) / kCharAdvance);
   }
 }
 
 }  // namespace
 
 void writeBarPlotPng(const std::string& path, const std::vector<BarPanel>& panels, int panelWidth, int panelHeight) {
-  Canvas canvas(std::max(1, panelWidth * int(panels.size())), panelHeight);
-  canvas.fill(0, 0, canvas.width() - 1, canvas.height() - 1, kWhite);
-  for (size_t i = 0; i < panels.size(); ++i)
-    drawBarPanel(canvas, int(i) * panelWidth, panelWidth, panelHeight, panels[i]);
-  writePng(path, canvas, "bar chart");
+  writePanelsPng(path, panels, panelWidth, panelHeight, drawBarPanel, "bar chart");
 }
 
 }  // namespace portico::cli
