@@ -4,6 +4,7 @@
 
 #include <csignal>
 
+#include "common/util/heap_reuse.h"
 #include "coordinator/coordinator.h"
 
 namespace {
@@ -35,6 +36,9 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
+  // Every Result is unpacked into fresh segments and its batches re-packed:
+  // keep what they free (a bounded amount, whatever the queues hold).
+  portico::keepFreedMemory(uint64_t(256) << 20);
   try {
     portico::Coordinator coordinator(options);
     running = &coordinator;
