@@ -135,11 +135,10 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   }
   auto deposits = result.initDeposits(static_cast<unsigned>(out.deposits.size()));
   unsigned cellIndex = 0;
-  for (const auto& [cell, photons] : out.deposits) {
+  for (const auto& [cell, records] : out.deposits) {
     deposits[cellIndex].setCell(cell);
-    const std::string records = packRecords(photons);
-    deposits[cellIndex].setRecords(
-        capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()), records.size()));
+    deposits[cellIndex].setRecords(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()),
+                                                       records.size() * sizeof(PhotonRecord)));
     ++cellIndex;
   }
   auto film = result.initFilm(static_cast<unsigned>(out.film.sums().size()));

@@ -316,13 +316,14 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
 void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {
   ++out.counters.photonDeposits;
   const uint32_t cell = tracer_.cell().id();
-  out.deposits[cell].push_back(photon);
+  const PhotonRecord record = toRecord(photon);
+  out.deposits[cell].push_back(record);
   // Copies for neighbours across a nearby portal, so their estimates near
   // the doorway see this side too (no seam at the threshold).
   thread_local std::vector<uint32_t> neighbors;
   tracer_.neighborsNear(photon.position, parameters_.photonRadius, neighbors);
   for (uint32_t neighbor : neighbors) {
-    out.deposits[neighbor].push_back(photon);
+    out.deposits[neighbor].push_back(record);
     ++out.counters.photonCopies;
   }
 }

@@ -14,6 +14,7 @@
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
 #include "common/transport/photon_map.h"
+#include "common/transport/photon_record.h"
 #include "common/transport/ray_state.h"
 #include "common/transport/trace_counters.h"
 
@@ -42,8 +43,10 @@ Vec3 portalCountColour(uint32_t crossings);
 
 struct KernelOutputs {
   // By the cell whose table receives them: the cell traced, and neighbours
-  // for photons within the photon radius of their shared portal.
-  std::map<uint32_t, std::vector<StoredPhoton>> deposits;
+  // for photons within the photon radius of their shared portal. Encoded
+  // as they are stored (24 bytes, not a StoredPhoton's 48): the Result
+  // takes each table with one copy.
+  std::map<uint32_t, std::vector<PhotonRecord>> deposits;
   std::map<uint32_t, std::vector<RayState>> crossings;   // by destination cell
   FilmAccumulator film;
   TraceCounters counters;
