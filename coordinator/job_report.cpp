@@ -69,6 +69,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                    {"escaped", get(counters, "rays.escaped")},
                    {"traced", get(counters, "rays.traced")},
                    {"crossings", crossings},
+                   {"forwarded", get(counters, "rays.forwarded")},
                    {"crossings_per_camera_ray", camera ? double(crossings) / camera : 0.0},
                    {"invalid", get(counters, "rays.invalid")},
                    {"queued", store.queuedRays(job.id, 1)}};

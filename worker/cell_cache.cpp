@@ -77,6 +77,13 @@ LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const
   return *entry.cell;
 }
 
+LoadedCell* CellCache::heldCell(const std::string& directory, uint32_t cellId, const std::string& acceleratorSpec) {
+  auto it = cells_.find(CellKey{directory, cellId, acceleratorSpec});
+  if (it == cells_.end()) return nullptr;
+  touch(it->second);
+  return it->second.cell.get();
+}
+
 void CellCache::buildAccelerator(LoadedCell& cell, const std::string& spec) {
   cell.tracer.reset();
   cell.accelerator.reset();

@@ -54,6 +54,8 @@ class CellCache {
   // acceleratorSpec.
   LoadedCell& cell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec,
                    const std::function<std::string()>& resolve = {});
+  // The cell if it is held with this spec (then pinned), else null: loads nothing.
+  LoadedCell* heldCell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec);
   // Replaces a loaded cell's accelerator with one built from `spec`.
   void rebuildAccelerator(LoadedCell& cell, const std::string& spec);
   // The photon map of (job, cell), or nullptr when not cached; pinned.

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <algorithm>
 #include <deque>
 
 #include "common/net/message.h"
@@ -63,10 +64,45 @@ LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneS
   return cell;
 }
 
+// Crossings into cells this worker already holds (with the job's accelerator,
+// and in the render phase with their photon map) are traced here, in this
+// lease, instead of going back to the coordinator to come out again as a
+// lease of their own. A photon bouncing between rooms the worker holds then
+// finishes without a round trip per portal: the end of a photon pass is
+// made of such small generations, each a lease, and the workers sat idle
+// between them. No bit changes: a ray carries its whole state, photon tables
+// are sorted by content and film sums are exact. At most `limit` rays are
+// forwarded (the last destination's in full), so a lease stays about a
+// lease's work. Returns the rays forwarded.
+int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std::string& store,
+                           const std::string& accel, uint64_t job, bool renderPhase, const JobParameters& parameters,
+                           int64_t limit, KernelOutputs& out) {
+  int64_t forwarded = 0;
+  for (bool progress = true; progress && forwarded < limit;) {
+    progress = false;
+    for (auto it = out.crossings.begin(); it != out.crossings.end() && forwarded < limit;) {
+      const uint32_t destination = it->first;
+      LoadedCell* held = cache.heldCell(store, destination, accel);
+      const PhotonMap* photons = held && renderPhase ? cache.photonMap(job, destination) : nullptr;
+      if (!held || (renderPhase && !photons)) {
+        ++it;
+        continue;
+      }
+      const std::vector<RayState> rays = std::move(it->second);
+      it = out.crossings.erase(it);   // tracing may add crossings to other cells; this one stays valid
+      CellKernel kernel(scene, *held->tracer, parameters, photons);
+      for (const RayState& ray : rays) kernel.trace(ray, out);
+      forwarded += int64_t(rays.size());
+      progress = true;
+    }
+  }
+  return forwarded;
+}
+
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::vector<StoredPhoton>> photons,
-                                                      const std::string& storeDirectory) {
+                                                      const std::string& storeDirectory, int64_t forwardRays) {
   const auto started = std::chrono::steady_clock::now();
   auto spec = assign.getSpec();
   const std::string& store = storeDirectory;
@@ -119,8 +155,13 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
     }
   }
 
+  // The lease's own rays, before any are forwarded: what auto learns from.
   cell.raysTraced += out.counters.raySegments;
   chooser.learn(renderPhase, assign.getLeaseWork(), out.counters.raySegments);
+  const int64_t forwarded =
+      forwardRays > 0 ? forwardToHeldCells(cache, scene, store, accel, assign.getJob(), renderPhase, parameters,
+                                           std::max(forwardRays, assign.getLeaseWork()), out)
+                      : 0;
 
   auto message = std::make_unique<capnp::MallocMessageBuilder>();
   auto result = message->initRoot<wire::Envelope>().initResult();
@@ -156,6 +197,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   named.push_back({"cells.cache_hits", cacheStats.cellHits});
   named.push_back({"cells.bytes_read", cacheStats.bytesRead});
   named.push_back({"photon_maps.built", cacheStats.photonMapsBuilt});
+  named.push_back({"rays.forwarded", forwarded});
   // Microseconds: most builds take well under a millisecond.
   named.push_back({"time.accel_build_us", std::llround(cacheStats.acceleratorBuildMs * 1e3)});
   // Which structure each cell got (auto's choices): the job's statistics

@@ -24,10 +24,12 @@ std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool i
 
 // Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
 // The scene is read from `storeDirectory` (the job's store, or the worker's
-// local copy of it).
+// local copy of it). Crossings into cells the cache already holds are traced
+// in the lease too, up to max(forwardRays, the lease's own work) rays (0:
+// none); see forwardToHeldCells in lease_runner.cpp.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::vector<StoredPhoton>> photons,
-                                                      const std::string& storeDirectory);
+                                                      const std::string& storeDirectory, int64_t forwardRays);
 
 }  // namespace portico

@@ -43,6 +43,10 @@ int main(int argc, char** argv) {
   app.add_option("--calibration", options.calibrationPath,
                  "the accelerator cost model's calibration for --accel auto (`portico bench calibrate`; default: "
                  "$PORTICO_CALIBRATION, else ~/.cache/portico/calibration.json when present, else built-in)");
+  app.add_option("--forward-rays", options.forwardRays,
+                 "most rays a lease traces in neighbour cells this worker already holds, instead of handing them "
+                 "back (at least the lease's own work; 0: hand every crossing back)")
+      ->capture_default_str();
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

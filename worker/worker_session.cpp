@@ -101,7 +101,8 @@ std::future<std::unique_ptr<capnp::MallocMessageBuilder>> WorkerSession::startLe
       }
     } notify{leaseDone_};
     const std::string store = assign.getSpec().getStore();
-    return runLease(cache_, chooser_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store);
+    return runLease(cache_, chooser_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store,
+                    options_.forwardRays);
   });
 }
 

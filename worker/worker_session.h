@@ -40,6 +40,9 @@ struct WorkerOptions {
   // The cost model's calibration for `--accel auto` ("": CostModel::defaultPath()
   // when it exists, else the built-in one).
   std::string calibrationPath;
+  // Most rays a lease traces in neighbour cells this worker already holds
+  // (at least as many as the lease's own work); 0: every crossing goes back.
+  int64_t forwardRays = 20000;
 };
 
 class WorkerSession {

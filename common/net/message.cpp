@@ -49,9 +49,9 @@ capnp::ReaderOptions optionsFor(size_t packedBytes) {
 }  // namespace
 
 PackedReader::PackedReader(const void* data, size_t bytes)
-    : input_(kj::ArrayPtr<const kj::byte>(static_cast<const kj::byte*>(data), bytes)), buffered_(input_) {
+    : input_(kj::ArrayPtr<const kj::byte>(static_cast<const kj::byte*>(data), bytes)) {
   try {
-    reader_ = std::make_unique<capnp::PackedMessageReader>(buffered_, optionsFor(bytes));
+    reader_ = std::make_unique<capnp::PackedMessageReader>(input_, optionsFor(bytes));
     // Read every segment now. Cap'n Proto reads the later segments of a
     // multi-segment message lazily and skips what is left of it in its
     // destructor: on a truncated frame that skip throws from a destructor,
@@ -70,8 +70,7 @@ Decoded::Decoded(const zmq::message_t& frame) {
   if (frame.size() > kMaxFrameBytes)
     throw std::runtime_error(
         fmt::format("malformed message: {} bytes is over the {} byte limit", frame.size(), kMaxFrameBytes));
-  bytes_.assign(static_cast<const char*>(frame.data()), frame.size());
-  reader_ = std::make_unique<PackedReader>(bytes_.data(), bytes_.size());
+  reader_ = std::make_unique<PackedReader>(frame.data(), frame.size());
   envelope_ = reader_->root<wire::Envelope>();
   try {
     (void)envelope_.which();   // a malformed root fails here, not deep in a handler

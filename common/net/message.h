@@ -44,19 +44,18 @@ class PackedReader {
   }
 
  private:
-  kj::ArrayInputStream input_;
-  kj::BufferedInputStreamWrapper buffered_;
+  kj::ArrayInputStream input_;   // buffered already: the packed reader reads it in place
   std::unique_ptr<capnp::PackedMessageReader> reader_;
 };
 
-// A decoded envelope from one ZeroMQ frame (the frame is copied).
+// A decoded envelope from one ZeroMQ frame. The frame is read (unpacked into
+// the reader's own segments) while constructing; nothing refers to it after.
 class Decoded {
  public:
   explicit Decoded(const zmq::message_t& frame);
   wire::Envelope::Reader envelope() const { return envelope_; }
 
  private:
-  std::string bytes_;
   std::unique_ptr<PackedReader> reader_;
   wire::Envelope::Reader envelope_;
 };

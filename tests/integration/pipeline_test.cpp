@@ -70,6 +70,40 @@ TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitFor
 }
 
 
+// A worker traces crossings into cells it already holds within the lease
+// (worker/lease_runner.cpp, forwardToHeldCells). Handing every crossing back
+// instead must give the same bits, and forwarding must actually happen.
+TEST_F(Pipeline, TracingCrossingsInHeldCellsChangesNoBit) {
+  const uint64_t photons = 60000;
+  nlohmann::json forwarding, handedBack;
+  {
+    LocalCluster cluster(dir_ / "forwarding", 2);
+    forwarding = cluster.render(store_, dir_ / "forwarding.exr", photons, 2);
+  }
+  {
+    LocalCluster cluster(dir_ / "handed-back", 2, {{"--forward-rays", "0"}, {"--forward-rays", "0"}});
+    handedBack = cluster.render(store_, dir_ / "handed-back.exr", photons, 2);
+  }
+  ASSERT_EQ(forwarding.value("state", ""), "done") << forwarding.dump(2);
+  ASSERT_EQ(handedBack.value("state", ""), "done") << handedBack.dump(2);
+  const auto forwardingStats = nlohmann::json::parse(readFile(dir_ / "forwarding.exr.json"));
+  const auto handedBackStats = nlohmann::json::parse(readFile(dir_ / "handed-back.exr.json"));
+  expectConservation(forwardingStats);
+  expectConservation(handedBackStats);
+  EXPECT_GT(forwardingStats["rays"]["forwarded"].get<int64_t>(), 0);
+  EXPECT_EQ(handedBackStats["rays"]["forwarded"].get<int64_t>(), 0);
+  // Forwarding saves round trips, not rays: the same work was done.
+  EXPECT_EQ(forwardingStats["photons"], handedBackStats["photons"]);
+  EXPECT_EQ(forwardingStats["rays"]["traced"], handedBackStats["rays"]["traced"]);
+  EXPECT_EQ(forwardingStats["rays"]["crossings"], handedBackStats["rays"]["crossings"]);
+  EXPECT_LT(forwardingStats["leases"].get<int64_t>(), handedBackStats["leases"].get<int64_t>());
+
+  const LinearImage a = readImage((dir_ / "forwarding.exr").string());
+  const LinearImage b = readImage((dir_ / "handed-back.exr").string());
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
+}
+
 TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
   const uint64_t photons = 60000;
   nlohmann::json reference, crashed;
