@@ -1,33 +1,13 @@
-// kd:sah: the surface area heuristic, built in O(n log n) after Wald &
-// Havran, "On building fast kd-trees for ray tracing, and on doing that in
-// O(N log N)" (2006).
-//
-// Each node keeps, per axis, the sorted list of its triangles' events: where
-// a triangle's (clipped) box starts and ends along the axis, or one planar
-// event where the box is flat. Events are sorted once, at the root; a sweep
-// over a node's lists evaluates every candidate plane in O(n); the chosen
-// split classifies each triangle below, above or both, and the lists are
-// split in one pass that preserves their order. Only the straddling
-// triangles are clipped to the children (perfect splits), and their new
-// events, sorted on their own, are merged in.
-//
-// Memory: the lists live in one arena used as a stack. A node's lists are
-// at its top; its children's lists replace them (through a scratch copy),
-// the above child's first, so that the below child, built first, is again
-// at the top. No allocation per node, and the arena stays within a small
-// multiple of the root's lists.
-//
-// Cost model: a leaf costs intersection * n; a split costs
-//   traversal + intersection * (A_below * n_below + A_above * n_above) / A,
-// times `empty` when one side of a plane strictly inside the node is empty.
-// Triangles lying in the plane go to the side where they cost less, so the
-// axis-aligned walls, floors and furniture faces of a building end up in
-// thin leaves of their own. A node stays a leaf when no split is cheaper.
+// kd:sah: the surface area heuristic (header comment rewritten at the end of this change).
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <optional>
+#include <span>
 #include <utility>
+#include <vector>
 
 #include "common/accel/kd_build.h"
 
@@ -39,73 +19,194 @@ namespace {
 // a plane's ends before its planar triangles, and those before its starts.
 constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
 
-struct Event {
-  float position;
-  uint32_t code;  // primitive << 2 | type
-};
-
-inline uint32_t typeOf(const Event& event) { return event.code & 3; }
-inline uint32_t primitiveOf(const Event& event) { return event.code >> 2; }
-inline bool sortsBefore(const Event& a, const Event& b) {
-  return a.position < b.position || (a.position == b.position && typeOf(a) < typeOf(b));
-}
-
-// Maps floats (not NaN, no -0) to unsigned integers in the same order.
+// Maps floats (not NaN, no -0) to unsigned integers in the same order, and back.
 inline uint32_t orderedBits(float position) {
   const uint32_t bits = std::bit_cast<uint32_t>(position);
   return (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
 }
+inline float fromOrderedBits(uint32_t ordered) {
+  return std::bit_cast<float>((ordered & 0x80000000u) ? ordered & 0x7fffffffu : ~ordered);
+}
 
-// Stable LSD radix sort by position (11 + 11 + 10 bits), so that events
-// generated ends first, then planars, then starts come out sorted by
-// (position, type). The result is in events.
-void radixSortByPosition(std::vector<Event>& events, std::vector<Event>& scratch) {
-  scratch.resize(events.size());
-  constexpr int kShift[3] = {0, 11, 22};
-  constexpr uint32_t kMask[3] = {2047, 2047, 1023};
-  for (int pass = 0; pass < 3; ++pass) {
-    uint32_t offsets[2048] = {};
-    for (const Event& event : events) ++offsets[(orderedBits(event.position) >> kShift[pass]) & kMask[pass]];
-    // A digit shared by every event (the usual case for the top bits) needs no pass.
-    if (std::find(std::begin(offsets), std::end(offsets), uint32_t(events.size())) != std::end(offsets)) continue;
-    uint32_t sum = 0;
-    for (uint32_t& offset : offsets) {
-      const uint32_t bucket = offset;
-      offset = sum;
-      sum += bucket;
-    }
-    for (const Event& event : events)
-      scratch[offsets[(orderedBits(event.position) >> kShift[pass]) & kMask[pass]]++] = event;
-    events.swap(scratch);
+// An event: where a triangle's box starts or ends along an axis, or where a
+// flat box lies. Its value sorts by position, then type.
+using Event = uint64_t;
+inline Event makeEvent(float position, uint32_t type) {
+  return uint64_t(orderedBits(position + 0.0f)) << 2 | type;  // + 0: no -0 events
+}
+inline uint32_t positionKey(Event event) { return uint32_t(event >> 2); }
+inline uint32_t typeOf(Event event) { return uint32_t(event) & 3; }
+
+// Appends the events of box along axis.
+inline void addEvents(std::vector<Event>& events, const Bounds3& box, int axis) {
+  const float lo = box.lo[axis], hi = box.hi[axis];
+  if (lo == hi) {
+    events.push_back(makeEvent(lo, kPlanar));
+  } else {
+    events.push_back(makeEvent(lo, kStart));
+    events.push_back(makeEvent(hi, kEnd));
   }
 }
 
-// Appends the events of a triangle whose box (within the node) is box.
-inline void addEvents(std::vector<Event>* lists, const Bounds3& box, uint32_t primitive) {
-  for (int axis = 0; axis < 3; ++axis) {
-    const float lo = box.lo[axis] + 0.0f, hi = box.hi[axis] + 0.0f;  // + 0: no -0 events
-    if (lo == hi) {
-      lists[axis].push_back({lo, primitive << 2 | kPlanar});
-    } else {
-      lists[axis].push_back({lo, primitive << 2 | kStart});
-      lists[axis].push_back({hi, primitive << 2 | kEnd});
-    }
-  }
-}
+// The SAH cost of planes along one axis of a node, in units of the
+// intersection cost, scaled by the node's half area (the factor 2 cancels):
+// leaf = A n; split = A traversal / intersection + A_below n_below + A_above n_above.
+struct PlaneCost {
+  float nodeLo, nodeHi;
+  double perimeter, cross, splitBase, emptyBonus;
+  uint32_t count;
 
-// Where a node's three lists are in the arena: one after another.
-struct NodeLists {
-  size_t begin = 0;
-  uint32_t size[3] = {0, 0, 0};
-  uint32_t triangleCount = 0;
-
-  size_t offset(int axis) const {
-    return begin + (axis > 0 ? size[0] : 0) + (axis > 1 ? size[1] : 0);
+  // Infinity when the split would leave a child equal to the node (a plane
+  // on a face that moves nothing out).
+  double operator()(float position, uint32_t below, uint32_t above) const {
+    if ((position == nodeLo && above == count) || (position == nodeHi && below == count)) return kInfinity;
+    const double belowArea = double(position - nodeLo) * perimeter + cross;
+    const double aboveArea = double(nodeHi - position) * perimeter + cross;
+    double cost = belowArea * below + aboveArea * above;
+    if ((below == 0 || above == 0) && position > nodeLo && position < nodeHi) cost *= emptyBonus;
+    return splitBase + cost;
   }
-  size_t total() const { return size_t(size[0]) + size[1] + size[2]; }
 };
 
-enum Side : uint8_t { kBoth = 0, kBelow = 1, kAbove = 2 };
+// The best split so far, and its cost.
+struct BestSplit {
+  double cost;
+  std::optional<KdSplit> split;
+};
+
+// The sweep of Wald & Havran over sorted events of one axis. below counts
+// the triangles reaching below the first event's position from before it,
+// above those reaching above it (including the events' own triangles). At
+// each plane p: `below` counts the triangles reaching below p, `above`
+// those reaching above it, `planar` those lying in it; planar triangles go
+// to the side where they cost less.
+void sweep(std::span<const Event> events, uint32_t below, uint32_t above, const PlaneCost& cost, int axis,
+           BestSplit& best) {
+  for (size_t i = 0; i < events.size();) {
+    const uint32_t key = positionKey(events[i]);
+    uint32_t counts[3] = {0, 0, 0};  // ends, planars, starts at this position
+    do ++counts[typeOf(events[i])];
+    while (++i < events.size() && positionKey(events[i]) == key);
+    const float position = fromOrderedBits(key);
+    const uint32_t planar = counts[kPlanar];
+    above -= planar + counts[kEnd];
+    const double planarBelowCost = cost(position, below + planar, above);
+    const double planarAboveCost = planar > 0 ? cost(position, below, above + planar) : kInfinity;
+    if (planarBelowCost < best.cost || planarAboveCost < best.cost) {
+      const bool planarBelow = planarBelowCost <= planarAboveCost;
+      best.cost = planarBelow ? planarBelowCost : planarAboveCost;
+      best.split = KdSplit{axis, position, planarBelow};
+    }
+    below += counts[kStart] + planar;
+  }
+}
+
+// Four lanes at once (GCC and Clang vector extensions: SSE on x86-64).
+using Float4 = float __attribute__((vector_size(16)));
+using Int4 = int32_t __attribute__((vector_size(16)));
+
+// Nodes of at most this many triangles are split by counting, not sorting.
+constexpr uint32_t kSmallNode = 16;
+
+// The exact SAH of a small node without sorting: every face of every box is
+// a candidate plane, and its counts below, above and in it come from
+// comparing it with every box, four candidates at a time. O(n^2), but with
+// no branches and no per-node setup it beats sorting up to kSmallNode.
+class SmallNodeSplitter {
+ public:
+  void findSplit(std::span<const KdReference> references, const PlaneCost& cost, int axis, BestSplit& best);
+
+ private:
+  // Per box along the axis, in all four lanes: its ends, and its position
+  // when it is flat there (else NaN, equal to nothing).
+  Float4 lo_[kSmallNode], hi_[kSmallNode], planar_[kSmallNode];
+  alignas(16) float candidates_[2 * kSmallNode + 3];
+};
+
+void SmallNodeSplitter::findSplit(std::span<const KdReference> references, const PlaneCost& cost, int axis,
+                                  BestSplit& best) {
+  const uint32_t count = uint32_t(references.size());
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  uint32_t candidateCount = 0;
+  for (uint32_t j = 0; j < count; ++j) {
+    const float lo = references[j].box.lo[axis] + 0.0f, hi = references[j].box.hi[axis] + 0.0f;  // no -0
+    lo_[j] = Float4{} + lo;
+    hi_[j] = Float4{} + hi;
+    planar_[j] = Float4{} + (lo == hi ? lo : kNaN);
+    candidates_[candidateCount++] = lo;
+    if (lo != hi) candidates_[candidateCount++] = hi;
+  }
+  while (candidateCount % 4) candidates_[candidateCount++] = kNaN;  // NaN costs never win
+
+  const Float4 nodeLo = Float4{} + cost.nodeLo, nodeHi = Float4{} + cost.nodeHi;
+  const Float4 perimeter = Float4{} + float(cost.perimeter), cross = Float4{} + float(cost.cross);
+  const Float4 splitBase = Float4{} + float(cost.splitBase), emptyBonus = Float4{} + float(cost.emptyBonus);
+  const Int4 all = Int4{} + int32_t(count);
+  const Float4 infinity = Float4{} + kInfinity;
+  // As PlaneCost, four planes at once.
+  const auto planeCost = [&](Float4 position, Int4 below, Int4 above, Float4 belowArea, Float4 aboveArea) {
+    Float4 result = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
+    result = ((below == 0 || above == 0) && position > nodeLo && position < nodeHi) ? result * emptyBonus : result;
+    result = ((position == nodeLo && above == all) || (position == nodeHi && below == all)) ? infinity : result + splitBase;
+    return result;
+  };
+  // Per lane, the best so far: its cost and 2 * candidate + (planar above).
+  Float4 laneCost = infinity;
+  Int4 laneChoice = Int4{} - 1;
+  for (uint32_t c = 0; c < candidateCount; c += 4) {
+    Float4 position;
+    std::memcpy(&position, candidates_ + c, sizeof(position));
+    Int4 below = {}, above = {}, planar = {};
+    for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
+      below -= lo_[j] < position;
+      above -= hi_[j] > position;
+      planar -= planar_[j] == position;
+    }
+    const Float4 belowArea = (position - nodeLo) * perimeter + cross;
+    const Float4 aboveArea = (nodeHi - position) * perimeter + cross;
+    const Int4 choice = (Int4{0, 2, 4, 6} + int32_t(2 * c));
+    const Float4 planarBelowCost = planeCost(position, below + planar, above, belowArea, aboveArea);
+    Int4 better = planarBelowCost < laneCost;
+    laneCost = better ? planarBelowCost : laneCost;
+    laneChoice = better ? choice : laneChoice;
+    const Float4 planarAboveCost = planar > 0 ? planeCost(position, below, above + planar, belowArea, aboveArea) : infinity;
+    better = planarAboveCost < laneCost;
+    laneCost = better ? planarAboveCost : laneCost;
+    laneChoice = better ? choice + 1 : laneChoice;
+  }
+  // The lanes' best, the earliest candidate among equals.
+  int bestLane = -1;
+  for (int lane = 0; lane < 4; ++lane) {
+    if (laneChoice[lane] < 0) continue;
+    if (bestLane < 0 || laneCost[lane] < laneCost[bestLane] ||
+        (laneCost[lane] == laneCost[bestLane] && laneChoice[lane] < laneChoice[bestLane]))
+      bestLane = lane;
+  }
+  if (bestLane >= 0 && laneCost[bestLane] < best.cost) {
+    best.cost = laneCost[bestLane];
+    best.split = KdSplit{axis, candidates_[laneChoice[bestLane] / 2], (laneChoice[bestLane] & 1) == 0};
+  }
+}
+
+// Bins along one axis of a node: bin(x) grows with x, so a triangle whose
+// event is in a lower bin than another's has it strictly below the other.
+struct Binning {
+  float lo, scale;
+  uint32_t last;
+  uint32_t operator()(float x) const { return std::min(uint32_t((x - lo) * scale), last); }
+};
+
+constexpr uint32_t kMaxBins = 256;
+
+// Per bin, along one axis: the events of each type whose position falls in it.
+struct AxisBins {
+  uint32_t counts[3][kMaxBins];  // [type][bin]
+};
+
+// Bins [first, last] of an axis, where the exact sweep looks.
+struct Window {
+  uint32_t first, last;
+};
 
 class SahBuilder {
  public:
@@ -116,230 +217,169 @@ class SahBuilder {
         traversalCost_(options.traversalCost),
         intersectionCost_(options.intersectionCost),
         emptyBonus_(options.emptyBonus),
-        writer_(tree),
-        side_(mesh.triangleCount) {}
+        binCount_(uint32_t(options.bins)),
+        writer_(tree) {}
 
-  std::vector<Event>& arena() { return arena_; }
-  void build(const NodeLists& root, const Bounds3& box) { buildNode(writer_.root(), root, box, 1); }
+  std::vector<KdReference>& arena() { return arena_; }
+  void build(const Bounds3& box) { buildNode(writer_.root(), 0, uint32_t(arena_.size()), box, 1); }
 
  private:
-  std::optional<KdSplit> findSplit(const NodeLists& lists, const Bounds3& box) const;
-  void buildNode(uint32_t node, const NodeLists& lists, const Bounds3& box, uint32_t depth);
-  void makeLeaf(uint32_t node, const NodeLists& lists, uint32_t depth);
+  std::optional<KdSplit> findSplit(std::span<const KdReference> references, const Bounds3& box);
+  Window chooseWindow(std::span<const KdReference> references, const PlaneCost& cost, int axis,
+                      const Binning& bin);
+  void buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth);
+  std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
+  void makeLeaf(uint32_t node, std::span<const KdReference> references, uint32_t depth);
 
   const MeshView& mesh_;
   KdBuildLimits limits_;
   double traversalCost_, intersectionCost_, emptyBonus_;
+  uint32_t binCount_;
   KdTreeWriter writer_;
-  std::vector<Side> side_;  // per primitive: its side of the split being made
-  std::vector<Event> arena_;
+  // The references of the nodes still to build, used as a stack: a node's
+  // are at the top; its children's replace them.
+  std::vector<KdReference> arena_;
   // Scratch, reused from node to node (only before recursing).
-  std::vector<Event> belowScratch_, aboveScratch_;
-  std::vector<Event> newBelow_[3], newAbove_[3];
+  std::vector<Event> events_;
+  std::vector<KdReference> belowScratch_;
   std::vector<uint32_t> leafTriangles_;
+  AxisBins bins_;
+  SmallNodeSplitter smallNodeSplitter_;
 };
 
-// The sweep of Wald & Havran over each axis's sorted events. At a plane p,
-// `below` counts the triangles reaching below p, `above` those reaching
-// above it, `planar` those lying in it.
-std::optional<KdSplit> SahBuilder::findSplit(const NodeLists& lists, const Bounds3& box) const {
+// Binned SAH (with binCount_ bins) to find where along axis the best plane
+// lies, then the window of bins around it.
+Window SahBuilder::chooseWindow(std::span<const KdReference> references, const PlaneCost& cost, int axis,
+                                const Binning& bin) {
+  const uint32_t binCount = bin.last + 1;
+  for (auto& counts : bins_.counts) std::fill(counts, counts + binCount, 0u);
+  for (const KdReference& reference : references) {
+    const float lo = reference.box.lo[axis], hi = reference.box.hi[axis];
+    if (lo == hi) {
+      ++bins_.counts[kPlanar][bin(lo)];
+    } else {
+      ++bins_.counts[kStart][bin(lo)];
+      ++bins_.counts[kEnd][bin(hi)];
+    }
+  }
+  // The cost at each inner bin boundary, planar triangles below.
+  const float width = (cost.nodeHi - cost.nodeLo) / float(binCount);
+  uint32_t below = 0, above = cost.count, bestBoundary = 1;
+  double bestCost = kInfinity;
+  for (uint32_t boundary = 1; boundary < binCount; ++boundary) {
+    below += bins_.counts[kStart][boundary - 1] + bins_.counts[kPlanar][boundary - 1];
+    above -= bins_.counts[kEnd][boundary - 1] + bins_.counts[kPlanar][boundary - 1];
+    const double boundaryCost = cost(cost.nodeLo + width * float(boundary), below, above);
+    if (boundaryCost < bestCost) bestCost = boundaryCost, bestBoundary = boundary;
+  }
+  // The bins on either side of the best boundary, grown over empty bins so
+  // that the window holds the events next to it.
+  const auto empty = [&](uint32_t b) {
+    return bins_.counts[kStart][b] + bins_.counts[kEnd][b] + bins_.counts[kPlanar][b] == 0;
+  };
+  Window window{bestBoundary - 1, bestBoundary};
+  while (window.first > 0 && empty(window.first)) --window.first;
+  while (window.last + 1 < binCount && empty(window.last)) ++window.last;
+  return window;
+}
+
+std::optional<KdSplit> SahBuilder::findSplit(std::span<const KdReference> references, const Bounds3& box) {
   const Vec3 extent = box.diagonal();
-  // Half areas throughout: the factor 2 cancels.
   const double halfArea = double(extent.x) * extent.y + double(extent.y) * extent.z +
                           double(extent.z) * extent.x;
   if (!(halfArea > 0)) return std::nullopt;
-  const uint32_t count = lists.triangleCount;
-  // Costs in units of the intersection cost, scaled by the node's area:
-  // leaf = A * n; split = A * traversal / intersection + A_below n_below + A_above n_above.
-  const double splitBase = halfArea * traversalCost_ / intersectionCost_;
-  double bestCost = halfArea * count;  // a split must beat the leaf
-  std::optional<KdSplit> best;
+  const uint32_t count = uint32_t(references.size());
+  BestSplit best{halfArea * count, std::nullopt};  // a split must beat the leaf
   for (int axis = 0; axis < 3; ++axis) {
     const float nodeLo = box.lo[axis], nodeHi = box.hi[axis];
     if (!(nodeLo < nodeHi)) continue;  // flat: every plane is a face
     const double side1 = extent[(axis + 1) % 3], side2 = extent[(axis + 2) % 3];
-    const double perimeter = side1 + side2, cross = side1 * side2;
-    const Event* const events = arena_.data() + lists.offset(axis);
-    const uint32_t size = lists.size[axis];
-
-    // Cost of the split at position with these counts; infinity when it
-    // would leave a child equal to the node (a plane on a face that moves
-    // nothing out).
-    const auto splitCost = [&](float position, uint32_t belowCount, uint32_t aboveCount) {
-      if ((position == nodeLo && aboveCount == count) || (position == nodeHi && belowCount == count))
-        return double(kInfinity);
-      const double belowArea = double(position - nodeLo) * perimeter + cross;
-      const double aboveArea = double(nodeHi - position) * perimeter + cross;
-      double cost = belowArea * belowCount + aboveArea * aboveCount;
-      if ((belowCount == 0 || aboveCount == 0) && position > nodeLo && position < nodeHi) cost *= emptyBonus_;
-      return splitBase + cost;
-    };
-
-    uint32_t below = 0, above = count;
-    for (uint32_t i = 0; i < size;) {
-      // The group of events at one position: ends, then planars, then starts.
-      const float position = events[i].position;
-      uint32_t ends = 0, planar = 0, starts = 0;
-      do {
-        const uint32_t type = typeOf(events[i]);
-        ends += type == kEnd;
-        planar += type == kPlanar;
-        starts += type == kStart;
-      } while (++i < size && events[i].position == position);
-      above -= planar + ends;
-      const double planarBelowCost = splitCost(position, below + planar, above);
-      const double planarAboveCost = planar > 0 ? splitCost(position, below, above + planar) : kInfinity;
-      if (planarBelowCost < bestCost || planarAboveCost < bestCost) {
-        const bool planarBelow = planarBelowCost <= planarAboveCost;
-        bestCost = planarBelow ? planarBelowCost : planarAboveCost;
-        best = KdSplit{axis, position, planarBelow};
-      }
-      below += starts + planar;
+    const PlaneCost cost{nodeLo, nodeHi, side1 + side2, side1 * side2, halfArea * traversalCost_ / intersectionCost_,
+                         emptyBonus_, count};
+    if (count <= kSmallNode) {
+      smallNodeSplitter_.findSplit(references, cost, axis, best);
+      continue;
     }
+    events_.clear();
+    uint32_t below = 0, above = count;
+    const float scale = float(binCount_) / (nodeHi - nodeLo);
+    if (std::isfinite(scale)) {
+      const Binning bin{nodeLo, scale, binCount_ - 1};
+      const Window window = chooseWindow(references, cost, axis, bin);
+      for (uint32_t b = 0; b < window.first; ++b) {
+        below += bins_.counts[kStart][b] + bins_.counts[kPlanar][b];
+        above -= bins_.counts[kEnd][b] + bins_.counts[kPlanar][b];
+      }
+      for (const KdReference& reference : references) {
+        const float lo = reference.box.lo[axis], hi = reference.box.hi[axis];
+        const uint32_t loBin = bin(lo), hiBin = bin(hi);
+        const bool loIn = loBin >= window.first && loBin <= window.last;
+        const bool hiIn = hiBin >= window.first && hiBin <= window.last;
+        if (lo == hi) {
+          if (loIn) events_.push_back(makeEvent(lo, kPlanar));
+        } else {
+          if (loIn) events_.push_back(makeEvent(lo, kStart));
+          if (hiIn) events_.push_back(makeEvent(hi, kEnd));
+        }
+      }
+    } else {
+      for (const KdReference& reference : references) addEvents(events_, reference.box, axis);
+    }
+    std::sort(events_.begin(), events_.end());
+    sweep(events_, below, above, cost, axis, best);
   }
-  return best;
+  return best.split;
 }
 
-void SahBuilder::makeLeaf(uint32_t node, const NodeLists& lists, uint32_t depth) {
-  // Each triangle has one start or one planar event on every axis.
+void SahBuilder::makeLeaf(uint32_t node, std::span<const KdReference> references, uint32_t depth) {
   leafTriangles_.clear();
-  const Event* const events = arena_.data() + lists.offset(0);
-  for (uint32_t i = 0; i < lists.size[0]; ++i)
-    if (typeOf(events[i]) != kEnd) leafTriangles_.push_back(primitiveOf(events[i]));
+  for (const KdReference& reference : references) leafTriangles_.push_back(reference.primitive);
   std::sort(leafTriangles_.begin(), leafTriangles_.end());
   writer_.leaf(node, leafTriangles_, depth);
 }
 
-// Merges the sorted runs a and b into out; returns the end of the output.
-Event* mergeEvents(const Event* a, const Event* aEnd, const Event* b, const Event* bEnd, Event* out) {
-  if (b == bEnd) {
-    std::memcpy(out, a, size_t(aEnd - a) * sizeof(Event));
-    return out + (aEnd - a);
+// Replaces the node's references at begin by its children's: above's
+// first, so that below's, built first, are at the top. Straddling triangles
+// are clipped to each child (perfect splits). Returns the counts of below
+// and above.
+std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t count, const KdSplit& split) {
+  if (belowScratch_.size() < count) belowScratch_.resize(count);
+  KdReference* const references = arena_.data() + begin;
+  KdReference* const below = belowScratch_.data();
+  // Each reference gives at most one to above, so above's, written in place,
+  // never overtake the one being read.
+  uint32_t aboveCount = 0, belowCount = 0;
+  for (uint32_t i = 0; i < count; ++i) {
+    const KdReference reference = references[i];
+    const KdSide side = kdSideOf(reference.box, split);
+    if (side != KdSide::Both) {
+      references[aboveCount] = reference;
+      below[belowCount] = reference;
+      aboveCount += side == KdSide::Above;
+      belowCount += side == KdSide::Below;
+      continue;
+    }
+    Vec3 v0, v1, v2;
+    mesh_.triangle(reference.primitive, v0, v1, v2);
+    Bounds3 belowPart, abovePart;
+    clipTriangleToChildren(v0, v1, v2, reference.box, split.axis, split.position, belowPart, abovePart);
+    if (!abovePart.empty()) references[aboveCount++] = {abovePart, reference.primitive};
+    if (!belowPart.empty()) below[belowCount++] = {belowPart, reference.primitive};
   }
-  return std::merge(a, aEnd, b, bEnd, out, [](const Event& x, const Event& y) { return sortsBefore(x, y); });
+  if (arena_.size() < begin + aboveCount + belowCount) arena_.resize(begin + aboveCount + belowCount);
+  std::memcpy(arena_.data() + begin + aboveCount, belowScratch_.data(), belowCount * sizeof(KdReference));
+  return {belowCount, aboveCount};
 }
 
-void SahBuilder::buildNode(uint32_t node, const NodeLists& lists, const Bounds3& box, uint32_t depth) {
-  if (lists.triangleCount <= limits_.leafSize || depth > limits_.maxDepth)
-    return makeLeaf(node, lists, depth);
-  const std::optional<KdSplit> split = findSplit(lists, box);
-  if (!split) return makeLeaf(node, lists, depth);
-  const int splitAxis = split->axis;
-  const float position = split->position;
-  const Side planarSide = split->planarBelow ? kBelow : kAbove;
-
-  // Classify, in one pass over the split axis's sorted events. Before the
-  // plane: a start means "both" unless the triangle's end (also before, or
-  // on, the plane) overrules it with "below". On the plane: ends below,
-  // planars to their side, starts above. After it: starts and planars
-  // above; ends change nothing.
-  {
-    const Event* const events = arena_.data() + lists.offset(splitAxis);
-    const uint32_t size = lists.size[splitAxis];
-    Side* const side = side_.data();
-    uint32_t i = 0;
-    for (; i < size && events[i].position < position; ++i)
-      side[primitiveOf(events[i])] = typeOf(events[i]) == kStart ? kBoth : kBelow;
-    for (; i < size && events[i].position == position; ++i) {
-      const uint32_t type = typeOf(events[i]);
-      side[primitiveOf(events[i])] = type == kEnd ? kBelow : type == kStart ? kAbove : planarSide;
-    }
-    for (; i < size; ++i)
-      if (typeOf(events[i]) != kEnd) side[primitiveOf(events[i])] = kAbove;
-  }
-
-  // Straddling triangles (those still "both": they start before the plane
-  // and end after it) are clipped to each child; their new events are sorted.
-  const Bounds3 belowBox = boxBelow(box, splitAxis, position);
-  const Bounds3 aboveBox = boxAbove(box, splitAxis, position);
-  for (int axis = 0; axis < 3; ++axis) newBelow_[axis].clear(), newAbove_[axis].clear();
-  uint32_t belowCount = 0, aboveCount = 0;
-  {
-    const Event* const events = arena_.data() + lists.offset(splitAxis);
-    const uint32_t size = lists.size[splitAxis];
-    for (uint32_t i = 0; i < size && events[i].position < position; ++i) {
-      const uint32_t primitive = primitiveOf(events[i]);
-      if (typeOf(events[i]) != kStart || side_[primitive] != kBoth) continue;
-      Vec3 v0, v1, v2;
-      mesh_.triangle(primitive, v0, v1, v2);
-      Bounds3 belowPart, abovePart;
-      clipTriangleToChildren(v0, v1, v2, box, splitAxis, position, belowPart, abovePart);
-      if (!belowPart.empty()) addEvents(newBelow_, belowPart, primitive), ++belowCount;
-      if (!abovePart.empty()) addEvents(newAbove_, abovePart, primitive), ++aboveCount;
-    }
-  }
-  const auto before = [](const Event& x, const Event& y) { return sortsBefore(x, y); };
-  for (int axis = 0; axis < 3; ++axis) {
-    std::sort(newBelow_[axis].begin(), newBelow_[axis].end(), before);
-    std::sort(newAbove_[axis].begin(), newAbove_[axis].end(), before);
-  }
-
-  // Split each list in order into the scratch buffers, without branching on
-  // the side (a coin toss for the predictor): every event is written to
-  // both, and kept where it belongs.
-  const size_t total = lists.total();
-  if (belowScratch_.size() < total) belowScratch_.resize(total), aboveScratch_.resize(total);
-  uint32_t filteredBelow[3], filteredAbove[3];
-  {
-    Event* outBelow = belowScratch_.data();
-    Event* outAbove = aboveScratch_.data();
-    const Side* const side = side_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      const Event* const events = arena_.data() + lists.offset(axis);
-      const uint32_t size = lists.size[axis];
-      Event* const startBelow = outBelow;
-      Event* const startAbove = outAbove;
-      for (uint32_t i = 0; i < size; ++i) {
-        const Event event = events[i];
-        const Side s = side[primitiveOf(event)];
-        *outBelow = event;
-        *outAbove = event;
-        outBelow += s == kBelow;
-        outAbove += s == kAbove;
-        if (axis == 0) {
-          const uint32_t triangle = typeOf(event) != kEnd;
-          belowCount += triangle & (s == kBelow);
-          aboveCount += triangle & (s == kAbove);
-        }
-      }
-      filteredBelow[axis] = uint32_t(outBelow - startBelow);
-      filteredAbove[axis] = uint32_t(outAbove - startAbove);
-    }
-  }
-
-  // The children's lists replace the node's in the arena: above first, so
-  // that below, built first, is at the top.
-  NodeLists above, below;
-  above.begin = lists.begin;
-  above.triangleCount = aboveCount;
-  below.triangleCount = belowCount;
-  size_t needed = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    above.size[axis] = filteredAbove[axis] + uint32_t(newAbove_[axis].size());
-    below.size[axis] = filteredBelow[axis] + uint32_t(newBelow_[axis].size());
-    needed += size_t(above.size[axis]) + below.size[axis];
-  }
-  below.begin = above.begin + above.total();
-  if (arena_.size() < lists.begin + needed) arena_.resize(lists.begin + needed);
-  {
-    Event* out = arena_.data() + above.begin;
-    const Event* in = aboveScratch_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      out = mergeEvents(in, in + filteredAbove[axis], newAbove_[axis].data(),
-                        newAbove_[axis].data() + newAbove_[axis].size(), out);
-      in += filteredAbove[axis];
-    }
-    in = belowScratch_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      out = mergeEvents(in, in + filteredBelow[axis], newBelow_[axis].data(),
-                        newBelow_[axis].data() + newBelow_[axis].size(), out);
-      in += filteredBelow[axis];
-    }
-  }
-
-  const uint32_t children = writer_.split(node, splitAxis, position);
-  buildNode(children, below, belowBox, depth + 1);
-  buildNode(children + 1, above, aboveBox, depth + 1);
+void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth) {
+  const std::span<const KdReference> references(arena_.data() + begin, count);
+  if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
+  const std::optional<KdSplit> split = findSplit(references, box);
+  if (!split) return makeLeaf(node, references, depth);
+  const auto [belowCount, aboveCount] = splitReferences(begin, count, *split);
+  const uint32_t children = writer_.split(node, split->axis, split->position);
+  buildNode(children, begin + aboveCount, belowCount, boxBelow(box, split->axis, split->position), depth + 1);
+  buildNode(children + 1, begin, aboveCount, boxAbove(box, split->axis, split->position), depth + 1);
 }
 
 }  // namespace
@@ -348,39 +388,13 @@ void buildKdTreeSah(const MeshView& mesh, const KdTreeOptions& options, KdTreeDa
   const std::vector<uint32_t> triangles = kdTreeTriangles(mesh);
   if (triangles.empty()) return;
   SahBuilder builder(mesh, options, kdBuildLimits(options, triangles.size()), tree);
-
-  // The root's events, generated ends, then planars, then starts, so that
-  // the stable sort by position leaves equal positions in type order.
-  std::vector<Bounds3> boxes(triangles.size());
-  for (size_t i = 0; i < triangles.size(); ++i) {
-    boxes[i] = mesh.triangleBounds(triangles[i]);
-    tree.bounds.extend(boxes[i]);
+  std::vector<KdReference>& arena = builder.arena();
+  arena.reserve(triangles.size());
+  for (uint32_t primitive : triangles) {
+    arena.push_back({mesh.triangleBounds(primitive), primitive});
+    tree.bounds.extend(arena.back().box);
   }
-  NodeLists root;
-  root.triangleCount = uint32_t(triangles.size());
-  std::vector<Event>& arena = builder.arena();
-  std::vector<Event> list, scratch;
-  for (int axis = 0; axis < 3; ++axis) {
-    list.clear();
-    for (uint32_t type : {kEnd, kPlanar, kStart}) {
-      for (size_t i = 0; i < triangles.size(); ++i) {
-        const float lo = boxes[i].lo[axis] + 0.0f, hi = boxes[i].hi[axis] + 0.0f;  // no -0
-        const uint32_t code = triangles[i] << 2 | type;
-        if (lo == hi) {
-          if (type == kPlanar) list.push_back({lo, code});
-        } else if (type != kPlanar) {
-          list.push_back({type == kStart ? lo : hi, code});
-        }
-      }
-    }
-    radixSortByPosition(list, scratch);
-    root.size[axis] = uint32_t(list.size());
-    arena.insert(arena.end(), list.begin(), list.end());
-  }
-  std::vector<Bounds3>().swap(boxes);
-  std::vector<Event>().swap(list);
-  std::vector<Event>().swap(scratch);
-  builder.build(root, tree.bounds);
+  builder.build(tree.bounds);
 }
 
 }  // namespace portico

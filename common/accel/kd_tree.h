@@ -23,6 +23,9 @@
 //   intersection=C  cost of one ray-triangle test, default 1.5.
 //   empty=F         factor applied to the cost of a split with an empty side
 //                   (an empty-space bonus), 0 < F <= 1, default 0.8.
+//   bins=N          bins per axis, 2..256, default 32: large nodes first
+//                   look for their split among the N - 1 bin boundaries,
+//                   then exactly among the triangles' faces near the best.
 //
 // Hits are identical, bit for bit, to those of `brute`: see kd_traverse.cpp.
 #pragma once
@@ -44,6 +47,7 @@ struct KdTreeOptions {
   double traversalCost = 1.0;
   double intersectionCost = 1.5;
   double emptyBonus = 0.8;
+  int bins = 32;
 };
 
 // The deepest tree any option allows (the traversal stack holds one entry per level).

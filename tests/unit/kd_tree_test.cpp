@@ -242,7 +242,8 @@ TEST(KdTree, MatchesBruteForceOnMixedScenesWithEveryParameter) {
   for (const char* spec :
        {"kd:median,leaf=1", "kd:median,leaf=8,depth=4", "kd:median,depth=60", "kd:bbox,leaf=1",
         "kd:bbox,depth=3", "kd:sah,leaf=4", "kd:sah,depth=2", "kd:sah,traversal=1,intersection=80",
-        "kd:sah,traversal=15,intersection=20,empty=1", "kd:sah,empty=0.2", "kd"})
+        "kd:sah,traversal=15,intersection=20,empty=1", "kd:sah,empty=0.2", "kd:sah,bins=2", "kd:sah,bins=256",
+        "kd"})
     expectSameAsBruteForce(mesh, spec, 4000, 500);
 }
 
@@ -553,7 +554,7 @@ TEST(KdTreeSpec, RejectsUnknownVariantsParametersAndBadValues) {
             "accelerator spec 'kd:octree': unknown variant 'octree' for kd (known: median, sah, bbox)");
   EXPECT_EQ(buildError("kd:sah,lef=4"),
             "accelerator spec 'kd:sah,lef=4': unknown parameter 'lef' for kd "
-            "(it takes: leaf, depth, traversal, intersection, empty)");
+            "(it takes: leaf, depth, traversal, intersection, empty, bins)");
   EXPECT_EQ(buildError("kd:median,traversal=2"),
             "accelerator spec 'kd:median,traversal=2': unknown parameter 'traversal' for kd "
             "(it takes: leaf, depth)");
@@ -569,12 +570,16 @@ TEST(KdTreeSpec, RejectsUnknownVariantsParametersAndBadValues) {
             std::string::npos);
   EXPECT_NE(buildError("kd:sah,empty=1.5").find("parameter empty must be a factor in (0, 1]"),
             std::string::npos);
+  EXPECT_NE(buildError("kd:sah,bins=1").find("bins must be"), std::string::npos);
+  EXPECT_NE(buildError("kd:sah,bins=257").find("bins must be at most 256"), std::string::npos);
+  EXPECT_NE(buildError("kd:median,bins=8").find("unknown parameter 'bins'"), std::string::npos);
   EXPECT_NE(buildError("kd:sah,median").find("two variants"), std::string::npos);
 
   // validateAcceleratorSpec finds the same problems without building.
   EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,lef=4")), std::invalid_argument);
   EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:fast")), std::invalid_argument);
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,leaf=4,depth=40")));
+  EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,bins=8")));
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:median,leaf=2")));
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:bbox")));
 }
