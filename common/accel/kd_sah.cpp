@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -36,17 +37,6 @@ inline Event makeEvent(float position, uint32_t type) {
 }
 inline uint32_t positionKey(Event event) { return uint32_t(event >> 2); }
 inline uint32_t typeOf(Event event) { return uint32_t(event) & 3; }
-
-// Appends the events of box along axis.
-inline void addEvents(std::vector<Event>& events, const Bounds3& box, int axis) {
-  const float lo = box.lo[axis], hi = box.hi[axis];
-  if (lo == hi) {
-    events.push_back(makeEvent(lo, kPlanar));
-  } else {
-    events.push_back(makeEvent(lo, kStart));
-    events.push_back(makeEvent(hi, kEnd));
-  }
-}
 
 // The SAH cost of planes along one axis of a node, in units of the
 // intersection cost, scaled by the node's half area (the factor 2 cancels):
@@ -101,112 +91,277 @@ void sweep(std::span<const Event> events, uint32_t below, uint32_t above, const 
   }
 }
 
-// Four lanes at once (GCC and Clang vector extensions: SSE on x86-64).
+// Four lanes at once (GCC and Clang vector extensions: SSE on x86-64). The
+// lanes are the three axes (the fourth repeats the third and is ignored).
 using Float4 = float __attribute__((vector_size(16)));
 using Int4 = int32_t __attribute__((vector_size(16)));
 
-// Nodes of at most this many triangles are split by counting, not sorting.
-constexpr uint32_t kSmallNode = 16;
+// A triangle in a node: the bounds of its part inside the node, in arrays
+// that an axis indexes and that load as vectors (32 bytes: a reference is
+// copied as two vectors).
+struct alignas(16) Reference {
+  float lo[3];
+  uint32_t primitive;
+  float hi[3];
+  uint32_t unused = 0;
 
-// The exact SAH of a small node without sorting: every face of every box is
-// a candidate plane, and its counts below, above and in it come from
-// comparing it with every box, four candidates at a time. O(n^2), but with
-// no branches and no per-node setup it beats sorting up to kSmallNode.
-class SmallNodeSplitter {
- public:
-  void findSplit(std::span<const KdReference> references, const PlaneCost& cost, int axis, BestSplit& best);
+  static Reference of(const Bounds3& box, uint32_t primitive) {
+    return {{box.lo.x, box.lo.y, box.lo.z}, primitive, {box.hi.x, box.hi.y, box.hi.z}};
+  }
+  Bounds3 bounds() const { return Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}); }
+  Float4 lo4() const { return load(offsetof(Reference, lo)); }
+  Float4 hi4() const { return load(offsetof(Reference, hi)); }
 
  private:
-  // Per box along the axis, in all four lanes: its ends, and its position
-  // when it is flat there (else NaN, equal to nothing).
+  // The three floats at offset, and the third again (not the neighbour).
+  Float4 load(size_t offset) const {
+    Float4 v;
+    std::memcpy(&v, reinterpret_cast<const char*>(this) + offset, sizeof(v));
+    return __builtin_shufflevector(v, v, 0, 1, 2, 2);
+  }
+};
+static_assert(sizeof(Reference) == 32 && offsetof(Reference, hi) == 16);
+
+// Nodes of at most this many triangles are split by counting, not binning.
+constexpr uint32_t kSmallNode = 16;
+
+// The exact SAH of a small node: every face of every box is a candidate
+// plane, and its counts below, above and in it come from comparing it with
+// every box, on the three axes at once. O(n^2), but with no sorting, no
+// branches and no per-node setup, the fastest way up to kSmallNode.
+//
+// The costs of PlaneCost, simplified: a plane on a face of the node never
+// beats the leaf (its child equal to the node already costs as much), so
+// it needs no test; and a plane leaves a side empty only at the lowest lo
+// or the highest hi of the boxes, so the empty-space bonus goes to those
+// two cuts, costed apart.
+class SmallNodeSplitter {
+ public:
+  // costs[axis] is null for a flat axis.
+  void findSplit(std::span<const Reference> references, const PlaneCost* const costs[3], BestSplit& best);
+
+ private:
+  // Per box: its lo and hi, and its position on the axes where it is flat
+  // (else NaN, equal to nothing).
   Float4 lo_[kSmallNode], hi_[kSmallNode], planar_[kSmallNode];
-  alignas(16) float candidates_[2 * kSmallNode + 3];
+  // Per candidate (lo then hi of each box), the costs (without the split's
+  // own) with planar triangles below and above.
+  Float4 planarBelowCost_[2 * kSmallNode], planarAboveCost_[2 * kSmallNode];
 };
 
-void SmallNodeSplitter::findSplit(std::span<const KdReference> references, const PlaneCost& cost, int axis,
+void SmallNodeSplitter::findSplit(std::span<const Reference> references, const PlaneCost* const costs[3],
                                   BestSplit& best) {
   const uint32_t count = uint32_t(references.size());
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  uint32_t candidateCount = 0;
+  Float4 lowest = Float4{} + kInfinity, highest = -lowest;
   for (uint32_t j = 0; j < count; ++j) {
-    const float lo = references[j].box.lo[axis] + 0.0f, hi = references[j].box.hi[axis] + 0.0f;  // no -0
-    lo_[j] = Float4{} + lo;
-    hi_[j] = Float4{} + hi;
-    planar_[j] = Float4{} + (lo == hi ? lo : kNaN);
-    candidates_[candidateCount++] = lo;
-    if (lo != hi) candidates_[candidateCount++] = hi;
+    lo_[j] = references[j].lo4() + 0.0f;  // + 0: no -0
+    hi_[j] = references[j].hi4() + 0.0f;
+    planar_[j] = lo_[j] == hi_[j] ? lo_[j] : kNaN;
+    lowest = lo_[j] < lowest ? lo_[j] : lowest;
+    highest = hi_[j] > highest ? hi_[j] : highest;
   }
-  while (candidateCount % 4) candidates_[candidateCount++] = kNaN;  // NaN costs never win
+  // PlaneCost in lanes; NaN node bounds (lane 3, flat axes) give NaN costs, which never win.
+  Float4 nodeLo = Float4{} + kNaN, nodeHi = nodeLo, perimeter = {}, cross = {};
+  double splitBase = 0, emptyBonus = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!costs[axis]) continue;
+    nodeLo[axis] = costs[axis]->nodeLo;
+    nodeHi[axis] = costs[axis]->nodeHi;
+    perimeter[axis] = float(costs[axis]->perimeter);
+    cross[axis] = float(costs[axis]->cross);
+    splitBase = costs[axis]->splitBase;
+    emptyBonus = costs[axis]->emptyBonus;
+  }
+  const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;  // below + above, for any plane
+  const auto belowArea = [&](Float4 position) { return (position - nodeLo) * perimeter + cross; };
+  const Float4 all = Float4{} + float(count);
 
-  const Float4 nodeLo = Float4{} + cost.nodeLo, nodeHi = Float4{} + cost.nodeHi;
-  const Float4 perimeter = Float4{} + float(cost.perimeter), cross = Float4{} + float(cost.cross);
-  const Float4 splitBase = Float4{} + float(cost.splitBase), emptyBonus = Float4{} + float(cost.emptyBonus);
-  const Int4 all = Int4{} + int32_t(count);
-  const Float4 infinity = Float4{} + kInfinity;
-  // As PlaneCost, four planes at once.
-  const auto planeCost = [&](Float4 position, Int4 below, Int4 above, Float4 belowArea, Float4 aboveArea) {
-    Float4 result = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
-    result = ((below == 0 || above == 0) && position > nodeLo && position < nodeHi) ? result * emptyBonus : result;
-    result = ((position == nodeLo && above == all) || (position == nodeHi && below == all)) ? infinity : result + splitBase;
-    return result;
-  };
-  // Per lane, the best so far: its cost and 2 * candidate + (planar above).
-  Float4 laneCost = infinity;
-  Int4 laneChoice = Int4{} - 1;
-  for (uint32_t c = 0; c < candidateCount; c += 4) {
-    Float4 position;
-    std::memcpy(&position, candidates_ + c, sizeof(position));
+  // Every candidate plane: the lowest cost per lane.
+  Float4 cheapest = Float4{} + kInfinity;
+  for (uint32_t k = 0; k < 2 * count; ++k) {
+    const Float4 position = k & 1 ? hi_[k / 2] : lo_[k / 2];
     Int4 below = {}, above = {}, planar = {};
     for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
       below -= lo_[j] < position;
       above -= hi_[j] > position;
       planar -= planar_[j] == position;
     }
-    const Float4 belowArea = (position - nodeLo) * perimeter + cross;
-    const Float4 aboveArea = (nodeHi - position) * perimeter + cross;
-    const Int4 choice = (Int4{0, 2, 4, 6} + int32_t(2 * c));
-    const Float4 planarBelowCost = planeCost(position, below + planar, above, belowArea, aboveArea);
-    Int4 better = planarBelowCost < laneCost;
-    laneCost = better ? planarBelowCost : laneCost;
-    laneChoice = better ? choice : laneChoice;
-    const Float4 planarAboveCost = planar > 0 ? planeCost(position, below, above + planar, belowArea, aboveArea) : infinity;
-    better = planarAboveCost < laneCost;
-    laneCost = better ? planarAboveCost : laneCost;
-    laneChoice = better ? choice + 1 : laneChoice;
+    const Float4 areaBelow = belowArea(position), areaAbove = wholeArea - areaBelow;
+    const Float4 planarBelowCost = areaBelow * __builtin_convertvector(below + planar, Float4) +
+                                   areaAbove * __builtin_convertvector(above, Float4);
+    const Float4 planarAboveCost =
+        planarBelowCost + (areaAbove - areaBelow) * __builtin_convertvector(planar, Float4);
+    planarBelowCost_[k] = planarBelowCost;
+    planarAboveCost_[k] = planarAboveCost;
+    cheapest = planarBelowCost < cheapest ? planarBelowCost : cheapest;
+    cheapest = planarAboveCost < cheapest ? planarAboveCost : cheapest;
   }
-  // The lanes' best, the earliest candidate among equals.
-  int bestLane = -1;
-  for (int lane = 0; lane < 4; ++lane) {
-    if (laneChoice[lane] < 0) continue;
-    if (bestLane < 0 || laneCost[lane] < laneCost[bestLane] ||
-        (laneCost[lane] == laneCost[bestLane] && laneChoice[lane] < laneChoice[bestLane]))
-      bestLane = lane;
-  }
-  if (bestLane >= 0 && laneCost[bestLane] < best.cost) {
-    best.cost = laneCost[bestLane];
-    best.split = KdSplit{axis, candidates_[laneChoice[bestLane] / 2], (laneChoice[bestLane] & 1) == 0};
+  // The empty-space cuts: below the lowest lo, above the highest hi.
+  const Float4 infinity = Float4{} + kInfinity, bonus = Float4{} + float(emptyBonus);
+  const Float4 cutLowCost = lowest > nodeLo ? (wholeArea - belowArea(lowest)) * all * bonus : infinity;
+  const Float4 cutHighCost = highest < nodeHi ? belowArea(highest) * all * bonus : infinity;
+
+  // Per axis, the cheapest of the three (the cuts first among equals), then
+  // the lowest axis among equals.
+  for (int axis = 0; axis < 3; ++axis) {
+    const double cost = splitBase + std::min({cutLowCost[axis], cutHighCost[axis], cheapest[axis]});
+    if (!(cost < best.cost)) continue;
+    best.cost = cost;
+    if (cutLowCost[axis] <= cutHighCost[axis] && cutLowCost[axis] <= cheapest[axis]) {
+      best.split = KdSplit{axis, lowest[axis], false};
+    } else if (cutHighCost[axis] <= cheapest[axis]) {
+      best.split = KdSplit{axis, highest[axis], true};
+    } else {
+      uint32_t k = 0;
+      while (planarBelowCost_[k][axis] != cheapest[axis] && planarAboveCost_[k][axis] != cheapest[axis]) ++k;
+      best.split = KdSplit{axis, k & 1 ? hi_[k / 2][axis] : lo_[k / 2][axis],
+                           planarBelowCost_[k][axis] == cheapest[axis]};
+    }
   }
 }
 
-// Bins along one axis of a node: bin(x) grows with x, so a triangle whose
-// event is in a lower bin than another's has it strictly below the other.
-struct Binning {
-  float lo, scale;
-  uint32_t last;
-  uint32_t operator()(float x) const { return std::min(uint32_t((x - lo) * scale), last); }
-};
-
 constexpr uint32_t kMaxBins = 256;
 
-// Per bin, along one axis: the events of each type whose position falls in it.
-struct AxisBins {
-  uint32_t counts[3][kMaxBins];  // [type][bin]
+// Bins [first, last] of an axis, where the exact sweep looks; empty when first > last.
+struct Window {
+  int32_t first = 1, last = 0;
 };
 
-// Bins [first, last] of an axis, where the exact sweep looks.
-struct Window {
-  uint32_t first, last;
+// Binned SAH for nodes over kSmallNode triangles, in O(n): one pass bins
+// the triangles' events along the three axes, and each axis's best bin
+// boundary is found; a second collects the events in the window of bins
+// around it, which are sorted and swept exactly (the counts of the bins
+// before the window start the sweep). The split is thus the exact SAH's
+// best plane near the binned best, always on a face of a triangle's box.
+class BinnedSplitter {
+ public:
+  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(9 * binCount + 1) {}
+  // costs[axis] is null for a flat axis.
+  void findSplit(std::span<const Reference> references, const Bounds3& box, const PlaneCost* const costs[3],
+                 BestSplit& best);
+
+ private:
+  // The bins of x along the three axes: they grow with x, so an event in a
+  // lower bin than another lies strictly below it. An axis too thin to bin
+  // has all its events in bin 0.
+  struct Binning {
+    Float4 origin, scale, last;
+    Int4 operator()(Float4 x) const {
+      Float4 t = (x - origin) * scale;
+      t = t > 0.0f ? t : 0.0f;  // never negative, not even NaN
+      return __builtin_convertvector(t < last ? t : last, Int4);
+    }
+  };
+  // Where counts_ keeps the events of an axis and type.
+  uint32_t slot(int axis, uint32_t type) const { return (uint32_t(axis) * 3 + type) * binCount_; }
+  void countEvents(std::span<const Reference> references, const Binning& bin);
+  Window chooseWindow(int axis, const PlaneCost& cost) const;
+  void collectWindows(std::span<const Reference> references, const Binning& bin, const Window (&windows)[3]);
+
+  uint32_t binCount_;
+  // Per axis, type and bin, the events there; the last entry takes the
+  // ends of flat boxes (which have none).
+  std::vector<uint32_t> counts_;
+  std::vector<Event> events_[3];
+  uint32_t eventCounts_[3];
 };
+
+void BinnedSplitter::countEvents(std::span<const Reference> references, const Binning& bin) {
+  std::fill(counts_.begin(), counts_.end(), 0u);
+  const Int4 startSlot = {int32_t(slot(0, kStart)), int32_t(slot(1, kStart)), int32_t(slot(2, kStart)), 0};
+  const Int4 planarSlot = {int32_t(slot(0, kPlanar)), int32_t(slot(1, kPlanar)), int32_t(slot(2, kPlanar)), 0};
+  const Int4 endSlot = {int32_t(slot(0, kEnd)), int32_t(slot(1, kEnd)), int32_t(slot(2, kEnd)), 0};
+  const Int4 unused = Int4{} + int32_t(counts_.size() - 1);
+  uint32_t* const counts = counts_.data();
+  for (const Reference& reference : references) {
+    const Float4 lo = reference.lo4(), hi = reference.hi4();
+    const Int4 planar = lo == hi;
+    const Int4 loIndex = (planar ? planarSlot : startSlot) + bin(lo);
+    const Int4 hiIndex = planar ? unused : endSlot + bin(hi);
+    ++counts[loIndex[0]], ++counts[loIndex[1]], ++counts[loIndex[2]];
+    ++counts[hiIndex[0]], ++counts[hiIndex[1]], ++counts[hiIndex[2]];
+  }
+}
+
+// The bins on either side of the best inner boundary (planar triangles
+// below it), grown over empty bins so that the window holds the events
+// next to it.
+Window BinnedSplitter::chooseWindow(int axis, const PlaneCost& cost) const {
+  const uint32_t* const starts = counts_.data() + slot(axis, kStart);
+  const uint32_t* const ends = counts_.data() + slot(axis, kEnd);
+  const uint32_t* const planars = counts_.data() + slot(axis, kPlanar);
+  const float width = (cost.nodeHi - cost.nodeLo) / float(binCount_);
+  uint32_t below = 0, above = cost.count, bestBoundary = 1;
+  double bestCost = kInfinity;
+  for (uint32_t boundary = 1; boundary < binCount_; ++boundary) {
+    below += starts[boundary - 1] + planars[boundary - 1];
+    above -= ends[boundary - 1] + planars[boundary - 1];
+    const double boundaryCost = cost(cost.nodeLo + width * float(boundary), below, above);
+    if (boundaryCost < bestCost) bestCost = boundaryCost, bestBoundary = boundary;
+  }
+  const auto empty = [&](uint32_t bin) { return starts[bin] + ends[bin] + planars[bin] == 0; };
+  uint32_t first = bestBoundary - 1, last = bestBoundary;
+  while (first > 0 && empty(first)) --first;
+  while (last + 1 < binCount_ && empty(last)) ++last;
+  return {int32_t(first), int32_t(last)};
+}
+
+// The events in the windows, per axis, into events_. Most triangles have
+// none there, found for the three axes at once.
+void BinnedSplitter::collectWindows(std::span<const Reference> references, const Binning& bin,
+                                    const Window (&windows)[3]) {
+  const Int4 first = {windows[0].first, windows[1].first, windows[2].first, 1};
+  const Int4 last = {windows[0].last, windows[1].last, windows[2].last, 0};
+  Event* events[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    if (events_[axis].size() < 2 * references.size()) events_[axis].resize(2 * references.size());
+    events[axis] = events_[axis].data();
+    eventCounts_[axis] = 0;
+  }
+  for (const Reference& reference : references) {
+    const Float4 lo = reference.lo4(), hi = reference.hi4();
+    const Int4 loBin = bin(lo), hiBin = bin(hi);
+    const Int4 planar = lo == hi;
+    const Int4 loIn = (loBin >= first) & (loBin <= last);
+    const Int4 hiIn = (hiBin >= first) & (hiBin <= last) & ~planar;
+    const Int4 in = loIn | hiIn;
+    if ((in[0] | in[1] | in[2]) == 0) continue;
+    for (int axis = 0; axis < 3; ++axis) {
+      if (loIn[axis]) events[axis][eventCounts_[axis]++] = makeEvent(reference.lo[axis], planar[axis] ? kPlanar : kStart);
+      if (hiIn[axis]) events[axis][eventCounts_[axis]++] = makeEvent(reference.hi[axis], kEnd);
+    }
+  }
+}
+
+void BinnedSplitter::findSplit(std::span<const Reference> references, const Bounds3& box,
+                               const PlaneCost* const costs[3], BestSplit& best) {
+  Binning bin{{}, {}, Float4{} + float(binCount_ - 1)};
+  Window windows[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const float scale = float(binCount_) / (box.hi[axis] - box.lo[axis]);
+    bin.origin[axis] = box.lo[axis];
+    bin.scale[axis] = std::isfinite(scale) ? scale : 0.0f;
+  }
+  bin.origin[3] = bin.origin[2];
+  bin.scale[3] = bin.scale[2];
+  countEvents(references, bin);
+  for (int axis = 0; axis < 3; ++axis)
+    if (costs[axis]) windows[axis] = chooseWindow(axis, *costs[axis]);
+  collectWindows(references, bin, windows);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!costs[axis]) continue;
+    // The sweep starts with the triangles whose events lie before the window.
+    uint32_t below = 0, above = uint32_t(references.size());
+    for (uint32_t b = 0; b < uint32_t(windows[axis].first); ++b) {
+      below += counts_[slot(axis, kStart) + b] + counts_[slot(axis, kPlanar) + b];
+      above -= counts_[slot(axis, kEnd) + b] + counts_[slot(axis, kPlanar) + b];
+    }
+    Event* const events = events_[axis].data();
+    std::sort(events, events + eventCounts_[axis]);
+    sweep({events, eventCounts_[axis]}, below, above, *costs[axis], axis, best);
+  }
+}
 
 class SahBuilder {
  public:
@@ -217,123 +372,58 @@ class SahBuilder {
         traversalCost_(options.traversalCost),
         intersectionCost_(options.intersectionCost),
         emptyBonus_(options.emptyBonus),
-        binCount_(uint32_t(options.bins)),
-        writer_(tree) {}
+        writer_(tree),
+        binnedSplitter_(uint32_t(options.bins)) {}
 
-  std::vector<KdReference>& arena() { return arena_; }
+  std::vector<Reference>& arena() { return arena_; }
   void build(const Bounds3& box) { buildNode(writer_.root(), 0, uint32_t(arena_.size()), box, 1); }
 
  private:
-  std::optional<KdSplit> findSplit(std::span<const KdReference> references, const Bounds3& box);
-  Window chooseWindow(std::span<const KdReference> references, const PlaneCost& cost, int axis,
-                      const Binning& bin);
+  std::optional<KdSplit> findSplit(std::span<const Reference> references, const Bounds3& box);
   void buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth);
   std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
-  void makeLeaf(uint32_t node, std::span<const KdReference> references, uint32_t depth);
+  void makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth);
 
   const MeshView& mesh_;
   KdBuildLimits limits_;
   double traversalCost_, intersectionCost_, emptyBonus_;
-  uint32_t binCount_;
   KdTreeWriter writer_;
   // The references of the nodes still to build, used as a stack: a node's
   // are at the top; its children's replace them.
-  std::vector<KdReference> arena_;
+  std::vector<Reference> arena_;
   // Scratch, reused from node to node (only before recursing).
-  std::vector<Event> events_;
-  std::vector<KdReference> belowScratch_;
+  std::vector<Reference> belowScratch_;
   std::vector<uint32_t> leafTriangles_;
-  AxisBins bins_;
   SmallNodeSplitter smallNodeSplitter_;
+  BinnedSplitter binnedSplitter_;
 };
 
-// Binned SAH (with binCount_ bins) to find where along axis the best plane
-// lies, then the window of bins around it.
-Window SahBuilder::chooseWindow(std::span<const KdReference> references, const PlaneCost& cost, int axis,
-                                const Binning& bin) {
-  const uint32_t binCount = bin.last + 1;
-  for (auto& counts : bins_.counts) std::fill(counts, counts + binCount, 0u);
-  for (const KdReference& reference : references) {
-    const float lo = reference.box.lo[axis], hi = reference.box.hi[axis];
-    if (lo == hi) {
-      ++bins_.counts[kPlanar][bin(lo)];
-    } else {
-      ++bins_.counts[kStart][bin(lo)];
-      ++bins_.counts[kEnd][bin(hi)];
-    }
-  }
-  // The cost at each inner bin boundary, planar triangles below.
-  const float width = (cost.nodeHi - cost.nodeLo) / float(binCount);
-  uint32_t below = 0, above = cost.count, bestBoundary = 1;
-  double bestCost = kInfinity;
-  for (uint32_t boundary = 1; boundary < binCount; ++boundary) {
-    below += bins_.counts[kStart][boundary - 1] + bins_.counts[kPlanar][boundary - 1];
-    above -= bins_.counts[kEnd][boundary - 1] + bins_.counts[kPlanar][boundary - 1];
-    const double boundaryCost = cost(cost.nodeLo + width * float(boundary), below, above);
-    if (boundaryCost < bestCost) bestCost = boundaryCost, bestBoundary = boundary;
-  }
-  // The bins on either side of the best boundary, grown over empty bins so
-  // that the window holds the events next to it.
-  const auto empty = [&](uint32_t b) {
-    return bins_.counts[kStart][b] + bins_.counts[kEnd][b] + bins_.counts[kPlanar][b] == 0;
-  };
-  Window window{bestBoundary - 1, bestBoundary};
-  while (window.first > 0 && empty(window.first)) --window.first;
-  while (window.last + 1 < binCount && empty(window.last)) ++window.last;
-  return window;
-}
-
-std::optional<KdSplit> SahBuilder::findSplit(std::span<const KdReference> references, const Bounds3& box) {
+std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> references, const Bounds3& box) {
   const Vec3 extent = box.diagonal();
   const double halfArea = double(extent.x) * extent.y + double(extent.y) * extent.z +
                           double(extent.z) * extent.x;
   if (!(halfArea > 0)) return std::nullopt;
   const uint32_t count = uint32_t(references.size());
-  BestSplit best{halfArea * count, std::nullopt};  // a split must beat the leaf
+  PlaneCost costs[3];
+  const PlaneCost* axes[3] = {nullptr, nullptr, nullptr};
   for (int axis = 0; axis < 3; ++axis) {
-    const float nodeLo = box.lo[axis], nodeHi = box.hi[axis];
-    if (!(nodeLo < nodeHi)) continue;  // flat: every plane is a face
+    if (!(box.lo[axis] < box.hi[axis])) continue;  // flat: every plane is a face
     const double side1 = extent[(axis + 1) % 3], side2 = extent[(axis + 2) % 3];
-    const PlaneCost cost{nodeLo, nodeHi, side1 + side2, side1 * side2, halfArea * traversalCost_ / intersectionCost_,
-                         emptyBonus_, count};
-    if (count <= kSmallNode) {
-      smallNodeSplitter_.findSplit(references, cost, axis, best);
-      continue;
-    }
-    events_.clear();
-    uint32_t below = 0, above = count;
-    const float scale = float(binCount_) / (nodeHi - nodeLo);
-    if (std::isfinite(scale)) {
-      const Binning bin{nodeLo, scale, binCount_ - 1};
-      const Window window = chooseWindow(references, cost, axis, bin);
-      for (uint32_t b = 0; b < window.first; ++b) {
-        below += bins_.counts[kStart][b] + bins_.counts[kPlanar][b];
-        above -= bins_.counts[kEnd][b] + bins_.counts[kPlanar][b];
-      }
-      for (const KdReference& reference : references) {
-        const float lo = reference.box.lo[axis], hi = reference.box.hi[axis];
-        const uint32_t loBin = bin(lo), hiBin = bin(hi);
-        const bool loIn = loBin >= window.first && loBin <= window.last;
-        const bool hiIn = hiBin >= window.first && hiBin <= window.last;
-        if (lo == hi) {
-          if (loIn) events_.push_back(makeEvent(lo, kPlanar));
-        } else {
-          if (loIn) events_.push_back(makeEvent(lo, kStart));
-          if (hiIn) events_.push_back(makeEvent(hi, kEnd));
-        }
-      }
-    } else {
-      for (const KdReference& reference : references) addEvents(events_, reference.box, axis);
-    }
-    std::sort(events_.begin(), events_.end());
-    sweep(events_, below, above, cost, axis, best);
+    costs[axis] = {box.lo[axis], box.hi[axis], side1 + side2, side1 * side2,
+                   halfArea * traversalCost_ / intersectionCost_, emptyBonus_, count};
+    axes[axis] = &costs[axis];
   }
+  BestSplit best{halfArea * count, std::nullopt};  // a split must beat the leaf
+  if (count > kSmallNode)
+    binnedSplitter_.findSplit(references, box, axes, best);
+  else
+    smallNodeSplitter_.findSplit(references, axes, best);
   return best.split;
 }
 
-void SahBuilder::makeLeaf(uint32_t node, std::span<const KdReference> references, uint32_t depth) {
+void SahBuilder::makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth) {
   leafTriangles_.clear();
-  for (const KdReference& reference : references) leafTriangles_.push_back(reference.primitive);
+  for (const Reference& reference : references) leafTriangles_.push_back(reference.primitive);
   std::sort(leafTriangles_.begin(), leafTriangles_.end());
   writer_.leaf(node, leafTriangles_, depth);
 }
@@ -344,35 +434,41 @@ void SahBuilder::makeLeaf(uint32_t node, std::span<const KdReference> references
 // and above.
 std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t count, const KdSplit& split) {
   if (belowScratch_.size() < count) belowScratch_.resize(count);
-  KdReference* const references = arena_.data() + begin;
-  KdReference* const below = belowScratch_.data();
+  Reference* const references = arena_.data() + begin;
+  Reference* const below = belowScratch_.data();
   // Each reference gives at most one to above, so above's, written in place,
   // never overtake the one being read.
   uint32_t aboveCount = 0, belowCount = 0;
+  const int axis = split.axis;
+  const float position = split.position;
+  const bool planarBelow = split.planarBelow;
   for (uint32_t i = 0; i < count; ++i) {
-    const KdReference reference = references[i];
-    const KdSide side = kdSideOf(reference.box, split);
-    if (side != KdSide::Both) {
-      references[aboveCount] = reference;
-      below[belowCount] = reference;
-      aboveCount += side == KdSide::Above;
-      belowCount += side == KdSide::Below;
-      continue;
-    }
+    // As kdSideOf, without branches (which side is a coin toss): lo <= hi,
+    // so a box ending on the plane goes below unless it lies in it with the
+    // planar triangles above; and the other way round.
+    const float lo = references[i].lo[axis], hi = references[i].hi[axis];
+    const bool toBelow = (hi <= position) & ((lo < position) | planarBelow);
+    const bool toAbove = (lo >= position) & ((hi > position) | !planarBelow);
+    const Reference reference = references[i];
+    std::memcpy(&references[aboveCount], &reference, sizeof(Reference));
+    std::memcpy(&below[belowCount], &reference, sizeof(Reference));
+    aboveCount += toAbove;
+    belowCount += toBelow;
+    if (toBelow | toAbove) continue;
     Vec3 v0, v1, v2;
     mesh_.triangle(reference.primitive, v0, v1, v2);
     Bounds3 belowPart, abovePart;
-    clipTriangleToChildren(v0, v1, v2, reference.box, split.axis, split.position, belowPart, abovePart);
-    if (!abovePart.empty()) references[aboveCount++] = {abovePart, reference.primitive};
-    if (!belowPart.empty()) below[belowCount++] = {belowPart, reference.primitive};
+    clipTriangleToChildren(v0, v1, v2, reference.bounds(), axis, position, belowPart, abovePart);
+    if (!abovePart.empty()) references[aboveCount++] = Reference::of(abovePart, reference.primitive);
+    if (!belowPart.empty()) below[belowCount++] = Reference::of(belowPart, reference.primitive);
   }
   if (arena_.size() < begin + aboveCount + belowCount) arena_.resize(begin + aboveCount + belowCount);
-  std::memcpy(arena_.data() + begin + aboveCount, belowScratch_.data(), belowCount * sizeof(KdReference));
+  std::memcpy(arena_.data() + begin + aboveCount, belowScratch_.data(), belowCount * sizeof(Reference));
   return {belowCount, aboveCount};
 }
 
 void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth) {
-  const std::span<const KdReference> references(arena_.data() + begin, count);
+  const std::span<const Reference> references(arena_.data() + begin, count);
   if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
   const std::optional<KdSplit> split = findSplit(references, box);
   if (!split) return makeLeaf(node, references, depth);
@@ -388,11 +484,12 @@ void buildKdTreeSah(const MeshView& mesh, const KdTreeOptions& options, KdTreeDa
   const std::vector<uint32_t> triangles = kdTreeTriangles(mesh);
   if (triangles.empty()) return;
   SahBuilder builder(mesh, options, kdBuildLimits(options, triangles.size()), tree);
-  std::vector<KdReference>& arena = builder.arena();
+  std::vector<Reference>& arena = builder.arena();
   arena.reserve(triangles.size());
   for (uint32_t primitive : triangles) {
-    arena.push_back({mesh.triangleBounds(primitive), primitive});
-    tree.bounds.extend(arena.back().box);
+    const Bounds3 box = mesh.triangleBounds(primitive);
+    arena.push_back(Reference::of(box, primitive));
+    tree.bounds.extend(box);
   }
   builder.build(tree.bounds);
 }
