@@ -39,6 +39,12 @@ KdBuildLimits kdBuildLimits(const KdTreeOptions& options, size_t triangleCount);
 void clipTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Bounds3& box,
                             int axis, float position, Bounds3& below, Bounds3& above);
 
+// Cheaper and looser: the triangle is split by the plane only (not clipped
+// to box first), and the bounds of its parts are cut to box's halves. Just
+// as conservative, for box holding the part of the triangle that matters.
+void splitTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Bounds3& box, int axis,
+                             float position, Bounds3& below, Bounds3& above);
+
 // The two halves of box at position along axis.
 inline Bounds3 boxBelow(Bounds3 box, int axis, float position) {
   box.hi[axis] = position;

@@ -458,7 +458,7 @@ std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t
     Vec3 v0, v1, v2;
     mesh_.triangle(reference.primitive, v0, v1, v2);
     Bounds3 belowPart, abovePart;
-    clipTriangleToChildren(v0, v1, v2, reference.bounds(), axis, position, belowPart, abovePart);
+    splitTriangleToChildren(v0, v1, v2, reference.bounds(), axis, position, belowPart, abovePart);
     if (!abovePart.empty()) references[aboveCount++] = Reference::of(abovePart, reference.primitive);
     if (!belowPart.empty()) below[belowCount++] = Reference::of(belowPart, reference.primitive);
   }
