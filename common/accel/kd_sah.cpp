@@ -141,6 +141,20 @@ class SmallNodeSplitter {
   void findSplit(std::span<const Reference> references, const PlaneCost* const costs[3], BestSplit& best);
 
  private:
+  // The boxes reaching below the plane at position, above it, and lying in it.
+  struct Counts {
+    Int4 below, above, planar;
+  };
+  Counts countAround(Float4 position, uint32_t count) const {
+    Counts counts{{}, {}, {}};
+    for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
+      counts.below -= lo_[j] < position;
+      counts.above -= hi_[j] > position;
+      counts.planar -= planar_[j] == position;
+    }
+    return counts;
+  }
+
   // Per box: its lo and hi, and its position on the axes where it is flat
   // (else NaN, equal to nothing).
   Float4 lo_[kSmallNode], hi_[kSmallNode], planar_[kSmallNode];
@@ -181,17 +195,12 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const P
   Float4 cheapest = Float4{} + kInfinity;
   for (uint32_t k = 0; k < 2 * count; ++k) {
     const Float4 position = k & 1 ? hi_[k / 2] : lo_[k / 2];
-    Int4 below = {}, above = {}, planar = {};
-    for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
-      below -= lo_[j] < position;
-      above -= hi_[j] > position;
-      planar -= planar_[j] == position;
-    }
+    const Counts counts = countAround(position, count);
     const Float4 areaBelow = belowArea(position), areaAbove = wholeArea - areaBelow;
-    const Float4 planarBelowCost = areaBelow * __builtin_convertvector(below + planar, Float4) +
-                                   areaAbove * __builtin_convertvector(above, Float4);
+    const Float4 planarBelowCost = areaBelow * __builtin_convertvector(counts.below + counts.planar, Float4) +
+                                   areaAbove * __builtin_convertvector(counts.above, Float4);
     const Float4 planarAboveCost =
-        planarBelowCost + (areaAbove - areaBelow) * __builtin_convertvector(planar, Float4);
+        planarBelowCost + (areaAbove - areaBelow) * __builtin_convertvector(counts.planar, Float4);
     planarBelowCost_[k] = planarBelowCost;
     planarAboveCost_[k] = planarAboveCost;
     cheapest = planarBelowCost < cheapest ? planarBelowCost : cheapest;
@@ -221,22 +230,16 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const P
   }
 }
 
-constexpr uint32_t kMaxBins = 256;
-
-// Bins [first, last] of an axis, where the exact sweep looks; empty when first > last.
-struct Window {
-  int32_t first = 1, last = 0;
-};
-
-// Binned SAH for nodes over kSmallNode triangles, in O(n): one pass bins
-// the triangles' events along the three axes, and each axis's best bin
-// boundary is found; a second collects the events in the window of bins
-// around it, which are sorted and swept exactly (the counts of the bins
-// before the window start the sweep). The split is thus the exact SAH's
-// best plane near the binned best, always on a face of a triangle's box.
+// Binned SAH for nodes over kSmallNode triangles, in O(n): one pass counts
+// the triangles' events in bins along the three axes; the costs at the bin
+// boundaries choose the axis and the best boundary on it; a second pass
+// collects that axis's events in the bins on either side of it, which are
+// sorted and swept exactly (the counts of the bins before them start the
+// sweep). The split is thus the exact SAH's best plane near the binned
+// best, always on a face of a triangle's box.
 class BinnedSplitter {
  public:
-  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(9 * binCount + 1) {}
+  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(3 * binCount + 1) {}
   // costs[axis] is null for a flat axis.
   void findSplit(std::span<const Reference> references, const Bounds3& box, const PlaneCost* const costs[3],
                  BestSplit& best);
@@ -253,91 +256,113 @@ class BinnedSplitter {
       return __builtin_convertvector(t < last ? t : last, Int4);
     }
   };
-  // Where counts_ keeps the events of an axis and type.
-  uint32_t slot(int axis, uint32_t type) const { return (uint32_t(axis) * 3 + type) * binCount_; }
+  // The best boundary: its axis, and the bins on either side of it.
+  struct Window {
+    int axis;
+    uint32_t first, last;
+  };
   void countEvents(std::span<const Reference> references, const Binning& bin);
-  Window chooseWindow(int axis, const PlaneCost& cost) const;
-  void collectWindows(std::span<const Reference> references, const Binning& bin, const Window (&windows)[3]);
+  std::optional<Window> chooseWindow(const Bounds3& box, const PlaneCost* const costs[3]) const;
+  uint32_t collectEvents(std::span<const Reference> references, const Binning& bin, const Window& window);
+  const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
 
   uint32_t binCount_;
-  // Per axis, type and bin, the events there; the last entry takes the
-  // ends of flat boxes (which have none).
-  std::vector<uint32_t> counts_;
-  std::vector<Event> events_[3];
-  uint32_t eventCounts_[3];
+  // Per event type and bin, the events there along each axis (in lanes);
+  // the last entry takes the ends of flat boxes (which have none).
+  std::vector<Int4> counts_;
+  std::vector<Event> events_;
 };
 
 void BinnedSplitter::countEvents(std::span<const Reference> references, const Binning& bin) {
-  std::fill(counts_.begin(), counts_.end(), 0u);
-  const Int4 startSlot = {int32_t(slot(0, kStart)), int32_t(slot(1, kStart)), int32_t(slot(2, kStart)), 0};
-  const Int4 planarSlot = {int32_t(slot(0, kPlanar)), int32_t(slot(1, kPlanar)), int32_t(slot(2, kPlanar)), 0};
-  const Int4 endSlot = {int32_t(slot(0, kEnd)), int32_t(slot(1, kEnd)), int32_t(slot(2, kEnd)), 0};
-  const Int4 unused = Int4{} + int32_t(counts_.size() - 1);
-  uint32_t* const counts = counts_.data();
+  std::fill(counts_.begin(), counts_.end(), Int4{});
+  // Indices of the uint32_t counters: (type * binCount + bin) * 4 + axis.
+  const Int4 lane = {0, 1, 2, 3};
+  const Int4 starts = lane + int32_t(4 * kStart * binCount_), planars = lane + int32_t(4 * kPlanar * binCount_);
+  const Int4 ends = lane + int32_t(4 * kEnd * binCount_), unused = lane + int32_t(4 * 3 * binCount_);
+  uint32_t* const counters = reinterpret_cast<uint32_t*>(counts_.data());
   for (const Reference& reference : references) {
     const Float4 lo = reference.lo4(), hi = reference.hi4();
     const Int4 planar = lo == hi;
-    const Int4 loIndex = (planar ? planarSlot : startSlot) + bin(lo);
-    const Int4 hiIndex = planar ? unused : endSlot + bin(hi);
-    ++counts[loIndex[0]], ++counts[loIndex[1]], ++counts[loIndex[2]];
-    ++counts[hiIndex[0]], ++counts[hiIndex[1]], ++counts[hiIndex[2]];
+    const Int4 loIndex = (planar ? planars : starts) + bin(lo) * 4;
+    const Int4 hiIndex = planar ? unused : ends + bin(hi) * 4;
+    ++counters[loIndex[0]], ++counters[loIndex[1]], ++counters[loIndex[2]];
+    ++counters[hiIndex[0]], ++counters[hiIndex[1]], ++counters[hiIndex[2]];
   }
 }
 
-// The bins on either side of the best inner boundary (planar triangles
-// below it), grown over empty bins so that the window holds the events
-// next to it.
-Window BinnedSplitter::chooseWindow(int axis, const PlaneCost& cost) const {
-  const uint32_t* const starts = counts_.data() + slot(axis, kStart);
-  const uint32_t* const ends = counts_.data() + slot(axis, kEnd);
-  const uint32_t* const planars = counts_.data() + slot(axis, kPlanar);
-  const float width = (cost.nodeHi - cost.nodeLo) / float(binCount_);
-  uint32_t below = 0, above = cost.count, bestBoundary = 1;
-  double bestCost = kInfinity;
+// The cheapest inner bin boundary over the three axes at once (planar
+// triangles below it; the lowest axis among equals), and the bins on
+// either side of it, grown over empty bins so that they hold the events
+// next to it. None when no axis can be split.
+std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const Bounds3& box,
+                                                                   const PlaneCost* const costs[3]) const {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  // PlaneCost in lanes; NaN node bounds (lane 3, flat axes) give NaN costs, which never win.
+  Float4 nodeLo = Float4{} + kNaN, nodeHi = nodeLo, perimeter = {}, cross = {};
+  float emptyBonus = 1;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (!costs[axis]) continue;
+    nodeLo[axis] = box.lo[axis];
+    nodeHi[axis] = box.hi[axis];
+    perimeter[axis] = float(costs[axis]->perimeter);
+    cross[axis] = float(costs[axis]->cross);
+    emptyBonus = float(costs[axis]->emptyBonus);
+  }
+  const Float4 width = (nodeHi - nodeLo) / float(binCount_);
+  const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;
+  const Int4* const starts = counts(kStart);
+  const Int4* const ends = counts(kEnd);
+  const Int4* const planars = counts(kPlanar);
+  Int4 below = {}, above = Int4{} + int32_t(costs[costs[0] ? 0 : costs[1] ? 1 : 2]->count);
+  Float4 bestCost = Float4{} + kInfinity;
+  Int4 bestBoundary = Int4{} + 1;
   for (uint32_t boundary = 1; boundary < binCount_; ++boundary) {
     below += starts[boundary - 1] + planars[boundary - 1];
     above -= ends[boundary - 1] + planars[boundary - 1];
-    const double boundaryCost = cost(cost.nodeLo + width * float(boundary), below, above);
-    if (boundaryCost < bestCost) bestCost = boundaryCost, bestBoundary = boundary;
+    const Float4 belowArea = width * float(boundary) * perimeter + cross, aboveArea = wholeArea - belowArea;
+    Float4 cost = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
+    cost = (below == 0) | (above == 0) ? cost * emptyBonus : cost;
+    const Int4 better = cost < bestCost;
+    bestCost = better ? cost : bestCost;
+    bestBoundary = better ? Int4{} + int32_t(boundary) : bestBoundary;
   }
-  const auto empty = [&](uint32_t bin) { return starts[bin] + ends[bin] + planars[bin] == 0; };
-  uint32_t first = bestBoundary - 1, last = bestBoundary;
-  while (first > 0 && empty(first)) --first;
-  while (last + 1 < binCount_ && empty(last)) ++last;
-  return {int32_t(first), int32_t(last)};
+  int axis = -1;
+  for (int lane = 0; lane < 3; ++lane)
+    if (bestCost[lane] < kInfinity && (axis < 0 || bestCost[lane] < bestCost[axis])) axis = lane;
+  if (axis < 0) return std::nullopt;
+  const auto empty = [&](uint32_t bin) { return (starts[bin] + ends[bin] + planars[bin])[axis] == 0; };
+  Window window{axis, uint32_t(bestBoundary[axis]) - 1, uint32_t(bestBoundary[axis])};
+  while (window.first > 0 && empty(window.first)) --window.first;
+  while (window.last + 1 < binCount_ && empty(window.last)) ++window.last;
+  return window;
 }
 
-// The events in the windows, per axis, into events_. Most triangles have
-// none there, found for the three axes at once.
-void BinnedSplitter::collectWindows(std::span<const Reference> references, const Binning& bin,
-                                    const Window (&windows)[3]) {
-  const Int4 first = {windows[0].first, windows[1].first, windows[2].first, 1};
-  const Int4 last = {windows[0].last, windows[1].last, windows[2].last, 0};
-  Event* events[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    if (events_[axis].size() < 2 * references.size()) events_[axis].resize(2 * references.size());
-    events[axis] = events_[axis].data();
-    eventCounts_[axis] = 0;
-  }
+// The events of the window's axis in its bins, sorted, into events_;
+// returns their count. Written whether in the window or not, kept when in
+// it: no branch to mispredict.
+uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Binning& bin,
+                                       const Window& window) {
+  if (events_.size() < 2 * references.size()) events_.resize(2 * references.size());
+  Event* const events = events_.data();
+  const int axis = window.axis;
+  const uint32_t span = window.last - window.first;
+  uint32_t count = 0;
   for (const Reference& reference : references) {
-    const Float4 lo = reference.lo4(), hi = reference.hi4();
-    const Int4 loBin = bin(lo), hiBin = bin(hi);
-    const Int4 planar = lo == hi;
-    const Int4 loIn = (loBin >= first) & (loBin <= last);
-    const Int4 hiIn = (hiBin >= first) & (hiBin <= last) & ~planar;
-    const Int4 in = loIn | hiIn;
-    if ((in[0] | in[1] | in[2]) == 0) continue;
-    for (int axis = 0; axis < 3; ++axis) {
-      if (loIn[axis]) events[axis][eventCounts_[axis]++] = makeEvent(reference.lo[axis], planar[axis] ? kPlanar : kStart);
-      if (hiIn[axis]) events[axis][eventCounts_[axis]++] = makeEvent(reference.hi[axis], kEnd);
-    }
+    const float lo = reference.lo[axis], hi = reference.hi[axis];
+    const bool planar = lo == hi;
+    const uint32_t loBin = uint32_t(bin(reference.lo4())[axis]), hiBin = uint32_t(bin(reference.hi4())[axis]);
+    events[count] = makeEvent(lo, planar ? kPlanar : kStart);
+    count += loBin - window.first <= span;
+    events[count] = makeEvent(hi, kEnd);
+    count += !planar & (hiBin - window.first <= span);
   }
+  std::sort(events, events + count);
+  return count;
 }
 
 void BinnedSplitter::findSplit(std::span<const Reference> references, const Bounds3& box,
                                const PlaneCost* const costs[3], BestSplit& best) {
   Binning bin{{}, {}, Float4{} + float(binCount_ - 1)};
-  Window windows[3];
   for (int axis = 0; axis < 3; ++axis) {
     const float scale = float(binCount_) / (box.hi[axis] - box.lo[axis]);
     bin.origin[axis] = box.lo[axis];
@@ -346,21 +371,17 @@ void BinnedSplitter::findSplit(std::span<const Reference> references, const Boun
   bin.origin[3] = bin.origin[2];
   bin.scale[3] = bin.scale[2];
   countEvents(references, bin);
-  for (int axis = 0; axis < 3; ++axis)
-    if (costs[axis]) windows[axis] = chooseWindow(axis, *costs[axis]);
-  collectWindows(references, bin, windows);
-  for (int axis = 0; axis < 3; ++axis) {
-    if (!costs[axis]) continue;
-    // The sweep starts with the triangles whose events lie before the window.
-    uint32_t below = 0, above = uint32_t(references.size());
-    for (uint32_t b = 0; b < uint32_t(windows[axis].first); ++b) {
-      below += counts_[slot(axis, kStart) + b] + counts_[slot(axis, kPlanar) + b];
-      above -= counts_[slot(axis, kEnd) + b] + counts_[slot(axis, kPlanar) + b];
-    }
-    Event* const events = events_[axis].data();
-    std::sort(events, events + eventCounts_[axis]);
-    sweep({events, eventCounts_[axis]}, below, above, *costs[axis], axis, best);
+  const std::optional<Window> window = chooseWindow(box, costs);
+  if (!window) return;
+  // The sweep starts with the triangles whose events lie before the window.
+  Int4 below = {}, above = Int4{} + int32_t(references.size());
+  for (uint32_t b = 0; b < window->first; ++b) {
+    below += counts(kStart)[b] + counts(kPlanar)[b];
+    above -= counts(kEnd)[b] + counts(kPlanar)[b];
   }
+  const uint32_t count = collectEvents(references, bin, *window);
+  const int axis = window->axis;
+  sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), *costs[axis], axis, best);
 }
 
 class SahBuilder {
