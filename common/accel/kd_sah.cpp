@@ -122,6 +122,35 @@ struct alignas(16) Reference {
 };
 static_assert(sizeof(Reference) == 32 && offsetof(Reference, hi) == 16);
 
+// A node's box, in arrays that an axis indexes.
+struct Box {
+  float lo[3], hi[3];
+
+  Box below(int axis, float position) const {
+    Box box = *this;
+    box.hi[axis] = position;
+    return box;
+  }
+  Box above(int axis, float position) const {
+    Box box = *this;
+    box.lo[axis] = position;
+    return box;
+  }
+};
+
+// A node's SAH (PlaneCost's terms) for the three axes in lanes. Lane 3 and
+// flat axes (where every plane is a face) have NaN bounds: their costs are
+// NaN, and never win.
+struct NodeCost {
+  Float4 lo, hi, perimeter, cross;
+  double halfArea, splitBase, emptyBonus;
+  uint32_t count;
+
+  PlaneCost plane(int axis) const {
+    return {lo[axis], hi[axis], double(perimeter[axis]), double(cross[axis]), splitBase, emptyBonus, count};
+  }
+};
+
 // Nodes of at most this many triangles are split by counting, not binning.
 constexpr uint32_t kSmallNode = 16;
 
@@ -137,8 +166,7 @@ constexpr uint32_t kSmallNode = 16;
 // two cuts, costed apart.
 class SmallNodeSplitter {
  public:
-  // costs[axis] is null for a flat axis.
-  void findSplit(std::span<const Reference> references, const PlaneCost* const costs[3], BestSplit& best);
+  void findSplit(std::span<const Reference> references, const NodeCost& cost, BestSplit& best);
 
  private:
   // The boxes reaching below the plane at position, above it, and lying in it.
@@ -163,8 +191,7 @@ class SmallNodeSplitter {
   Float4 planarBelowCost_[2 * kSmallNode], planarAboveCost_[2 * kSmallNode];
 };
 
-void SmallNodeSplitter::findSplit(std::span<const Reference> references, const PlaneCost* const costs[3],
-                                  BestSplit& best) {
+void SmallNodeSplitter::findSplit(std::span<const Reference> references, const NodeCost& cost, BestSplit& best) {
   const uint32_t count = uint32_t(references.size());
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   Float4 lowest = Float4{} + kInfinity, highest = -lowest;
@@ -175,18 +202,7 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const P
     lowest = lo_[j] < lowest ? lo_[j] : lowest;
     highest = hi_[j] > highest ? hi_[j] : highest;
   }
-  // PlaneCost in lanes; NaN node bounds (lane 3, flat axes) give NaN costs, which never win.
-  Float4 nodeLo = Float4{} + kNaN, nodeHi = nodeLo, perimeter = {}, cross = {};
-  double splitBase = 0, emptyBonus = 1;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (!costs[axis]) continue;
-    nodeLo[axis] = costs[axis]->nodeLo;
-    nodeHi[axis] = costs[axis]->nodeHi;
-    perimeter[axis] = float(costs[axis]->perimeter);
-    cross[axis] = float(costs[axis]->cross);
-    splitBase = costs[axis]->splitBase;
-    emptyBonus = costs[axis]->emptyBonus;
-  }
+  const Float4 nodeLo = cost.lo, nodeHi = cost.hi, perimeter = cost.perimeter, cross = cost.cross;
   const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;  // below + above, for any plane
   const auto belowArea = [&](Float4 position) { return (position - nodeLo) * perimeter + cross; };
   const Float4 all = Float4{} + float(count);
@@ -207,16 +223,16 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const P
     cheapest = planarAboveCost < cheapest ? planarAboveCost : cheapest;
   }
   // The empty-space cuts: below the lowest lo, above the highest hi.
-  const Float4 infinity = Float4{} + kInfinity, bonus = Float4{} + float(emptyBonus);
+  const Float4 infinity = Float4{} + kInfinity, bonus = Float4{} + float(cost.emptyBonus);
   const Float4 cutLowCost = lowest > nodeLo ? (wholeArea - belowArea(lowest)) * all * bonus : infinity;
   const Float4 cutHighCost = highest < nodeHi ? belowArea(highest) * all * bonus : infinity;
 
   // Per axis, the cheapest of the three (the cuts first among equals), then
   // the lowest axis among equals.
   for (int axis = 0; axis < 3; ++axis) {
-    const double cost = splitBase + std::min({cutLowCost[axis], cutHighCost[axis], cheapest[axis]});
-    if (!(cost < best.cost)) continue;
-    best.cost = cost;
+    const double splitCost = cost.splitBase + std::min({cutLowCost[axis], cutHighCost[axis], cheapest[axis]});
+    if (!(splitCost < best.cost)) continue;
+    best.cost = splitCost;
     if (cutLowCost[axis] <= cutHighCost[axis] && cutLowCost[axis] <= cheapest[axis]) {
       best.split = KdSplit{axis, lowest[axis], false};
     } else if (cutHighCost[axis] <= cheapest[axis]) {
@@ -240,9 +256,7 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const P
 class BinnedSplitter {
  public:
   explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(3 * binCount + 1) {}
-  // costs[axis] is null for a flat axis.
-  void findSplit(std::span<const Reference> references, const Bounds3& box, const PlaneCost* const costs[3],
-                 BestSplit& best);
+  void findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost, BestSplit& best);
 
  private:
   // The bins of x along the three axes: they grow with x, so an event in a
@@ -262,7 +276,7 @@ class BinnedSplitter {
     uint32_t first, last;
   };
   void countEvents(std::span<const Reference> references, const Binning& bin);
-  std::optional<Window> chooseWindow(const Bounds3& box, const PlaneCost* const costs[3]) const;
+  std::optional<Window> chooseWindow(const NodeCost& cost) const;
   uint32_t collectEvents(std::span<const Reference> references, const Binning& bin, const Window& window);
   const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
 
@@ -294,36 +308,25 @@ void BinnedSplitter::countEvents(std::span<const Reference> references, const Bi
 // triangles below it; the lowest axis among equals), and the bins on
 // either side of it, grown over empty bins so that they hold the events
 // next to it. None when no axis can be split.
-std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const Bounds3& box,
-                                                                   const PlaneCost* const costs[3]) const {
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  // PlaneCost in lanes; NaN node bounds (lane 3, flat axes) give NaN costs, which never win.
-  Float4 nodeLo = Float4{} + kNaN, nodeHi = nodeLo, perimeter = {}, cross = {};
-  float emptyBonus = 1;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (!costs[axis]) continue;
-    nodeLo[axis] = box.lo[axis];
-    nodeHi[axis] = box.hi[axis];
-    perimeter[axis] = float(costs[axis]->perimeter);
-    cross[axis] = float(costs[axis]->cross);
-    emptyBonus = float(costs[axis]->emptyBonus);
-  }
+std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const NodeCost& cost) const {
+  const Float4 nodeLo = cost.lo, nodeHi = cost.hi, perimeter = cost.perimeter, cross = cost.cross;
+  const float emptyBonus = float(cost.emptyBonus);
   const Float4 width = (nodeHi - nodeLo) / float(binCount_);
   const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;
   const Int4* const starts = counts(kStart);
   const Int4* const ends = counts(kEnd);
   const Int4* const planars = counts(kPlanar);
-  Int4 below = {}, above = Int4{} + int32_t(costs[costs[0] ? 0 : costs[1] ? 1 : 2]->count);
+  Int4 below = {}, above = Int4{} + int32_t(cost.count);
   Float4 bestCost = Float4{} + kInfinity;
   Int4 bestBoundary = Int4{} + 1;
   for (uint32_t boundary = 1; boundary < binCount_; ++boundary) {
     below += starts[boundary - 1] + planars[boundary - 1];
     above -= ends[boundary - 1] + planars[boundary - 1];
     const Float4 belowArea = width * float(boundary) * perimeter + cross, aboveArea = wholeArea - belowArea;
-    Float4 cost = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
-    cost = (below == 0) | (above == 0) ? cost * emptyBonus : cost;
-    const Int4 better = cost < bestCost;
-    bestCost = better ? cost : bestCost;
+    Float4 boundaryCost = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
+    boundaryCost = (below == 0) | (above == 0) ? boundaryCost * emptyBonus : boundaryCost;
+    const Int4 better = boundaryCost < bestCost;
+    bestCost = better ? boundaryCost : bestCost;
     bestBoundary = better ? Int4{} + int32_t(boundary) : bestBoundary;
   }
   int axis = -1;
@@ -360,8 +363,8 @@ uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, co
   return count;
 }
 
-void BinnedSplitter::findSplit(std::span<const Reference> references, const Bounds3& box,
-                               const PlaneCost* const costs[3], BestSplit& best) {
+void BinnedSplitter::findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost,
+                               BestSplit& best) {
   Binning bin{{}, {}, Float4{} + float(binCount_ - 1)};
   for (int axis = 0; axis < 3; ++axis) {
     const float scale = float(binCount_) / (box.hi[axis] - box.lo[axis]);
@@ -371,7 +374,7 @@ void BinnedSplitter::findSplit(std::span<const Reference> references, const Boun
   bin.origin[3] = bin.origin[2];
   bin.scale[3] = bin.scale[2];
   countEvents(references, bin);
-  const std::optional<Window> window = chooseWindow(box, costs);
+  const std::optional<Window> window = chooseWindow(cost);
   if (!window) return;
   // The sweep starts with the triangles whose events lie before the window.
   Int4 below = {}, above = Int4{} + int32_t(references.size());
@@ -381,7 +384,7 @@ void BinnedSplitter::findSplit(std::span<const Reference> references, const Boun
   }
   const uint32_t count = collectEvents(references, bin, *window);
   const int axis = window->axis;
-  sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), *costs[axis], axis, best);
+  sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), cost.plane(axis), axis, best);
 }
 
 class SahBuilder {
@@ -390,24 +393,26 @@ class SahBuilder {
              KdTreeData& tree)
       : mesh_(mesh),
         limits_(limits),
-        traversalCost_(options.traversalCost),
-        intersectionCost_(options.intersectionCost),
+        splitFactor_(options.traversalCost / options.intersectionCost),
         emptyBonus_(options.emptyBonus),
         writer_(tree),
         binnedSplitter_(uint32_t(options.bins)) {}
 
   std::vector<Reference>& arena() { return arena_; }
-  void build(const Bounds3& box) { buildNode(writer_.root(), 0, uint32_t(arena_.size()), box, 1); }
+  void build(const Bounds3& bounds) {
+    const Box box{{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}};
+    buildNode(writer_.root(), 0, uint32_t(arena_.size()), box, 1);
+  }
 
  private:
-  std::optional<KdSplit> findSplit(std::span<const Reference> references, const Bounds3& box);
-  void buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth);
+  std::optional<KdSplit> findSplit(std::span<const Reference> references, const Box& box);
+  void buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth);
   std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
   void makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth);
 
   const MeshView& mesh_;
   KdBuildLimits limits_;
-  double traversalCost_, intersectionCost_, emptyBonus_;
+  double splitFactor_, emptyBonus_;  // traversal / intersection cost; the empty-space factor
   KdTreeWriter writer_;
   // The references of the nodes still to build, used as a stack: a node's
   // are at the top; its children's replace them.
@@ -419,26 +424,26 @@ class SahBuilder {
   BinnedSplitter binnedSplitter_;
 };
 
-std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> references, const Bounds3& box) {
-  const Vec3 extent = box.diagonal();
-  const double halfArea = double(extent.x) * extent.y + double(extent.y) * extent.z +
-                          double(extent.z) * extent.x;
-  if (!(halfArea > 0)) return std::nullopt;
-  const uint32_t count = uint32_t(references.size());
-  PlaneCost costs[3];
-  const PlaneCost* axes[3] = {nullptr, nullptr, nullptr};
+std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> references, const Box& box) {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const float extent[3] = {box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]};
+  NodeCost cost{Float4{} + kNaN, Float4{} + kNaN, {}, {}, 0, 0, emptyBonus_, uint32_t(references.size())};
   for (int axis = 0; axis < 3; ++axis) {
-    if (!(box.lo[axis] < box.hi[axis])) continue;  // flat: every plane is a face
-    const double side1 = extent[(axis + 1) % 3], side2 = extent[(axis + 2) % 3];
-    costs[axis] = {box.lo[axis], box.hi[axis], side1 + side2, side1 * side2,
-                   halfArea * traversalCost_ / intersectionCost_, emptyBonus_, count};
-    axes[axis] = &costs[axis];
+    const float side1 = extent[axis == 2 ? 0 : axis + 1], side2 = extent[axis == 0 ? 2 : axis - 1];
+    cost.perimeter[axis] = side1 + side2;
+    cost.cross[axis] = side1 * side2;
+    cost.halfArea += double(side1) * side2;  // each pair of faces once
+    if (!(extent[axis] > 0)) continue;  // flat: every plane is a face
+    cost.lo[axis] = box.lo[axis];
+    cost.hi[axis] = box.hi[axis];
   }
-  BestSplit best{halfArea * count, std::nullopt};  // a split must beat the leaf
-  if (count > kSmallNode)
-    binnedSplitter_.findSplit(references, box, axes, best);
+  if (!(cost.halfArea > 0)) return std::nullopt;
+  cost.splitBase = cost.halfArea * splitFactor_;
+  BestSplit best{cost.halfArea * cost.count, std::nullopt};  // a split must beat the leaf
+  if (cost.count > kSmallNode)
+    binnedSplitter_.findSplit(references, box, cost, best);
   else
-    smallNodeSplitter_.findSplit(references, axes, best);
+    smallNodeSplitter_.findSplit(references, cost, best);
   return best.split;
 }
 
@@ -488,15 +493,15 @@ std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t
   return {belowCount, aboveCount};
 }
 
-void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Bounds3& box, uint32_t depth) {
+void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth) {
   const std::span<const Reference> references(arena_.data() + begin, count);
   if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
   const std::optional<KdSplit> split = findSplit(references, box);
   if (!split) return makeLeaf(node, references, depth);
   const auto [belowCount, aboveCount] = splitReferences(begin, count, *split);
   const uint32_t children = writer_.split(node, split->axis, split->position);
-  buildNode(children, begin + aboveCount, belowCount, boxBelow(box, split->axis, split->position), depth + 1);
-  buildNode(children + 1, begin, aboveCount, boxAbove(box, split->axis, split->position), depth + 1);
+  buildNode(children, begin + aboveCount, belowCount, box.below(split->axis, split->position), depth + 1);
+  buildNode(children + 1, begin, aboveCount, box.above(split->axis, split->position), depth + 1);
 }
 
 }  // namespace
