@@ -173,14 +173,18 @@ class SmallNodeSplitter {
   struct Counts {
     Int4 below, above, planar;
   };
-  Counts countAround(Float4 position, uint32_t count) const {
-    Counts counts{{}, {}, {}};
+  // For the planes at the two faces of box (lo, hi) at once: each box is loaded once for both.
+  void countAround(uint32_t box, uint32_t count, Counts& atLo, Counts& atHi) const {
+    const Float4 lo = lo_[box], hi = hi_[box];
+    atLo = atHi = Counts{{}, {}, {}};
     for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
-      counts.below -= lo_[j] < position;
-      counts.above -= hi_[j] > position;
-      counts.planar -= planar_[j] == position;
+      atLo.below -= lo_[j] < lo;
+      atHi.below -= lo_[j] < hi;
+      atLo.above -= hi_[j] > lo;
+      atHi.above -= hi_[j] > hi;
+      atLo.planar -= planar_[j] == lo;
+      atHi.planar -= planar_[j] == hi;
     }
-    return counts;
   }
 
   // Per box: its lo and hi, and its position on the axes where it is flat
@@ -209,9 +213,7 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const N
 
   // Every candidate plane: the lowest cost per lane.
   Float4 cheapest = Float4{} + kInfinity;
-  for (uint32_t k = 0; k < 2 * count; ++k) {
-    const Float4 position = k & 1 ? hi_[k / 2] : lo_[k / 2];
-    const Counts counts = countAround(position, count);
+  const auto record = [&](uint32_t k, Float4 position, const Counts& counts) {
     const Float4 areaBelow = belowArea(position), areaAbove = wholeArea - areaBelow;
     const Float4 planarBelowCost = areaBelow * __builtin_convertvector(counts.below + counts.planar, Float4) +
                                    areaAbove * __builtin_convertvector(counts.above, Float4);
@@ -221,6 +223,12 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const N
     planarAboveCost_[k] = planarAboveCost;
     cheapest = planarBelowCost < cheapest ? planarBelowCost : cheapest;
     cheapest = planarAboveCost < cheapest ? planarAboveCost : cheapest;
+  };
+  for (uint32_t box = 0; box < count; ++box) {
+    Counts atLo, atHi;
+    countAround(box, count, atLo, atHi);
+    record(2 * box, lo_[box], atLo);
+    record(2 * box + 1, hi_[box], atHi);
   }
   // The empty-space cuts: below the lowest lo, above the highest hi.
   const Float4 infinity = Float4{} + kInfinity, bonus = Float4{} + float(cost.emptyBonus);
@@ -277,13 +285,14 @@ class BinnedSplitter {
   };
   void countEvents(std::span<const Reference> references, const Binning& bin);
   std::optional<Window> chooseWindow(const NodeCost& cost) const;
-  uint32_t collectEvents(std::span<const Reference> references, const Binning& bin, const Window& window);
+  uint32_t collectEvents(std::span<const Reference> references, const Window& window);
   const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
 
   uint32_t binCount_;
   // Per event type and bin, the events there along each axis (in lanes);
   // the last entry takes the ends of flat boxes (which have none).
   std::vector<Int4> counts_;
+  std::vector<Int4> referenceBins_;  // per reference, its lo's bins | its hi's bins << 16
   std::vector<Event> events_;
 };
 
@@ -294,11 +303,15 @@ void BinnedSplitter::countEvents(std::span<const Reference> references, const Bi
   const Int4 starts = lane + int32_t(4 * kStart * binCount_), planars = lane + int32_t(4 * kPlanar * binCount_);
   const Int4 ends = lane + int32_t(4 * kEnd * binCount_), unused = lane + int32_t(4 * 3 * binCount_);
   uint32_t* const counters = reinterpret_cast<uint32_t*>(counts_.data());
+  if (referenceBins_.size() < references.size()) referenceBins_.resize(references.size());
+  Int4* referenceBins = referenceBins_.data();
   for (const Reference& reference : references) {
     const Float4 lo = reference.lo4(), hi = reference.hi4();
     const Int4 planar = lo == hi;
-    const Int4 loIndex = (planar ? planars : starts) + bin(lo) * 4;
-    const Int4 hiIndex = planar ? unused : ends + bin(hi) * 4;
+    const Int4 loBin = bin(lo), hiBin = bin(hi);
+    *referenceBins++ = loBin | hiBin << 16;
+    const Int4 loIndex = (planar ? planars : starts) + loBin * 4;
+    const Int4 hiIndex = planar ? unused : ends + hiBin * 4;
     ++counters[loIndex[0]], ++counters[loIndex[1]], ++counters[loIndex[2]];
     ++counters[hiIndex[0]], ++counters[hiIndex[1]], ++counters[hiIndex[2]];
   }
@@ -343,17 +356,17 @@ std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const NodeCos
 // The events of the window's axis in its bins, sorted, into events_;
 // returns their count. Written whether in the window or not, kept when in
 // it: no branch to mispredict.
-uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Binning& bin,
-                                       const Window& window) {
+uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Window& window) {
   if (events_.size() < 2 * references.size()) events_.resize(2 * references.size());
   Event* const events = events_.data();
   const int axis = window.axis;
   const uint32_t span = window.last - window.first;
+  const Int4* referenceBins = referenceBins_.data();
   uint32_t count = 0;
   for (const Reference& reference : references) {
     const float lo = reference.lo[axis], hi = reference.hi[axis];
     const bool planar = lo == hi;
-    const uint32_t loBin = uint32_t(bin(reference.lo4())[axis]), hiBin = uint32_t(bin(reference.hi4())[axis]);
+    const uint32_t bins = uint32_t((*referenceBins++)[axis]), loBin = bins & 0xffff, hiBin = bins >> 16;
     events[count] = makeEvent(lo, planar ? kPlanar : kStart);
     count += loBin - window.first <= span;
     events[count] = makeEvent(hi, kEnd);
@@ -382,7 +395,7 @@ void BinnedSplitter::findSplit(std::span<const Reference> references, const Box&
     below += counts(kStart)[b] + counts(kPlanar)[b];
     above -= counts(kEnd)[b] + counts(kPlanar)[b];
   }
-  const uint32_t count = collectEvents(references, bin, *window);
+  const uint32_t count = collectEvents(references, *window);
   const int axis = window->axis;
   sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), cost.plane(axis), axis, best);
 }
