@@ -151,6 +151,12 @@ struct NodeCost {
   }
 };
 
+// In nodes of at most this many triangles a straddling triangle's box is
+// just cut at the plane: clipping the triangle costs more than it buys
+// there (the same tree quality on furnished halls and triangle soups),
+// their children being leaves or nearly.
+constexpr uint32_t kClipAbove = 4;
+
 // Nodes of at most this many triangles are split by counting, not binning.
 constexpr uint32_t kSmallNode = 16;
 
@@ -494,6 +500,15 @@ std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t
     aboveCount += toAbove;
     belowCount += toBelow;
     if (toBelow | toAbove) continue;
+    if (count <= kClipAbove) {
+      Reference part = reference;
+      part.lo[axis] = position;
+      references[aboveCount++] = part;
+      part = reference;
+      part.hi[axis] = position;
+      below[belowCount++] = part;
+      continue;
+    }
     Vec3 v0, v1, v2;
     mesh_.triangle(reference.primitive, v0, v1, v2);
     Bounds3 belowPart, abovePart;
@@ -524,7 +539,9 @@ void buildKdTreeSah(const MeshView& mesh, const KdTreeOptions& options, KdTreeDa
   if (triangles.empty()) return;
   SahBuilder builder(mesh, options, kdBuildLimits(options, triangles.size()), tree);
   std::vector<Reference>& arena = builder.arena();
-  arena.reserve(triangles.size());
+  // The root's references, and room for their children's (straddlers
+  // add a few): no regrowth and copy while the top of the tree is built.
+  arena.reserve(2 * triangles.size());
   for (uint32_t primitive : triangles) {
     const Bounds3 box = mesh.triangleBounds(primitive);
     arena.push_back(Reference::of(box, primitive));
