@@ -1,7 +1,7 @@
 // What the kd-tree builders share (not part of the public interface): the
 // writer that lays out the flat node array, triangle clipping, and the
 // reference-based builder that kd:median and kd:bbox plug their split
-// choosers into. kd:sah has its own event-list builder (kd_sah.cpp).
+// choosers into. kd:sah has its own binned builder (kd_sah.cpp).
 //
 // The invariant every builder keeps, on which the traversal's exactness rests
 // (kd_traverse.cpp): every point of every triangle in the tree lies in the

@@ -1,4 +1,36 @@
-// kd:sah: the surface area heuristic (header comment rewritten at the end of this change).
+// kd:sah: the surface area heuristic, built top-down in O(n log n) over
+// references (a triangle and the bounds of its part inside the node).
+//
+// Each node's split is the SAH's best plane, found one of two ways:
+//  - nodes of over kSmallNode (16) triangles: binned SAH (`bins` bins per
+//    axis, default 32). One pass counts the references' start, end and
+//    planar events per bin on the three axes at once (vector lanes); the
+//    costs at the bin boundaries choose the axis and the best boundary;
+//    a second pass collects that axis's events in the bins on either side
+//    of it, which are sorted and swept exactly as Wald & Havran ("On
+//    building fast kd-trees for ray tracing, and on doing that in
+//    O(N log N)", 2006) sweep a whole node. So the plane is always on a
+//    face of a triangle's box (a wall, a table top), where the exact SAH
+//    puts it, and each node costs O(n) plus the sort of a few events.
+//  - small nodes: the exact SAH, every box face a candidate, its counts
+//    by comparing it with every box (O(n^2) for n <= 16, no sorting).
+// Triangles lying in the plane go to the side where they cost less, so the
+// axis-aligned walls, floors and furniture faces of a building end up in
+// thin leaves of their own. A node stays a leaf when no split is cheaper.
+//
+// Cost model: a leaf costs intersection * n; a split costs
+//   traversal + intersection * (A_below * n_below + A_above * n_above) / A,
+// times `empty` when one side of a plane strictly inside the node is empty.
+//
+// Straddling triangles are split by the plane and their parts' bounds cut
+// to the reference's halves (perfect splits, splitTriangleToChildren); in
+// nodes of at most kClipAbove (4) triangles, whose children are leaves or
+// nearly, only the reference's box is cut.
+//
+// Memory: the references live in one arena used as a stack. A node's are
+// at its top; its children's replace them (below's through a scratch
+// copy), the above child's first, so that the below child, built first,
+// is again at the top. No allocation per node.
 #include <algorithm>
 #include <bit>
 #include <cmath>

@@ -4,10 +4,12 @@
 //   median  the spatial median of the node's longest axis. Builds fastest,
 //           traces slowest; stops at the depth and leaf-size limits.
 //   sah     the surface area heuristic (MacDonald & Booth 1990, Havran
-//           2000), built in O(n log n) from sorted event lists (Wald &
-//           Havran 2006) with perfect splits (triangles clipped to each
-//           node). The fastest to trace: choose it when a cell will take many
-//           rays. Stops when no split is cheaper than a leaf.
+//           2000), built in O(n log n): binned SAH refined by an exact
+//           sweep near the best bin boundary (Wald & Havran 2006) in large
+//           nodes, the exact SAH in small ones, with perfect splits
+//           (triangles clipped to each node). The fastest to trace: choose
+//           it when a cell will take many rays. Stops when no split is
+//           cheaper than a leaf.
 //   bbox    the bounding-box heuristic (Szécsi 2003): the node's triangle
 //           boxes sorted along its longest axis; the split is the box
 //           boundary that balances the two sides and cuts the fewest boxes.
