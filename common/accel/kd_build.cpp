@@ -4,6 +4,8 @@
 #include "common/accel/kd_build.h"
 
 #include <algorithm>
+#include <bit>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -51,16 +53,23 @@ KdBuildLimits kdBuildLimits(const KdTreeOptions& options, size_t triangleCount) 
 
 namespace {
 
-// Largest float <= value, smallest float >= value.
+// The next float towards -infinity, +infinity from a finite f (as
+// std::nextafter, without its call: clipping rounds every coordinate).
+float nextDown(float f) {
+  if (f == 0.0f) return -std::numeric_limits<float>::denorm_min();
+  const uint32_t bits = std::bit_cast<uint32_t>(f);
+  return std::bit_cast<float>(f > 0.0f ? bits - 1 : bits + 1);
+}
+float nextUp(float f) { return -nextDown(-f); }
+
+// Largest float <= value, smallest float >= value (value within float range).
 float floatBelow(double value) {
-  float f = static_cast<float>(value);
-  if (double(f) > value) f = std::nextafter(f, -kInfinity);
-  return f;
+  const float f = static_cast<float>(value);
+  return double(f) > value ? nextDown(f) : f;
 }
 float floatAbove(double value) {
-  float f = static_cast<float>(value);
-  if (double(f) < value) f = std::nextafter(f, kInfinity);
-  return f;
+  const float f = static_cast<float>(value);
+  return double(f) < value ? nextUp(f) : f;
 }
 
 struct Point {
@@ -151,6 +160,42 @@ void clipTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, cons
   const int aboveCount = clipPolygon(buffers[result], count, abovePolygon, axis, position, 1.0);
   below = polygonBounds(belowPolygon, belowCount, belowBox, triangle);
   above = polygonBounds(abovePolygon, aboveCount, aboveBox, triangle);
+}
+
+void splitTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Bounds3& box, int axis,
+                             float position, Bounds3& below, Bounds3& above) {
+  // The same bounds as polygonBounds of the parts (with clipPolygon's
+  // crossings), built directly: the corners are floats already, and only
+  // the crossings are rounded outwards (kept within the triangle's bounds).
+  const float corners[3][3] = {{v0.x, v0.y, v0.z}, {v1.x, v1.y, v1.z}, {v2.x, v2.y, v2.z}};
+  const Bounds3 triangle = triangleBounds(v0, v1, v2);
+  Bounds3 parts[2];  // below, above
+  double distance[3];
+  for (int i = 0; i < 3; ++i) distance[i] = double(corners[i][axis]) - double(position);
+  for (int i = 0; i < 3; ++i) {
+    const Vec3 corner(corners[i][0], corners[i][1], corners[i][2]);
+    if (distance[i] <= 0) parts[0].extend(corner);
+    if (distance[i] >= 0) parts[1].extend(corner);
+    const int j = i == 2 ? 0 : i + 1;
+    if (!((distance[i] < 0 && distance[j] > 0) || (distance[i] > 0 && distance[j] < 0))) continue;
+    const double t = distance[i] / (distance[i] - distance[j]);
+    Bounds3 crossing;
+    for (int k = 0; k < 3; ++k) {
+      const double c = k == axis ? double(position) : corners[i][k] + t * (double(corners[j][k]) - corners[i][k]);
+      crossing.lo[k] = std::max(floatBelow(c), triangle.lo[k]);
+      crossing.hi[k] = std::min(floatAbove(c), triangle.hi[k]);
+    }
+    parts[0].extend(crossing);
+    parts[1].extend(crossing);
+  }
+  const Bounds3 halves[2] = {boxBelow(box, axis, position), boxAbove(box, axis, position)};
+  for (int side = 0; side < 2; ++side) {
+    parts[side].lo = max(parts[side].lo, halves[side].lo);
+    parts[side].hi = min(parts[side].hi, halves[side].hi);
+    if (parts[side].empty()) parts[side] = Bounds3();
+  }
+  below = parts[0];
+  above = parts[1];
 }
 
 // ---------------------------------------------------------------------------

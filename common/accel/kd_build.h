@@ -1,7 +1,7 @@
 // What the kd-tree builders share (not part of the public interface): the
 // writer that lays out the flat node array, triangle clipping, and the
 // reference-based builder that kd:median and kd:bbox plug their split
-// choosers into. kd:sah has its own event-list builder (kd_sah.cpp).
+// choosers into. kd:sah has its own binned builder (kd_sah.cpp).
 //
 // The invariant every builder keeps, on which the traversal's exactness rests
 // (kd_traverse.cpp): every point of every triangle in the tree lies in the
@@ -38,6 +38,12 @@ KdBuildLimits kdBuildLimits(const KdTreeOptions& options, size_t triangleCount);
 // within the half and the triangle's own bounds. Empty when they do not meet.
 void clipTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Bounds3& box,
                             int axis, float position, Bounds3& below, Bounds3& above);
+
+// Cheaper and looser: the triangle is split by the plane only (not clipped
+// to box first), and the bounds of its parts are cut to box's halves. Just
+// as conservative, for box holding the part of the triangle that matters.
+void splitTriangleToChildren(const Vec3& v0, const Vec3& v1, const Vec3& v2, const Bounds3& box, int axis,
+                             float position, Bounds3& below, Bounds3& above);
 
 // The two halves of box at position along axis.
 inline Bounds3 boxBelow(Bounds3 box, int axis, float position) {

@@ -1,33 +1,46 @@
-// kd:sah: the surface area heuristic, built in O(n log n) after Wald &
-// Havran, "On building fast kd-trees for ray tracing, and on doing that in
-// O(N log N)" (2006).
+// kd:sah: the surface area heuristic, built top-down in O(n log n) over
+// references (a triangle and the bounds of its part inside the node).
 //
-// Each node keeps, per axis, the sorted list of its triangles' events: where
-// a triangle's (clipped) box starts and ends along the axis, or one planar
-// event where the box is flat. Events are sorted once, at the root; a sweep
-// over a node's lists evaluates every candidate plane in O(n); the chosen
-// split classifies each triangle below, above or both, and the lists are
-// split in one pass that preserves their order. Only the straddling
-// triangles are clipped to the children (perfect splits), and their new
-// events, sorted on their own, are merged in.
-//
-// Memory: the lists live in one arena used as a stack. A node's lists are
-// at its top; its children's lists replace them (through a scratch copy),
-// the above child's first, so that the below child, built first, is again
-// at the top. No allocation per node, and the arena stays within a small
-// multiple of the root's lists.
+// Each node's split is the SAH's best plane, found one of two ways:
+//  - nodes of over kSmallNode (16) triangles: binned SAH (`bins` bins per
+//    axis, default 32). One pass counts the references' start, end and
+//    planar events per bin on the three axes at once (vector lanes); the
+//    costs at the bin boundaries choose the axis and the best boundary;
+//    a second pass collects that axis's events in the bins on either side
+//    of it, which are sorted and swept exactly as Wald & Havran ("On
+//    building fast kd-trees for ray tracing, and on doing that in
+//    O(N log N)", 2006) sweep a whole node. So the plane is always on a
+//    face of a triangle's box (a wall, a table top), where the exact SAH
+//    puts it, and each node costs O(n) plus the sort of a few events.
+//  - small nodes: the exact SAH, every box face a candidate, its counts
+//    by comparing it with every box (O(n^2) for n <= 16, no sorting).
+// Triangles lying in the plane go to the side where they cost less, so the
+// axis-aligned walls, floors and furniture faces of a building end up in
+// thin leaves of their own. A node stays a leaf when no split is cheaper.
 //
 // Cost model: a leaf costs intersection * n; a split costs
 //   traversal + intersection * (A_below * n_below + A_above * n_above) / A,
 // times `empty` when one side of a plane strictly inside the node is empty.
-// Triangles lying in the plane go to the side where they cost less, so the
-// axis-aligned walls, floors and furniture faces of a building end up in
-// thin leaves of their own. A node stays a leaf when no split is cheaper.
+//
+// Straddling triangles are split by the plane and their parts' bounds cut
+// to the reference's halves (perfect splits, splitTriangleToChildren); in
+// nodes of at most kClipAbove (4) triangles, whose children are leaves or
+// nearly, only the reference's box is cut.
+//
+// Memory: the references live in one arena used as a stack. A node's are
+// at its top; its children's replace them (below's through a scratch
+// copy), the above child's first, so that the below child, built first,
+// is again at the top. No allocation per node.
 #include <algorithm>
 #include <bit>
+#include <cmath>
+#include <cstddef>
 #include <cstring>
+#include <limits>
 #include <optional>
+#include <span>
 #include <utility>
+#include <vector>
 
 #include "common/accel/kd_build.h"
 
@@ -39,73 +52,391 @@ namespace {
 // a plane's ends before its planar triangles, and those before its starts.
 constexpr uint32_t kEnd = 0, kPlanar = 1, kStart = 2;
 
-struct Event {
-  float position;
-  uint32_t code;  // primitive << 2 | type
-};
-
-inline uint32_t typeOf(const Event& event) { return event.code & 3; }
-inline uint32_t primitiveOf(const Event& event) { return event.code >> 2; }
-inline bool sortsBefore(const Event& a, const Event& b) {
-  return a.position < b.position || (a.position == b.position && typeOf(a) < typeOf(b));
-}
-
-// Maps floats (not NaN, no -0) to unsigned integers in the same order.
+// Maps floats (not NaN, no -0) to unsigned integers in the same order, and back.
 inline uint32_t orderedBits(float position) {
   const uint32_t bits = std::bit_cast<uint32_t>(position);
   return (bits & 0x80000000u) ? ~bits : bits | 0x80000000u;
 }
-
-// Stable LSD radix sort by position (11 + 11 + 10 bits), so that events
-// generated ends first, then planars, then starts come out sorted by
-// (position, type). The result is in events.
-void radixSortByPosition(std::vector<Event>& events, std::vector<Event>& scratch) {
-  scratch.resize(events.size());
-  constexpr int kShift[3] = {0, 11, 22};
-  constexpr uint32_t kMask[3] = {2047, 2047, 1023};
-  for (int pass = 0; pass < 3; ++pass) {
-    uint32_t offsets[2048] = {};
-    for (const Event& event : events) ++offsets[(orderedBits(event.position) >> kShift[pass]) & kMask[pass]];
-    // A digit shared by every event (the usual case for the top bits) needs no pass.
-    if (std::find(std::begin(offsets), std::end(offsets), uint32_t(events.size())) != std::end(offsets)) continue;
-    uint32_t sum = 0;
-    for (uint32_t& offset : offsets) {
-      const uint32_t bucket = offset;
-      offset = sum;
-      sum += bucket;
-    }
-    for (const Event& event : events)
-      scratch[offsets[(orderedBits(event.position) >> kShift[pass]) & kMask[pass]]++] = event;
-    events.swap(scratch);
-  }
+inline float fromOrderedBits(uint32_t ordered) {
+  return std::bit_cast<float>((ordered & 0x80000000u) ? ordered & 0x7fffffffu : ~ordered);
 }
 
-// Appends the events of a triangle whose box (within the node) is box.
-inline void addEvents(std::vector<Event>* lists, const Bounds3& box, uint32_t primitive) {
-  for (int axis = 0; axis < 3; ++axis) {
-    const float lo = box.lo[axis] + 0.0f, hi = box.hi[axis] + 0.0f;  // + 0: no -0 events
-    if (lo == hi) {
-      lists[axis].push_back({lo, primitive << 2 | kPlanar});
-    } else {
-      lists[axis].push_back({lo, primitive << 2 | kStart});
-      lists[axis].push_back({hi, primitive << 2 | kEnd});
-    }
-  }
+// An event: where a triangle's box starts or ends along an axis, or where a
+// flat box lies. Its value sorts by position, then type.
+using Event = uint64_t;
+inline Event makeEvent(float position, uint32_t type) {
+  return uint64_t(orderedBits(position + 0.0f)) << 2 | type;  // + 0: no -0 events
 }
+inline uint32_t positionKey(Event event) { return uint32_t(event >> 2); }
+inline uint32_t typeOf(Event event) { return uint32_t(event) & 3; }
 
-// Where a node's three lists are in the arena: one after another.
-struct NodeLists {
-  size_t begin = 0;
-  uint32_t size[3] = {0, 0, 0};
-  uint32_t triangleCount = 0;
+// The SAH cost of planes along one axis of a node, in units of the
+// intersection cost, scaled by the node's half area (the factor 2 cancels):
+// leaf = A n; split = A traversal / intersection + A_below n_below + A_above n_above.
+struct PlaneCost {
+  float nodeLo, nodeHi;
+  double perimeter, cross, splitBase, emptyBonus;
+  uint32_t count;
 
-  size_t offset(int axis) const {
-    return begin + (axis > 0 ? size[0] : 0) + (axis > 1 ? size[1] : 0);
+  // Infinity when the split would leave a child equal to the node (a plane
+  // on a face that moves nothing out).
+  double operator()(float position, uint32_t below, uint32_t above) const {
+    if ((position == nodeLo && above == count) || (position == nodeHi && below == count)) return kInfinity;
+    const double belowArea = double(position - nodeLo) * perimeter + cross;
+    const double aboveArea = double(nodeHi - position) * perimeter + cross;
+    double cost = belowArea * below + aboveArea * above;
+    if ((below == 0 || above == 0) && position > nodeLo && position < nodeHi) cost *= emptyBonus;
+    return splitBase + cost;
   }
-  size_t total() const { return size_t(size[0]) + size[1] + size[2]; }
 };
 
-enum Side : uint8_t { kBoth = 0, kBelow = 1, kAbove = 2 };
+// The best split so far, and its cost.
+struct BestSplit {
+  double cost;
+  std::optional<KdSplit> split;
+};
+
+// The sweep of Wald & Havran over sorted events of one axis. below counts
+// the triangles reaching below the first event's position from before it,
+// above those reaching above it (including the events' own triangles). At
+// each plane p: `below` counts the triangles reaching below p, `above`
+// those reaching above it, `planar` those lying in it; planar triangles go
+// to the side where they cost less.
+void sweep(std::span<const Event> events, uint32_t below, uint32_t above, const PlaneCost& cost, int axis,
+           BestSplit& best) {
+  for (size_t i = 0; i < events.size();) {
+    const uint32_t key = positionKey(events[i]);
+    uint32_t counts[3] = {0, 0, 0};  // ends, planars, starts at this position
+    do ++counts[typeOf(events[i])];
+    while (++i < events.size() && positionKey(events[i]) == key);
+    const float position = fromOrderedBits(key);
+    const uint32_t planar = counts[kPlanar];
+    above -= planar + counts[kEnd];
+    const double planarBelowCost = cost(position, below + planar, above);
+    const double planarAboveCost = planar > 0 ? cost(position, below, above + planar) : kInfinity;
+    if (planarBelowCost < best.cost || planarAboveCost < best.cost) {
+      const bool planarBelow = planarBelowCost <= planarAboveCost;
+      best.cost = planarBelow ? planarBelowCost : planarAboveCost;
+      best.split = KdSplit{axis, position, planarBelow};
+    }
+    below += counts[kStart] + planar;
+  }
+}
+
+// Four lanes at once (GCC and Clang vector extensions: SSE on x86-64). The
+// lanes are the three axes (the fourth repeats the third and is ignored).
+using Float4 = float __attribute__((vector_size(16)));
+using Int4 = int32_t __attribute__((vector_size(16)));
+
+// A triangle in a node: the bounds of its part inside the node, in arrays
+// that an axis indexes and that load as vectors (32 bytes: a reference is
+// copied as two vectors).
+struct alignas(16) Reference {
+  float lo[3];
+  uint32_t primitive;
+  float hi[3];
+  uint32_t unused = 0;
+
+  static Reference of(const Bounds3& box, uint32_t primitive) {
+    return {{box.lo.x, box.lo.y, box.lo.z}, primitive, {box.hi.x, box.hi.y, box.hi.z}};
+  }
+  Bounds3 bounds() const { return Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}); }
+  Float4 lo4() const { return load(offsetof(Reference, lo)); }
+  Float4 hi4() const { return load(offsetof(Reference, hi)); }
+
+ private:
+  // The three floats at offset, and the third again (not the neighbour).
+  Float4 load(size_t offset) const {
+    Float4 v;
+    std::memcpy(&v, reinterpret_cast<const char*>(this) + offset, sizeof(v));
+    return __builtin_shufflevector(v, v, 0, 1, 2, 2);
+  }
+};
+static_assert(sizeof(Reference) == 32 && offsetof(Reference, hi) == 16);
+
+// A node's box, in arrays that an axis indexes.
+struct Box {
+  float lo[3], hi[3];
+
+  Box below(int axis, float position) const {
+    Box box = *this;
+    box.hi[axis] = position;
+    return box;
+  }
+  Box above(int axis, float position) const {
+    Box box = *this;
+    box.lo[axis] = position;
+    return box;
+  }
+};
+
+// A node's SAH (PlaneCost's terms) for the three axes in lanes. Lane 3 and
+// flat axes (where every plane is a face) have NaN bounds: their costs are
+// NaN, and never win.
+struct NodeCost {
+  Float4 lo, hi, perimeter, cross;
+  double halfArea, splitBase, emptyBonus;
+  uint32_t count;
+
+  PlaneCost plane(int axis) const {
+    return {lo[axis], hi[axis], double(perimeter[axis]), double(cross[axis]), splitBase, emptyBonus, count};
+  }
+};
+
+// In nodes of at most this many triangles a straddling triangle's box is
+// just cut at the plane: clipping the triangle costs more than it buys
+// there (the same tree quality on furnished halls and triangle soups),
+// their children being leaves or nearly.
+constexpr uint32_t kClipAbove = 4;
+
+// Nodes of at most this many triangles are split by counting, not binning.
+constexpr uint32_t kSmallNode = 16;
+
+// The exact SAH of a small node: every face of every box is a candidate
+// plane, and its counts below, above and in it come from comparing it with
+// every box, on the three axes at once. O(n^2), but with no sorting, no
+// branches and no per-node setup, the fastest way up to kSmallNode.
+//
+// The costs of PlaneCost, simplified: a plane on a face of the node never
+// beats the leaf (its child equal to the node already costs as much), so
+// it needs no test; and a plane leaves a side empty only at the lowest lo
+// or the highest hi of the boxes, so the empty-space bonus goes to those
+// two cuts, costed apart.
+class SmallNodeSplitter {
+ public:
+  void findSplit(std::span<const Reference> references, const NodeCost& cost, BestSplit& best);
+
+ private:
+  // The boxes reaching below the plane at position, above it, and lying in it.
+  struct Counts {
+    Int4 below, above, planar;
+  };
+  // For the planes at the two faces of box (lo, hi) at once: each box is loaded once for both.
+  void countAround(uint32_t box, uint32_t count, Counts& atLo, Counts& atHi) const {
+    const Float4 lo = lo_[box], hi = hi_[box];
+    atLo = atHi = Counts{{}, {}, {}};
+    for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
+      atLo.below -= lo_[j] < lo;
+      atHi.below -= lo_[j] < hi;
+      atLo.above -= hi_[j] > lo;
+      atHi.above -= hi_[j] > hi;
+      atLo.planar -= planar_[j] == lo;
+      atHi.planar -= planar_[j] == hi;
+    }
+  }
+
+  // Per box: its lo and hi, and its position on the axes where it is flat
+  // (else NaN, equal to nothing).
+  Float4 lo_[kSmallNode], hi_[kSmallNode], planar_[kSmallNode];
+  // Per candidate (lo then hi of each box), the costs (without the split's
+  // own) with planar triangles below and above.
+  Float4 planarBelowCost_[2 * kSmallNode], planarAboveCost_[2 * kSmallNode];
+};
+
+void SmallNodeSplitter::findSplit(std::span<const Reference> references, const NodeCost& cost, BestSplit& best) {
+  const uint32_t count = uint32_t(references.size());
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  Float4 lowest = Float4{} + kInfinity, highest = -lowest;
+  for (uint32_t j = 0; j < count; ++j) {
+    lo_[j] = references[j].lo4() + 0.0f;  // + 0: no -0
+    hi_[j] = references[j].hi4() + 0.0f;
+    planar_[j] = lo_[j] == hi_[j] ? lo_[j] : kNaN;
+    lowest = lo_[j] < lowest ? lo_[j] : lowest;
+    highest = hi_[j] > highest ? hi_[j] : highest;
+  }
+  const Float4 nodeLo = cost.lo, nodeHi = cost.hi, perimeter = cost.perimeter, cross = cost.cross;
+  const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;  // below + above, for any plane
+  const auto belowArea = [&](Float4 position) { return (position - nodeLo) * perimeter + cross; };
+  const Float4 all = Float4{} + float(count);
+
+  // Every candidate plane: the lowest cost per lane.
+  Float4 cheapest = Float4{} + kInfinity;
+  const auto record = [&](uint32_t k, Float4 position, const Counts& counts) {
+    const Float4 areaBelow = belowArea(position), areaAbove = wholeArea - areaBelow;
+    const Float4 planarBelowCost = areaBelow * __builtin_convertvector(counts.below + counts.planar, Float4) +
+                                   areaAbove * __builtin_convertvector(counts.above, Float4);
+    const Float4 planarAboveCost =
+        planarBelowCost + (areaAbove - areaBelow) * __builtin_convertvector(counts.planar, Float4);
+    planarBelowCost_[k] = planarBelowCost;
+    planarAboveCost_[k] = planarAboveCost;
+    cheapest = planarBelowCost < cheapest ? planarBelowCost : cheapest;
+    cheapest = planarAboveCost < cheapest ? planarAboveCost : cheapest;
+  };
+  for (uint32_t box = 0; box < count; ++box) {
+    Counts atLo, atHi;
+    countAround(box, count, atLo, atHi);
+    record(2 * box, lo_[box], atLo);
+    record(2 * box + 1, hi_[box], atHi);
+  }
+  // The empty-space cuts: below the lowest lo, above the highest hi.
+  const Float4 infinity = Float4{} + kInfinity, bonus = Float4{} + float(cost.emptyBonus);
+  const Float4 cutLowCost = lowest > nodeLo ? (wholeArea - belowArea(lowest)) * all * bonus : infinity;
+  const Float4 cutHighCost = highest < nodeHi ? belowArea(highest) * all * bonus : infinity;
+
+  // Per axis, the cheapest of the three (the cuts first among equals), then
+  // the lowest axis among equals.
+  for (int axis = 0; axis < 3; ++axis) {
+    const double splitCost = cost.splitBase + std::min({cutLowCost[axis], cutHighCost[axis], cheapest[axis]});
+    if (!(splitCost < best.cost)) continue;
+    best.cost = splitCost;
+    if (cutLowCost[axis] <= cutHighCost[axis] && cutLowCost[axis] <= cheapest[axis]) {
+      best.split = KdSplit{axis, lowest[axis], false};
+    } else if (cutHighCost[axis] <= cheapest[axis]) {
+      best.split = KdSplit{axis, highest[axis], true};
+    } else {
+      uint32_t k = 0;
+      while (planarBelowCost_[k][axis] != cheapest[axis] && planarAboveCost_[k][axis] != cheapest[axis]) ++k;
+      best.split = KdSplit{axis, k & 1 ? hi_[k / 2][axis] : lo_[k / 2][axis],
+                           planarBelowCost_[k][axis] == cheapest[axis]};
+    }
+  }
+}
+
+// Binned SAH for nodes over kSmallNode triangles, in O(n): one pass counts
+// the triangles' events in bins along the three axes; the costs at the bin
+// boundaries choose the axis and the best boundary on it; a second pass
+// collects that axis's events in the bins on either side of it, which are
+// sorted and swept exactly (the counts of the bins before them start the
+// sweep). The split is thus the exact SAH's best plane near the binned
+// best, always on a face of a triangle's box.
+class BinnedSplitter {
+ public:
+  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(3 * binCount + 1) {}
+  void findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost, BestSplit& best);
+
+ private:
+  // The bins of x along the three axes: they grow with x, so an event in a
+  // lower bin than another lies strictly below it. An axis too thin to bin
+  // has all its events in bin 0.
+  struct Binning {
+    Float4 origin, scale, last;
+    Int4 operator()(Float4 x) const {
+      Float4 t = (x - origin) * scale;
+      t = t > 0.0f ? t : 0.0f;  // never negative, not even NaN
+      return __builtin_convertvector(t < last ? t : last, Int4);
+    }
+  };
+  // The best boundary: its axis, and the bins on either side of it.
+  struct Window {
+    int axis;
+    uint32_t first, last;
+  };
+  void countEvents(std::span<const Reference> references, const Binning& bin);
+  std::optional<Window> chooseWindow(const NodeCost& cost) const;
+  uint32_t collectEvents(std::span<const Reference> references, const Window& window);
+  const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
+
+  uint32_t binCount_;
+  // Per event type and bin, the events there along each axis (in lanes);
+  // the last entry takes the ends of flat boxes (which have none).
+  std::vector<Int4> counts_;
+  std::vector<Int4> referenceBins_;  // per reference, its lo's bins | its hi's bins << 16
+  std::vector<Event> events_;
+};
+
+void BinnedSplitter::countEvents(std::span<const Reference> references, const Binning& bin) {
+  std::fill(counts_.begin(), counts_.end(), Int4{});
+  // Indices of the uint32_t counters: (type * binCount + bin) * 4 + axis.
+  const Int4 lane = {0, 1, 2, 3};
+  const Int4 starts = lane + int32_t(4 * kStart * binCount_), planars = lane + int32_t(4 * kPlanar * binCount_);
+  const Int4 ends = lane + int32_t(4 * kEnd * binCount_), unused = lane + int32_t(4 * 3 * binCount_);
+  uint32_t* const counters = reinterpret_cast<uint32_t*>(counts_.data());
+  if (referenceBins_.size() < references.size()) referenceBins_.resize(references.size());
+  Int4* referenceBins = referenceBins_.data();
+  for (const Reference& reference : references) {
+    const Float4 lo = reference.lo4(), hi = reference.hi4();
+    const Int4 planar = lo == hi;
+    const Int4 loBin = bin(lo), hiBin = bin(hi);
+    *referenceBins++ = loBin | hiBin << 16;
+    const Int4 loIndex = (planar ? planars : starts) + loBin * 4;
+    const Int4 hiIndex = planar ? unused : ends + hiBin * 4;
+    ++counters[loIndex[0]], ++counters[loIndex[1]], ++counters[loIndex[2]];
+    ++counters[hiIndex[0]], ++counters[hiIndex[1]], ++counters[hiIndex[2]];
+  }
+}
+
+// The cheapest inner bin boundary over the three axes at once (planar
+// triangles below it; the lowest axis among equals), and the bins on
+// either side of it, grown over empty bins so that they hold the events
+// next to it. None when no axis can be split.
+std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const NodeCost& cost) const {
+  const Float4 nodeLo = cost.lo, nodeHi = cost.hi, perimeter = cost.perimeter, cross = cost.cross;
+  const float emptyBonus = float(cost.emptyBonus);
+  const Float4 width = (nodeHi - nodeLo) / float(binCount_);
+  const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;
+  const Int4* const starts = counts(kStart);
+  const Int4* const ends = counts(kEnd);
+  const Int4* const planars = counts(kPlanar);
+  Int4 below = {}, above = Int4{} + int32_t(cost.count);
+  Float4 bestCost = Float4{} + kInfinity;
+  Int4 bestBoundary = Int4{} + 1;
+  for (uint32_t boundary = 1; boundary < binCount_; ++boundary) {
+    below += starts[boundary - 1] + planars[boundary - 1];
+    above -= ends[boundary - 1] + planars[boundary - 1];
+    const Float4 belowArea = width * float(boundary) * perimeter + cross, aboveArea = wholeArea - belowArea;
+    Float4 boundaryCost = belowArea * __builtin_convertvector(below, Float4) + aboveArea * __builtin_convertvector(above, Float4);
+    boundaryCost = (below == 0) | (above == 0) ? boundaryCost * emptyBonus : boundaryCost;
+    const Int4 better = boundaryCost < bestCost;
+    bestCost = better ? boundaryCost : bestCost;
+    bestBoundary = better ? Int4{} + int32_t(boundary) : bestBoundary;
+  }
+  int axis = -1;
+  for (int lane = 0; lane < 3; ++lane)
+    if (bestCost[lane] < kInfinity && (axis < 0 || bestCost[lane] < bestCost[axis])) axis = lane;
+  if (axis < 0) return std::nullopt;
+  const auto empty = [&](uint32_t bin) { return (starts[bin] + ends[bin] + planars[bin])[axis] == 0; };
+  Window window{axis, uint32_t(bestBoundary[axis]) - 1, uint32_t(bestBoundary[axis])};
+  while (window.first > 0 && empty(window.first)) --window.first;
+  while (window.last + 1 < binCount_ && empty(window.last)) ++window.last;
+  return window;
+}
+
+// The events of the window's axis in its bins, sorted, into events_;
+// returns their count. Written whether in the window or not, kept when in
+// it: no branch to mispredict.
+uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Window& window) {
+  if (events_.size() < 2 * references.size()) events_.resize(2 * references.size());
+  Event* const events = events_.data();
+  const int axis = window.axis;
+  const uint32_t span = window.last - window.first;
+  const Int4* referenceBins = referenceBins_.data();
+  uint32_t count = 0;
+  for (const Reference& reference : references) {
+    const float lo = reference.lo[axis], hi = reference.hi[axis];
+    const bool planar = lo == hi;
+    const uint32_t bins = uint32_t((*referenceBins++)[axis]), loBin = bins & 0xffff, hiBin = bins >> 16;
+    events[count] = makeEvent(lo, planar ? kPlanar : kStart);
+    count += loBin - window.first <= span;
+    events[count] = makeEvent(hi, kEnd);
+    count += !planar & (hiBin - window.first <= span);
+  }
+  std::sort(events, events + count);
+  return count;
+}
+
+void BinnedSplitter::findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost,
+                               BestSplit& best) {
+  Binning bin{{}, {}, Float4{} + float(binCount_ - 1)};
+  for (int axis = 0; axis < 3; ++axis) {
+    const float scale = float(binCount_) / (box.hi[axis] - box.lo[axis]);
+    bin.origin[axis] = box.lo[axis];
+    bin.scale[axis] = std::isfinite(scale) ? scale : 0.0f;
+  }
+  bin.origin[3] = bin.origin[2];
+  bin.scale[3] = bin.scale[2];
+  countEvents(references, bin);
+  const std::optional<Window> window = chooseWindow(cost);
+  if (!window) return;
+  // The sweep starts with the triangles whose events lie before the window.
+  Int4 below = {}, above = Int4{} + int32_t(references.size());
+  for (uint32_t b = 0; b < window->first; ++b) {
+    below += counts(kStart)[b] + counts(kPlanar)[b];
+    above -= counts(kEnd)[b] + counts(kPlanar)[b];
+  }
+  const uint32_t count = collectEvents(references, *window);
+  const int axis = window->axis;
+  sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), cost.plane(axis), axis, best);
+}
 
 class SahBuilder {
  public:
@@ -113,233 +444,127 @@ class SahBuilder {
              KdTreeData& tree)
       : mesh_(mesh),
         limits_(limits),
-        traversalCost_(options.traversalCost),
-        intersectionCost_(options.intersectionCost),
+        splitFactor_(options.traversalCost / options.intersectionCost),
         emptyBonus_(options.emptyBonus),
         writer_(tree),
-        side_(mesh.triangleCount) {}
+        binnedSplitter_(uint32_t(options.bins)) {}
 
-  std::vector<Event>& arena() { return arena_; }
-  void build(const NodeLists& root, const Bounds3& box) { buildNode(writer_.root(), root, box, 1); }
+  std::vector<Reference>& arena() { return arena_; }
+  void build(const Bounds3& bounds) {
+    const Box box{{bounds.lo.x, bounds.lo.y, bounds.lo.z}, {bounds.hi.x, bounds.hi.y, bounds.hi.z}};
+    buildNode(writer_.root(), 0, uint32_t(arena_.size()), box, 1);
+  }
 
  private:
-  std::optional<KdSplit> findSplit(const NodeLists& lists, const Bounds3& box) const;
-  void buildNode(uint32_t node, const NodeLists& lists, const Bounds3& box, uint32_t depth);
-  void makeLeaf(uint32_t node, const NodeLists& lists, uint32_t depth);
+  std::optional<KdSplit> findSplit(std::span<const Reference> references, const Box& box);
+  void buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth);
+  std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
+  void makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth);
 
   const MeshView& mesh_;
   KdBuildLimits limits_;
-  double traversalCost_, intersectionCost_, emptyBonus_;
+  double splitFactor_, emptyBonus_;  // traversal / intersection cost; the empty-space factor
   KdTreeWriter writer_;
-  std::vector<Side> side_;  // per primitive: its side of the split being made
-  std::vector<Event> arena_;
+  // The references of the nodes still to build, used as a stack: a node's
+  // are at the top; its children's replace them.
+  std::vector<Reference> arena_;
   // Scratch, reused from node to node (only before recursing).
-  std::vector<Event> belowScratch_, aboveScratch_;
-  std::vector<Event> newBelow_[3], newAbove_[3];
+  std::vector<Reference> belowScratch_;
   std::vector<uint32_t> leafTriangles_;
+  SmallNodeSplitter smallNodeSplitter_;
+  BinnedSplitter binnedSplitter_;
 };
 
-// The sweep of Wald & Havran over each axis's sorted events. At a plane p,
-// `below` counts the triangles reaching below p, `above` those reaching
-// above it, `planar` those lying in it.
-std::optional<KdSplit> SahBuilder::findSplit(const NodeLists& lists, const Bounds3& box) const {
-  const Vec3 extent = box.diagonal();
-  // Half areas throughout: the factor 2 cancels.
-  const double halfArea = double(extent.x) * extent.y + double(extent.y) * extent.z +
-                          double(extent.z) * extent.x;
-  if (!(halfArea > 0)) return std::nullopt;
-  const uint32_t count = lists.triangleCount;
-  // Costs in units of the intersection cost, scaled by the node's area:
-  // leaf = A * n; split = A * traversal / intersection + A_below n_below + A_above n_above.
-  const double splitBase = halfArea * traversalCost_ / intersectionCost_;
-  double bestCost = halfArea * count;  // a split must beat the leaf
-  std::optional<KdSplit> best;
+std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> references, const Box& box) {
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const float extent[3] = {box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]};
+  NodeCost cost{Float4{} + kNaN, Float4{} + kNaN, {}, {}, 0, 0, emptyBonus_, uint32_t(references.size())};
   for (int axis = 0; axis < 3; ++axis) {
-    const float nodeLo = box.lo[axis], nodeHi = box.hi[axis];
-    if (!(nodeLo < nodeHi)) continue;  // flat: every plane is a face
-    const double side1 = extent[(axis + 1) % 3], side2 = extent[(axis + 2) % 3];
-    const double perimeter = side1 + side2, cross = side1 * side2;
-    const Event* const events = arena_.data() + lists.offset(axis);
-    const uint32_t size = lists.size[axis];
-
-    // Cost of the split at position with these counts; infinity when it
-    // would leave a child equal to the node (a plane on a face that moves
-    // nothing out).
-    const auto splitCost = [&](float position, uint32_t belowCount, uint32_t aboveCount) {
-      if ((position == nodeLo && aboveCount == count) || (position == nodeHi && belowCount == count))
-        return double(kInfinity);
-      const double belowArea = double(position - nodeLo) * perimeter + cross;
-      const double aboveArea = double(nodeHi - position) * perimeter + cross;
-      double cost = belowArea * belowCount + aboveArea * aboveCount;
-      if ((belowCount == 0 || aboveCount == 0) && position > nodeLo && position < nodeHi) cost *= emptyBonus_;
-      return splitBase + cost;
-    };
-
-    uint32_t below = 0, above = count;
-    for (uint32_t i = 0; i < size;) {
-      // The group of events at one position: ends, then planars, then starts.
-      const float position = events[i].position;
-      uint32_t ends = 0, planar = 0, starts = 0;
-      do {
-        const uint32_t type = typeOf(events[i]);
-        ends += type == kEnd;
-        planar += type == kPlanar;
-        starts += type == kStart;
-      } while (++i < size && events[i].position == position);
-      above -= planar + ends;
-      const double planarBelowCost = splitCost(position, below + planar, above);
-      const double planarAboveCost = planar > 0 ? splitCost(position, below, above + planar) : kInfinity;
-      if (planarBelowCost < bestCost || planarAboveCost < bestCost) {
-        const bool planarBelow = planarBelowCost <= planarAboveCost;
-        bestCost = planarBelow ? planarBelowCost : planarAboveCost;
-        best = KdSplit{axis, position, planarBelow};
-      }
-      below += starts + planar;
-    }
+    const float side1 = extent[axis == 2 ? 0 : axis + 1], side2 = extent[axis == 0 ? 2 : axis - 1];
+    cost.perimeter[axis] = side1 + side2;
+    cost.cross[axis] = side1 * side2;
+    cost.halfArea += double(side1) * side2;  // each pair of faces once
+    if (!(extent[axis] > 0)) continue;  // flat: every plane is a face
+    cost.lo[axis] = box.lo[axis];
+    cost.hi[axis] = box.hi[axis];
   }
-  return best;
+  if (!(cost.halfArea > 0)) return std::nullopt;
+  cost.splitBase = cost.halfArea * splitFactor_;
+  BestSplit best{cost.halfArea * cost.count, std::nullopt};  // a split must beat the leaf
+  if (cost.count > kSmallNode)
+    binnedSplitter_.findSplit(references, box, cost, best);
+  else
+    smallNodeSplitter_.findSplit(references, cost, best);
+  return best.split;
 }
 
-void SahBuilder::makeLeaf(uint32_t node, const NodeLists& lists, uint32_t depth) {
-  // Each triangle has one start or one planar event on every axis.
+void SahBuilder::makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth) {
   leafTriangles_.clear();
-  const Event* const events = arena_.data() + lists.offset(0);
-  for (uint32_t i = 0; i < lists.size[0]; ++i)
-    if (typeOf(events[i]) != kEnd) leafTriangles_.push_back(primitiveOf(events[i]));
+  for (const Reference& reference : references) leafTriangles_.push_back(reference.primitive);
   std::sort(leafTriangles_.begin(), leafTriangles_.end());
   writer_.leaf(node, leafTriangles_, depth);
 }
 
-// Merges the sorted runs a and b into out; returns the end of the output.
-Event* mergeEvents(const Event* a, const Event* aEnd, const Event* b, const Event* bEnd, Event* out) {
-  if (b == bEnd) {
-    std::memcpy(out, a, size_t(aEnd - a) * sizeof(Event));
-    return out + (aEnd - a);
+// Replaces the node's references at begin by its children's: above's
+// first, so that below's, built first, are at the top. Straddling triangles
+// are clipped to each child (perfect splits). Returns the counts of below
+// and above.
+std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t count, const KdSplit& split) {
+  if (belowScratch_.size() < count) belowScratch_.resize(count);
+  Reference* const references = arena_.data() + begin;
+  Reference* const below = belowScratch_.data();
+  // Each reference gives at most one to above, so above's, written in place,
+  // never overtake the one being read.
+  uint32_t aboveCount = 0, belowCount = 0;
+  const int axis = split.axis;
+  const float position = split.position;
+  const bool planarBelow = split.planarBelow;
+  for (uint32_t i = 0; i < count; ++i) {
+    // As kdSideOf, without branches (which side is a coin toss): lo <= hi,
+    // so a box ending on the plane goes below unless it lies in it with the
+    // planar triangles above; and the other way round.
+    const float lo = references[i].lo[axis], hi = references[i].hi[axis];
+    const bool toBelow = (hi <= position) & ((lo < position) | planarBelow);
+    const bool toAbove = (lo >= position) & ((hi > position) | !planarBelow);
+    const Reference reference = references[i];
+    std::memcpy(&references[aboveCount], &reference, sizeof(Reference));
+    std::memcpy(&below[belowCount], &reference, sizeof(Reference));
+    aboveCount += toAbove;
+    belowCount += toBelow;
+    if (toBelow | toAbove) continue;
+    if (count <= kClipAbove) {
+      Reference part = reference;
+      part.lo[axis] = position;
+      references[aboveCount++] = part;
+      part = reference;
+      part.hi[axis] = position;
+      below[belowCount++] = part;
+      continue;
+    }
+    Vec3 v0, v1, v2;
+    mesh_.triangle(reference.primitive, v0, v1, v2);
+    Bounds3 belowPart, abovePart;
+    splitTriangleToChildren(v0, v1, v2, reference.bounds(), axis, position, belowPart, abovePart);
+    if (!abovePart.empty()) references[aboveCount++] = Reference::of(abovePart, reference.primitive);
+    if (!belowPart.empty()) below[belowCount++] = Reference::of(belowPart, reference.primitive);
   }
-  return std::merge(a, aEnd, b, bEnd, out, [](const Event& x, const Event& y) { return sortsBefore(x, y); });
+  if (arena_.size() < begin + aboveCount + belowCount) arena_.resize(begin + aboveCount + belowCount);
+  // Copied inline: most nodes are small, and a call to memcpy costs them
+  // more than the copy.
+  Reference* const to = arena_.data() + begin + aboveCount;
+  for (uint32_t i = 0; i < belowCount; ++i) to[i] = below[i];
+  return {belowCount, aboveCount};
 }
 
-void SahBuilder::buildNode(uint32_t node, const NodeLists& lists, const Bounds3& box, uint32_t depth) {
-  if (lists.triangleCount <= limits_.leafSize || depth > limits_.maxDepth)
-    return makeLeaf(node, lists, depth);
-  const std::optional<KdSplit> split = findSplit(lists, box);
-  if (!split) return makeLeaf(node, lists, depth);
-  const int splitAxis = split->axis;
-  const float position = split->position;
-  const Side planarSide = split->planarBelow ? kBelow : kAbove;
-
-  // Classify, in one pass over the split axis's sorted events. Before the
-  // plane: a start means "both" unless the triangle's end (also before, or
-  // on, the plane) overrules it with "below". On the plane: ends below,
-  // planars to their side, starts above. After it: starts and planars
-  // above; ends change nothing.
-  {
-    const Event* const events = arena_.data() + lists.offset(splitAxis);
-    const uint32_t size = lists.size[splitAxis];
-    Side* const side = side_.data();
-    uint32_t i = 0;
-    for (; i < size && events[i].position < position; ++i)
-      side[primitiveOf(events[i])] = typeOf(events[i]) == kStart ? kBoth : kBelow;
-    for (; i < size && events[i].position == position; ++i) {
-      const uint32_t type = typeOf(events[i]);
-      side[primitiveOf(events[i])] = type == kEnd ? kBelow : type == kStart ? kAbove : planarSide;
-    }
-    for (; i < size; ++i)
-      if (typeOf(events[i]) != kEnd) side[primitiveOf(events[i])] = kAbove;
-  }
-
-  // Straddling triangles (those still "both": they start before the plane
-  // and end after it) are clipped to each child; their new events are sorted.
-  const Bounds3 belowBox = boxBelow(box, splitAxis, position);
-  const Bounds3 aboveBox = boxAbove(box, splitAxis, position);
-  for (int axis = 0; axis < 3; ++axis) newBelow_[axis].clear(), newAbove_[axis].clear();
-  uint32_t belowCount = 0, aboveCount = 0;
-  {
-    const Event* const events = arena_.data() + lists.offset(splitAxis);
-    const uint32_t size = lists.size[splitAxis];
-    for (uint32_t i = 0; i < size && events[i].position < position; ++i) {
-      const uint32_t primitive = primitiveOf(events[i]);
-      if (typeOf(events[i]) != kStart || side_[primitive] != kBoth) continue;
-      Vec3 v0, v1, v2;
-      mesh_.triangle(primitive, v0, v1, v2);
-      Bounds3 belowPart, abovePart;
-      clipTriangleToChildren(v0, v1, v2, box, splitAxis, position, belowPart, abovePart);
-      if (!belowPart.empty()) addEvents(newBelow_, belowPart, primitive), ++belowCount;
-      if (!abovePart.empty()) addEvents(newAbove_, abovePart, primitive), ++aboveCount;
-    }
-  }
-  const auto before = [](const Event& x, const Event& y) { return sortsBefore(x, y); };
-  for (int axis = 0; axis < 3; ++axis) {
-    std::sort(newBelow_[axis].begin(), newBelow_[axis].end(), before);
-    std::sort(newAbove_[axis].begin(), newAbove_[axis].end(), before);
-  }
-
-  // Split each list in order into the scratch buffers, without branching on
-  // the side (a coin toss for the predictor): every event is written to
-  // both, and kept where it belongs.
-  const size_t total = lists.total();
-  if (belowScratch_.size() < total) belowScratch_.resize(total), aboveScratch_.resize(total);
-  uint32_t filteredBelow[3], filteredAbove[3];
-  {
-    Event* outBelow = belowScratch_.data();
-    Event* outAbove = aboveScratch_.data();
-    const Side* const side = side_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      const Event* const events = arena_.data() + lists.offset(axis);
-      const uint32_t size = lists.size[axis];
-      Event* const startBelow = outBelow;
-      Event* const startAbove = outAbove;
-      for (uint32_t i = 0; i < size; ++i) {
-        const Event event = events[i];
-        const Side s = side[primitiveOf(event)];
-        *outBelow = event;
-        *outAbove = event;
-        outBelow += s == kBelow;
-        outAbove += s == kAbove;
-        if (axis == 0) {
-          const uint32_t triangle = typeOf(event) != kEnd;
-          belowCount += triangle & (s == kBelow);
-          aboveCount += triangle & (s == kAbove);
-        }
-      }
-      filteredBelow[axis] = uint32_t(outBelow - startBelow);
-      filteredAbove[axis] = uint32_t(outAbove - startAbove);
-    }
-  }
-
-  // The children's lists replace the node's in the arena: above first, so
-  // that below, built first, is at the top.
-  NodeLists above, below;
-  above.begin = lists.begin;
-  above.triangleCount = aboveCount;
-  below.triangleCount = belowCount;
-  size_t needed = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    above.size[axis] = filteredAbove[axis] + uint32_t(newAbove_[axis].size());
-    below.size[axis] = filteredBelow[axis] + uint32_t(newBelow_[axis].size());
-    needed += size_t(above.size[axis]) + below.size[axis];
-  }
-  below.begin = above.begin + above.total();
-  if (arena_.size() < lists.begin + needed) arena_.resize(lists.begin + needed);
-  {
-    Event* out = arena_.data() + above.begin;
-    const Event* in = aboveScratch_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      out = mergeEvents(in, in + filteredAbove[axis], newAbove_[axis].data(),
-                        newAbove_[axis].data() + newAbove_[axis].size(), out);
-      in += filteredAbove[axis];
-    }
-    in = belowScratch_.data();
-    for (int axis = 0; axis < 3; ++axis) {
-      out = mergeEvents(in, in + filteredBelow[axis], newBelow_[axis].data(),
-                        newBelow_[axis].data() + newBelow_[axis].size(), out);
-      in += filteredBelow[axis];
-    }
-  }
-
-  const uint32_t children = writer_.split(node, splitAxis, position);
-  buildNode(children, below, belowBox, depth + 1);
-  buildNode(children + 1, above, aboveBox, depth + 1);
+void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth) {
+  const std::span<const Reference> references(arena_.data() + begin, count);
+  if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
+  const std::optional<KdSplit> split = findSplit(references, box);
+  if (!split) return makeLeaf(node, references, depth);
+  const auto [belowCount, aboveCount] = splitReferences(begin, count, *split);
+  const uint32_t children = writer_.split(node, split->axis, split->position);
+  buildNode(children, begin + aboveCount, belowCount, box.below(split->axis, split->position), depth + 1);
+  buildNode(children + 1, begin, aboveCount, box.above(split->axis, split->position), depth + 1);
 }
 
 }  // namespace
@@ -348,39 +573,16 @@ void buildKdTreeSah(const MeshView& mesh, const KdTreeOptions& options, KdTreeDa
   const std::vector<uint32_t> triangles = kdTreeTriangles(mesh);
   if (triangles.empty()) return;
   SahBuilder builder(mesh, options, kdBuildLimits(options, triangles.size()), tree);
-
-  // The root's events, generated ends, then planars, then starts, so that
-  // the stable sort by position leaves equal positions in type order.
-  std::vector<Bounds3> boxes(triangles.size());
-  for (size_t i = 0; i < triangles.size(); ++i) {
-    boxes[i] = mesh.triangleBounds(triangles[i]);
-    tree.bounds.extend(boxes[i]);
+  std::vector<Reference>& arena = builder.arena();
+  // The root's references, and room for their children's (straddlers
+  // add a few): no regrowth and copy while the top of the tree is built.
+  arena.reserve(2 * triangles.size());
+  for (uint32_t primitive : triangles) {
+    const Bounds3 box = mesh.triangleBounds(primitive);
+    arena.push_back(Reference::of(box, primitive));
+    tree.bounds.extend(box);
   }
-  NodeLists root;
-  root.triangleCount = uint32_t(triangles.size());
-  std::vector<Event>& arena = builder.arena();
-  std::vector<Event> list, scratch;
-  for (int axis = 0; axis < 3; ++axis) {
-    list.clear();
-    for (uint32_t type : {kEnd, kPlanar, kStart}) {
-      for (size_t i = 0; i < triangles.size(); ++i) {
-        const float lo = boxes[i].lo[axis] + 0.0f, hi = boxes[i].hi[axis] + 0.0f;  // no -0
-        const uint32_t code = triangles[i] << 2 | type;
-        if (lo == hi) {
-          if (type == kPlanar) list.push_back({lo, code});
-        } else if (type != kPlanar) {
-          list.push_back({type == kStart ? lo : hi, code});
-        }
-      }
-    }
-    radixSortByPosition(list, scratch);
-    root.size[axis] = uint32_t(list.size());
-    arena.insert(arena.end(), list.begin(), list.end());
-  }
-  std::vector<Bounds3>().swap(boxes);
-  std::vector<Event>().swap(list);
-  std::vector<Event>().swap(scratch);
-  builder.build(root, tree.bounds);
+  builder.build(tree.bounds);
 }
 
 }  // namespace portico

@@ -22,6 +22,7 @@ KdTreeOptions readKdTreeOptions(AcceleratorParameters& parameters) {
     options.traversalCost = parameters.positiveNumber("traversal", options.traversalCost);
     options.intersectionCost = parameters.positiveNumber("intersection", options.intersectionCost);
     options.emptyBonus = parameters.positiveNumber("empty", options.emptyBonus);
+    options.bins = parameters.integer("bins", options.bins, 2, 256);
     if (options.emptyBonus > 1.0)
       parameters.fail("parameter empty must be a factor in (0, 1] (got " +
                       std::to_string(options.emptyBonus) + ")");

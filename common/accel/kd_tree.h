@@ -4,10 +4,12 @@
 //   median  the spatial median of the node's longest axis. Builds fastest,
 //           traces slowest; stops at the depth and leaf-size limits.
 //   sah     the surface area heuristic (MacDonald & Booth 1990, Havran
-//           2000), built in O(n log n) from sorted event lists (Wald &
-//           Havran 2006) with perfect splits (triangles clipped to each
-//           node). The fastest to trace: choose it when a cell will take many
-//           rays. Stops when no split is cheaper than a leaf.
+//           2000), built in O(n log n): binned SAH refined by an exact
+//           sweep near the best bin boundary (Wald & Havran 2006) in large
+//           nodes, the exact SAH in small ones, with perfect splits
+//           (triangles clipped to each node). The fastest to trace: choose
+//           it when a cell will take many rays. Stops when no split is
+//           cheaper than a leaf.
 //   bbox    the bounding-box heuristic (Szécsi 2003): the node's triangle
 //           boxes sorted along its longest axis; the split is the box
 //           boundary that balances the two sides and cuts the fewest boxes.
@@ -23,6 +25,9 @@
 //   intersection=C  cost of one ray-triangle test, default 1.5.
 //   empty=F         factor applied to the cost of a split with an empty side
 //                   (an empty-space bonus), 0 < F <= 1, default 0.8.
+//   bins=N          bins per axis, 2..256, default 32: large nodes first
+//                   look for their split among the N - 1 bin boundaries,
+//                   then exactly among the triangles' faces near the best.
 //
 // Hits are identical, bit for bit, to those of `brute`: see kd_traverse.cpp.
 #pragma once
@@ -44,6 +49,7 @@ struct KdTreeOptions {
   double traversalCost = 1.0;
   double intersectionCost = 1.5;
   double emptyBonus = 0.8;
+  int bins = 32;
 };
 
 // The deepest tree any option allows (the traversal stack holds one entry per level).

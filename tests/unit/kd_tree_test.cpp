@@ -242,7 +242,8 @@ TEST(KdTree, MatchesBruteForceOnMixedScenesWithEveryParameter) {
   for (const char* spec :
        {"kd:median,leaf=1", "kd:median,leaf=8,depth=4", "kd:median,depth=60", "kd:bbox,leaf=1",
         "kd:bbox,depth=3", "kd:sah,leaf=4", "kd:sah,depth=2", "kd:sah,traversal=1,intersection=80",
-        "kd:sah,traversal=15,intersection=20,empty=1", "kd:sah,empty=0.2", "kd"})
+        "kd:sah,traversal=15,intersection=20,empty=1", "kd:sah,empty=0.2", "kd:sah,bins=2", "kd:sah,bins=256",
+        "kd"})
     expectSameAsBruteForce(mesh, spec, 4000, 500);
 }
 
@@ -458,6 +459,48 @@ TEST(KdTree, ClipsTrianglesConservativelyAndTightly) {
   EXPECT_GE(tight, nonEmpty * 99 / 100);
 }
 
+TEST(KdTree, SplitsTrianglesByThePlaneAsClippingDoes) {
+  // kd:sah's cheaper split: the same bounds as clipping when the triangle
+  // lies in the box, and bounds holding clipping's when it crosses it.
+  std::mt19937 random(19);
+  std::uniform_real_distribution<float> coordinate(-3, 3), unit(0, 1);
+  const Bounds3 box({-2, -2, -2}, {2, 2, 2});
+  int crossing = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const float scale = i % 2 == 0 ? 0.6f : 1.0f;  // even: inside the box
+    const Vec3 v0 = Vec3(coordinate(random), coordinate(random), coordinate(random)) * scale;
+    const Vec3 v1 = Vec3(coordinate(random), coordinate(random), coordinate(random)) * scale;
+    const Vec3 v2 = i % 8 == 1 ? Vec3(v1.x, v1.y, v0.z) : Vec3(coordinate(random), coordinate(random), 1.5f) * scale;
+    const int axis = int(random() % 3);
+    const float position = -1.5f + 3 * unit(random);
+    Bounds3 clippedBelow, clippedAbove, splitBelow, splitAbove;
+    clipTriangleToChildren(v0, v1, v2, box, axis, position, clippedBelow, clippedAbove);
+    splitTriangleToChildren(v0, v1, v2, box, axis, position, splitBelow, splitAbove);
+    Bounds3 triangle(v0, v0);
+    triangle.extend(v1);
+    triangle.extend(v2);
+    const bool inside = box.contains(triangle.lo) && box.contains(triangle.hi);
+    crossing += !inside;
+    for (auto [clipped, split, half] : {std::tuple(clippedBelow, splitBelow, boxBelow(box, axis, position)),
+                                        std::tuple(clippedAbove, splitAbove, boxAbove(box, axis, position))}) {
+      if (inside) {
+        ASSERT_EQ(split.lo, clipped.lo) << i;
+        ASSERT_EQ(split.hi, clipped.hi) << i;
+        continue;
+      }
+      if (clipped.empty()) continue;
+      ASSERT_FALSE(split.empty()) << i;
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_LE(split.lo[k], clipped.lo[k]) << i;
+        ASSERT_GE(split.hi[k], clipped.hi[k]) << i;
+        ASSERT_GE(split.lo[k], half.lo[k]) << i;
+        ASSERT_LE(split.hi[k], half.hi[k]) << i;
+      }
+    }
+  }
+  EXPECT_GT(crossing, 1000);
+}
+
 TEST(KdTree, RespectsTheDepthAndLeafLimits) {
   const KdTestMesh mesh = mixedScene(12);
   for (const char* spec : {"kd:median,depth=5", "kd:sah,depth=5", "kd:bbox,depth=5"}) {
@@ -553,7 +596,7 @@ TEST(KdTreeSpec, RejectsUnknownVariantsParametersAndBadValues) {
             "accelerator spec 'kd:octree': unknown variant 'octree' for kd (known: median, sah, bbox)");
   EXPECT_EQ(buildError("kd:sah,lef=4"),
             "accelerator spec 'kd:sah,lef=4': unknown parameter 'lef' for kd "
-            "(it takes: leaf, depth, traversal, intersection, empty)");
+            "(it takes: leaf, depth, traversal, intersection, empty, bins)");
   EXPECT_EQ(buildError("kd:median,traversal=2"),
             "accelerator spec 'kd:median,traversal=2': unknown parameter 'traversal' for kd "
             "(it takes: leaf, depth)");
@@ -569,12 +612,16 @@ TEST(KdTreeSpec, RejectsUnknownVariantsParametersAndBadValues) {
             std::string::npos);
   EXPECT_NE(buildError("kd:sah,empty=1.5").find("parameter empty must be a factor in (0, 1]"),
             std::string::npos);
+  EXPECT_NE(buildError("kd:sah,bins=1").find("bins must be"), std::string::npos);
+  EXPECT_NE(buildError("kd:sah,bins=257").find("bins must be at most 256"), std::string::npos);
+  EXPECT_NE(buildError("kd:median,bins=8").find("unknown parameter 'bins'"), std::string::npos);
   EXPECT_NE(buildError("kd:sah,median").find("two variants"), std::string::npos);
 
   // validateAcceleratorSpec finds the same problems without building.
   EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,lef=4")), std::invalid_argument);
   EXPECT_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:fast")), std::invalid_argument);
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,leaf=4,depth=40")));
+  EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:sah,bins=8")));
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:median,leaf=2")));
   EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("kd:bbox")));
 }
