@@ -68,7 +68,18 @@ constexpr uint32_t kBoxOnlyVoxels = 8;
 // lines of triangles prefetched per voxel.
 constexpr int kWalkAhead = 4;
 constexpr int kPrefetchLines = 8;
+// Steps of the lattice of the rows' content boxes (VoxelRow: one byte a bound).
+constexpr int kLatticeSteps = 255;
 
+
+// The set bits of x: baseline x86-64 has no popcnt instruction, and GCC
+// makes std::popcount a library call there.
+inline uint32_t countBits(uint64_t x) {
+  x -= (x >> 1) & 0x5555555555555555u;
+  x = (x & 0x3333333333333333u) + ((x >> 2) & 0x3333333333333333u);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fu;
+  return uint32_t((x * 0x0101010101010101u) >> 56);
+}
 
 // Whether all six coordinates are finite, as isFinite(a) && isFinite(b),
 // branch-free: x - x is 0 exactly when x is finite (NaN otherwise).
@@ -156,8 +167,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
 
   stats_.spec = std::string(spec);
   if (meshBounds_.empty()) {
-    voxelStart_.assign(1, 0);
-    stats_.bytes = sizeof(*this) + sizeof(uint32_t);
+    stats_.bytes = sizeof(*this);
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return;
@@ -189,6 +199,8 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   const double margin = kReferenceMargin * std::max({gridExtent[0], gridExtent[1], gridExtent[2]});
   const Double3 voxelHalfSize{0.5 * voxelSize_[0] + margin, 0.5 * voxelSize_[1] + margin,
                               0.5 * voxelSize_[2] + margin};
+  contentMargin_ = 2 * margin;
+  for (int axis = 0; axis < 3; ++axis) latticeStep_[axis] = (voxelSize_[axis] + 2 * contentMargin_) / kLatticeSteps;
 
   const uint64_t voxelCount = uint64_t(resolution_[0]) * resolution_[1] * resolution_[2];
   const uint32_t strideY = uint32_t(resolution_[0]);
@@ -209,8 +221,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // and at least two axes, only in those the triangle itself (grown by the
   // margin) overlaps. Referencing more voxels than the triangle touches costs
   // only tests, never exactness (see the top of the file).
-  voxelStart_.assign(voxelCount + 1, 0);
-  uint32_t* const counts = voxelStart_.data() + 1;
+  std::vector<uint32_t> counts(voxelCount, 0);
   // Uninitialised, grown by hand: push_back's checks cost more than the rest
   // of a one-voxel triangle's work.
   std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> pairVoxel, pairPrimitive;
@@ -264,49 +275,55 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     }
   }
 
-  // Each voxel's run of packets: voxelStart_[voxel + 1] becomes its end (a
-  // prefix sum of the counts stored there), firstReference[voxel] its first
-  // place in `sorted` below; and the occupancy bits.
+  // The occupancy bits and the rows' ranks; counts[voxel] becomes the
+  // voxel's first place in `sorted` below.
   const uint64_t total = pairCount;
   if (total > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
-  std::vector<uint32_t> firstReference(voxelCount);
   occupied_.assign((voxelCount + 63) / 64, 0);
+  occupiedBefore_.resize(occupied_.size());
   uint64_t packetTotal = 0;
-  uint32_t referenceTotal = 0;
+  uint32_t referenceTotal = 0, occupiedTotal = 0;
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
     const uint64_t end = std::min<uint64_t>(voxelCount, (word + 1) * 64);
     uint64_t bits = 0;
     for (uint64_t voxel = word * 64; voxel < end; ++voxel) {
       const uint32_t count = counts[voxel];
       bits |= uint64_t(count != 0) << (voxel % 64);
-      firstReference[voxel] = referenceTotal;
+      counts[voxel] = referenceTotal;
       referenceTotal += count;
       packetTotal += (count + 3) / 4;
-      counts[voxel] = uint32_t(packetTotal);
     }
     occupied_[word] = bits;
-    stats_.leaves += uint64_t(std::popcount(bits));
+    occupiedBefore_[word] = occupiedTotal;
+    occupiedTotal += uint32_t(std::popcount(bits));
   }
   if (packetTotal > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle packets; use a lower res");
 
   // Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
   // array small enough to stay in cache). Pairs come in increasing primitive
-  // order, so each voxel's list is increasing. After it, firstReference[v]
-  // is voxel v's end in `sorted`.
+  // order, so each voxel's list is increasing. After it, counts[v] is voxel
+  // v's end in `sorted`.
   std::vector<uint32_t> sorted(total);
-  for (uint64_t pair = 0; pair < total; ++pair) sorted[firstReference[pairVoxel[pair]]++] = pairPrimitive[pair];
+  for (uint64_t pair = 0; pair < total; ++pair) sorted[counts[pairVoxel[pair]]++] = pairPrimitive[pair];
 
-  // Pass 3: the packets, written in order, voxel by voxel; each voxel's last
-  // packet padded with copies of its last triangle (tested once: the mailbox).
+  // Pass 3: the rows and the packets, written in order, voxel by voxel; each
+  // voxel's last packet padded with copies of its last triangle (tested
+  // once: the mailbox). The content box: the union of the triangles'
+  // bounding boxes grown by contentMargin_, clipped to the voxel grown by as
+  // much (the ends of the lattice), rounded outwards to the lattice.
+  rows_.resize(size_t(occupiedTotal) + 1);
   packets_.resize(packetTotal);
   TrianglePacket* packet = packets_.data();
+  VoxelRow* row = rows_.data();
   uint32_t reference = 0;
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
-    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1) {
-      const uint64_t voxel = word * 64 + uint64_t(std::countr_zero(bits));
-      const uint32_t end = firstReference[voxel];
+    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1, ++row) {
+      const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
+      const uint32_t end = counts[voxel];
+      row->firstPacket = uint32_t(packet - packets_.data());
+      Vec3 low(kInfinity), high(-kInfinity);
       for (; reference < end; reference += 4, ++packet) {
         for (uint32_t lane = 0; lane < 4; ++lane) {
           const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
@@ -316,19 +333,33 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
           packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
           packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
           packet->primitive[lane] = primitive;
+          low = min(low, min(v0, min(v1, v2)));
+          high = max(high, max(v0, max(v1, v2)));
         }
       }
       reference = end;
+      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
+      for (int axis = 0; axis < 3; ++axis) {
+        const double latticeLow = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+        const double inverseStep = 1.0 / latticeStep_[axis];
+        const double a = std::floor((double(low[axis]) - contentMargin_ - latticeLow) * inverseStep);
+        const double b = std::ceil((double(high[axis]) + contentMargin_ - latticeLow) * inverseStep);
+        row->low[axis] = uint8_t(std::clamp(a, 0.0, double(kLatticeSteps)));
+        row->high[axis] = uint8_t(std::clamp(b, 0.0, double(kLatticeSteps)));
+      }
     }
   }
+  row->firstPacket = uint32_t(packetTotal);
 
+  stats_.leaves = occupiedTotal;
   stats_.nodes = voxelCount;
   stats_.emptyLeaves = voxelCount - stats_.leaves;
   stats_.triangleReferences = total;
   stats_.averageDepth = 1;
   stats_.maxDepth = 1;
-  stats_.bytes = sizeof(*this) + voxelStart_.capacity() * sizeof(uint32_t) +
-                 packets_.capacity() * sizeof(TrianglePacket) + occupied_.capacity() * sizeof(uint64_t);
+  stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) +
+                 occupiedBefore_.capacity() * sizeof(uint32_t) + rows_.capacity() * sizeof(VoxelRow) +
+                 packets_.capacity() * sizeof(TrianglePacket);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -385,19 +416,33 @@ template <bool AnyHit>
   const int64_t stepX = indexStep[0], stepY = indexStep[1], stepZ = indexStep[2];
   int64_t leftX = stepsLeft[0], leftY = stepsLeft[1], leftZ = stepsLeft[2];
 
+  // Content boxes (VoxelRow): along each axis, the ray meets the lattice's
+  // first plane in the current voxel at that axis's exit distance (tx, ty,
+  // tz) minus latticeOffset, and each lattice step after it latticeStep
+  // later. A ray parallel to an axis never meets its planes: it tests no
+  // boxes (rare; the packets decide alone, as they may).
+  const bool testBoxes = direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0;
+  double latticeOffset[3], latticeStep[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    latticeOffset[axis] = (direction[axis] > 0.0 ? tDelta[axis] : 0.0) + contentMargin_ / direction[axis];
+    latticeStep[axis] = latticeStep_[axis] / direction[axis];
+  }
+
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
   grid_traversal::Mailbox mailbox;
   const TrianglePacket* const packets = packets_.data();
-  const uint32_t* const voxelStart = voxelStart_.data();
   const uint64_t* const occupied = occupied_.data();
+  const uint32_t* const occupiedBefore = occupiedBefore_.data();
+  const VoxelRow* const rows = rows_.data();
 
   // The walk runs ahead of the tests: it gathers the next few occupied
-  // voxels along the ray and prefetches their rows and triangles, so that
-  // their cache misses overlap instead of following one another (the
-  // triangles are tested in the walk's order all the same).
+  // voxels along the ray, keeps those whose content box the ray crosses and
+  // prefetches their triangles, so that their cache misses overlap instead
+  // of following one another (the triangles are tested in the walk's order
+  // all the same).
   uint32_t aheadIndex[kWalkAhead + 1];
-  double aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
+  double aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1], aheadPlane[kWalkAhead + 1][3];
   double tVoxelEnter = tEnter;
   bool walking = true;
   while (walking) {
@@ -408,6 +453,7 @@ template <bool AnyHit>
       aheadIndex[count] = uint32_t(index);
       aheadEnter[count] = tVoxelEnter;
       aheadExit[count] = tVoxelExit;
+      aheadPlane[count][0] = tx, aheadPlane[count][1] = ty, aheadPlane[count][2] = tz;
       count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
       if (tVoxelExit >= tExit) {
         walking = false;
@@ -433,15 +479,35 @@ template <bool AnyHit>
       tVoxelEnter = tVoxelExit;
       if (count == kWalkAhead) break;
     }
+    // The rows, and the content-box test: the part of the ray in the voxel
+    // and before the best hit so far must cross the box.
     uint32_t first[kWalkAhead], end[kWalkAhead];
+    int kept = 0;
     for (int k = 0; k < count; ++k) {
-      first[k] = voxelStart[aheadIndex[k]];
-      end[k] = voxelStart[aheadIndex[k] + 1];
-      const char* const line = reinterpret_cast<const char*>(packets + first[k]);
-      const char* const last = reinterpret_cast<const char*>(packets + end[k]) - 1;
+      const uint32_t voxel = aheadIndex[k];
+      const uint64_t before = occupied[voxel / 64] & ((uint64_t(1) << (voxel % 64)) - 1);
+      const VoxelRow& row = rows[occupiedBefore[voxel / 64] + countBits(before)];
+      if (testBoxes) {
+        double lower = aheadEnter[k], upper = std::min(aheadExit[k], tExit);
+        for (int axis = 0; axis < 3; ++axis) {
+          const double plane = aheadPlane[k][axis] - latticeOffset[axis];
+          const double a = plane + row.low[axis] * latticeStep[axis];
+          const double b = plane + row.high[axis] * latticeStep[axis];
+          lower = std::max(lower, std::min(a, b));
+          upper = std::min(upper, std::max(a, b));
+        }
+        if (!(lower <= upper)) continue;
+      }
+      first[kept] = row.firstPacket;
+      end[kept] = (&row)[1].firstPacket;
+      aheadEnter[kept] = aheadEnter[k];
+      aheadExit[kept] = aheadExit[k];
+      const char* const line = reinterpret_cast<const char*>(packets + first[kept]);
+      const char* const last = reinterpret_cast<const char*>(packets + end[kept]) - 1;
       for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
+      ++kept;
     }
-    for (int k = 0; k < count; ++k) {
+    for (int k = 0; k < kept; ++k) {
       // A voxel entered at or beyond the best hit cannot hold a nearer one;
       // nor can any voxel after the one holding it. (Hits beyond the current
       // voxel are kept, not re-tested: the mailbox would skip them.)

@@ -6,7 +6,10 @@
 // Layout: each voxel's triangles are copied, vertices and primitive id, into
 // the voxel's own run of 4-wide packets (one copy per reference), so a voxel
 // costs one row lookup and a contiguous read, and four triangles share one
-// SIMD sign test before the scalar watertight test (grid_traversal.h).
+// SIMD sign test before the scalar watertight test (grid_traversal.h). The
+// row also holds a coarse box around the voxel's contents: a voxel of a
+// floor, a wall or a chair leg is mostly air, and most rays crossing it
+// miss that box and skip its triangles.
 //
 // Parameters:
 //   res=N      voxels along the longest axis of the bounds; the other axes get
@@ -82,16 +85,32 @@ class UniformGrid final : public Accelerator {
   std::array<int, 3> resolution_{0, 0, 0};
   std::array<double, 3> low_{0, 0, 0}, high_{0, 0, 0};
   std::array<double, 3> voxelSize_{0, 0, 0}, inverseVoxelSize_{0, 0, 0};
-  // Compressed rows: voxel i (x fastest, then y, then z) holds the triangle
-  // packets packets_[voxelStart_[i] .. voxelStart_[i + 1]): its triangles by
-  // increasing primitive id, four to a packet, with their vertices (one copy
-  // per reference).
-  std::vector<uint32_t> voxelStart_;
+  // The rows' content boxes: grown by contentMargin_, on a lattice of
+  // latticeStep_ spacing that starts contentMargin_ below each voxel.
+  double contentMargin_ = 0;
+  std::array<double, 3> latticeStep_{0, 0, 0};
+  // One bit per voxel (x fastest, then y, then z), set when it holds
+  // references: small enough to stay in cache, so traversal crosses empty
+  // voxels touching nothing else. occupiedBefore_[w]: the occupied voxels
+  // before word w, so a voxel's row is found by counting bits.
+  std::vector<uint64_t> occupied_;
+  std::vector<uint32_t> occupiedBefore_;
+  // One row per occupied voxel, in voxel order, then one whose firstPacket
+  // ends the last run: the voxel's triangles are the packets
+  // packets_[row.firstPacket .. next row's firstPacket), by increasing
+  // primitive id, four to a packet, with their vertices (one copy per
+  // reference). low/high: the box its triangles' bounding boxes cover
+  // within the voxel, on a lattice of 255 steps across the voxel grown by
+  // two reference margins (rounded outwards), so a ray that misses it skips
+  // the voxel without loading a packet (uniform_grid.cpp says why that is
+  // exact).
+  struct VoxelRow {
+    uint32_t firstPacket;
+    uint8_t low[3], high[3];
+  };
+  std::vector<VoxelRow> rows_;
   std::vector<grid_traversal::TrianglePacket, grid_traversal::LargeArrayAllocator<grid_traversal::TrianglePacket>>
       packets_;
-  // One bit per voxel, set when it holds references: small enough to stay in
-  // cache, so traversal crosses empty voxels without touching voxelStart_.
-  std::vector<uint64_t> occupied_;
   AcceleratorStats stats_;
 };
 
