@@ -6,10 +6,12 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <emmintrin.h>
 #include <new>
 #include <utility>
 
@@ -68,6 +70,15 @@ struct TrianglePacket {
   uint32_t primitive[4];
 };
 static_assert(sizeof(TrianglePacket) == 160);
+
+// The box of a packet's four triangles on the lattice of its voxel's content
+// box (uniform_grid.h): x, y, z, and a fourth entry 0. Kept apart from the
+// packets, a voxel's side by side, so that testing them all reads a line or
+// two and only the packets whose box the ray crosses are loaded.
+struct PacketBox {
+  uint8_t low[4], high[4];
+};
+static_assert(sizeof(PacketBox) == 8);
 
 // For the builds of `grid` and `hgrid`: the separating-axis test of
 // triangleOverlapsBoxBeyondBounds (the 9 edge cross products and the
@@ -164,8 +175,39 @@ struct PacketRay {
   }
 };
 
-// Tests the triangles of packets[first, end), folding hits into `best`; with
-// AnyHit, returns true at the first hit. Four at a time, the first steps of
+// Where a ray crosses the lattice of a voxel's boxes (PacketBox), as
+// distances along it: lattice coordinate q of axis a at planeLow[a] + q *
+// step[a] (planeHigh[a] the same) for a = 0, 1, 2; in the fourth entries, the
+// span of the ray that counts, planeLow[3] to planeHigh[3] (step[3] = 0).
+// A ray that tests no boxes gets planes of -inf and +inf and no step.
+struct PacketBoxClip {
+  PacketRay::Float4 planeLow, planeHigh, step;
+};
+
+// Whether the ray crosses the box within the span of the clip. SSE2 (the
+// x86-64 baseline), which GCC's vector extensions do not reach here: they
+// widen the bytes one by one and select instead of min/max.
+inline bool crossesPacketBox(const PacketBox& box, const PacketBoxClip& clip) {
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i shorts = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&box)), zero);
+  const __m128 low = _mm_cvtepi32_ps(_mm_unpacklo_epi16(shorts, zero));
+  const __m128 high = _mm_cvtepi32_ps(_mm_unpackhi_epi16(shorts, zero));
+  const __m128 a = _mm_add_ps(clip.planeLow, _mm_mul_ps(low, clip.step));
+  const __m128 b = _mm_add_ps(clip.planeHigh, _mm_mul_ps(high, clip.step));
+  // The latest entry and the earliest exit over the four entries.
+  __m128 enter = _mm_min_ps(a, b), exit = _mm_max_ps(a, b);
+  enter = _mm_max_ps(enter, _mm_shuffle_ps(enter, enter, _MM_SHUFFLE(1, 0, 3, 2)));
+  exit = _mm_min_ps(exit, _mm_shuffle_ps(exit, exit, _MM_SHUFFLE(1, 0, 3, 2)));
+  enter = _mm_max_ss(enter, _mm_shuffle_ps(enter, enter, _MM_SHUFFLE(1, 1, 1, 1)));
+  exit = _mm_min_ss(exit, _mm_shuffle_ps(exit, exit, _MM_SHUFFLE(1, 1, 1, 1)));
+  return _mm_comile_ss(enter, exit);
+}
+
+// Tests the triangles of packets[first, end) whose box (boxes[first, end))
+// the ray crosses, folding hits into `best`; with AnyHit, returns true at
+// the first hit. The boxes first, 64 at a time and without branches, then
+// the packets they pass, prefetched together so that their cache misses
+// overlap. Four at a time, the first steps of
 // intersectTriangle (translation, shear, edge functions, sign test) run on
 // all four lanes with the very operations of the scalar test, so each lane
 // gets the scalar test's U, V, W bit for bit: a lane is dropped only where
@@ -174,8 +216,9 @@ struct PacketRay {
 // re-decides in double) go to intersectTriangle itself, once per primitive
 // (the mailbox), which alone decides hits.
 template <bool AnyHit>
-inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t end, Mailbox& mailbox,
-                        const PacketRay& packetRay, const WatertightRay& frame, const Ray& ray, Hit& best) {
+inline bool testPackets(const TrianglePacket* packets, const PacketBox* boxes, uint32_t first, uint32_t end,
+                        const PacketBoxClip& clip, Mailbox& mailbox, const PacketRay& packetRay,
+                        const WatertightRay& frame, const Ray& ray, Hit& best) {
   using Float4 = PacketRay::Float4;
   using Int4 = int32_t __attribute__((vector_size(16)));
   const auto load = [](const float* p) {
@@ -184,8 +227,16 @@ inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t 
     return value;
   };
   const int kx = packetRay.kx, ky = packetRay.ky, kz = packetRay.kz;
-  for (uint32_t p = first; p < end; ++p) {
-    const TrianglePacket& packet = packets[p];
+  for (uint32_t chunk = first; chunk < end; chunk += 64) {
+    const uint32_t count = std::min(end - chunk, 64u);
+    uint64_t crossed = 0;
+    for (uint32_t k = 0; k < count; ++k) crossed |= uint64_t(crossesPacketBox(boxes[chunk + k], clip)) << k;
+    for (uint64_t bits = crossed; bits != 0; bits &= bits - 1) {
+      const char* const start = reinterpret_cast<const char*>(packets + chunk + std::countr_zero(bits));
+      for (int offset : {0, 64, 128, int(sizeof(TrianglePacket)) - 1}) __builtin_prefetch(start + offset);
+    }
+    for (; crossed != 0; crossed &= crossed - 1) {
+    const TrianglePacket& packet = packets[chunk + std::countr_zero(crossed)];
     const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
     const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
     const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
@@ -217,6 +268,7 @@ inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t 
       if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
       if constexpr (AnyHit) return true;
       if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
+    }
     }
   }
   return false;

@@ -67,7 +67,8 @@ constexpr uint32_t kBoxOnlyVoxels = 8;
 // Traversal: occupied voxels the walk gathers ahead of the tests, and cache
 // lines of triangles prefetched per voxel.
 constexpr int kWalkAhead = 4;
-constexpr int kPrefetchLines = 8;
+constexpr int kPrefetchLines = 4;
+constexpr int kPrefetchBoxLines = 2;
 // Steps of the lattice of the rows' content boxes (VoxelRow: one byte a bound).
 constexpr int kLatticeSteps = 255;
 
@@ -310,21 +311,43 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
 
   // Pass 3: the rows and the packets, written in order, voxel by voxel; each
   // voxel's last packet padded with copies of its last triangle (tested
-  // once: the mailbox). The content box: the union of the triangles'
+  // once: the mailbox). A packet's box: the union of its triangles'
   // bounding boxes grown by contentMargin_, clipped to the voxel grown by as
-  // much (the ends of the lattice), rounded outwards to the lattice.
+  // much (the ends of the lattice), rounded outwards to the lattice; the
+  // row's box, the union of its packets'.
+  const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
+  // Lattice coordinates at or below / at or above a coordinate, clamped to
+  // the lattice (truncation is floor for the clamped values, which are >= 0).
+  const auto below = [&](double coordinate, double latticeLow, int axis) {
+    const double x = std::clamp((coordinate - latticeLow) * inverseStep[axis], 0.0, double(kLatticeSteps));
+    return uint8_t(x);
+  };
+  const auto above = [&](double coordinate, double latticeLow, int axis) {
+    const double x = std::clamp((coordinate - latticeLow) * inverseStep[axis], 0.0, double(kLatticeSteps));
+    const uint32_t q = uint32_t(x);
+    return uint8_t(q + (double(q) < x));
+  };
   rows_.resize(size_t(occupiedTotal) + 1);
   packets_.resize(packetTotal);
+  packetBoxes_.resize(packetTotal);
   TrianglePacket* packet = packets_.data();
+  grid_traversal::PacketBox* box = packetBoxes_.data();
   VoxelRow* row = rows_.data();
   uint32_t reference = 0;
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
     for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1, ++row) {
       const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
       const uint32_t end = counts[voxel];
+      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
+      double latticeLow[3];
+      for (int axis = 0; axis < 3; ++axis) {
+        latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+        row->low[axis] = kLatticeSteps;
+        row->high[axis] = 0;
+      }
       row->firstPacket = uint32_t(packet - packets_.data());
-      Vec3 low(kInfinity), high(-kInfinity);
-      for (; reference < end; reference += 4, ++packet) {
+      for (; reference < end; reference += 4, ++packet, ++box) {
+        Vec3 low(kInfinity), high(-kInfinity);
         for (uint32_t lane = 0; lane < 4; ++lane) {
           const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
           Vec3 v0, v1, v2;
@@ -336,17 +359,15 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
           low = min(low, min(v0, min(v1, v2)));
           high = max(high, max(v0, max(v1, v2)));
         }
+        for (int axis = 0; axis < 3; ++axis) {
+          box->low[axis] = below(double(low[axis]) - contentMargin_, latticeLow[axis], axis);
+          box->high[axis] = above(double(high[axis]) + contentMargin_, latticeLow[axis], axis);
+          row->low[axis] = std::min(row->low[axis], box->low[axis]);
+          row->high[axis] = std::max(row->high[axis], box->high[axis]);
+        }
+        box->low[3] = box->high[3] = 0;
       }
       reference = end;
-      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
-      for (int axis = 0; axis < 3; ++axis) {
-        const double latticeLow = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
-        const double inverseStep = 1.0 / latticeStep_[axis];
-        const double a = std::floor((double(low[axis]) - contentMargin_ - latticeLow) * inverseStep);
-        const double b = std::ceil((double(high[axis]) + contentMargin_ - latticeLow) * inverseStep);
-        row->low[axis] = uint8_t(std::clamp(a, 0.0, double(kLatticeSteps)));
-        row->high[axis] = uint8_t(std::clamp(b, 0.0, double(kLatticeSteps)));
-      }
     }
   }
   row->firstPacket = uint32_t(packetTotal);
@@ -359,7 +380,8 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   stats_.maxDepth = 1;
   stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) +
                  occupiedBefore_.capacity() * sizeof(uint32_t) + rows_.capacity() * sizeof(VoxelRow) +
-                 packets_.capacity() * sizeof(TrianglePacket);
+                 packets_.capacity() * sizeof(TrianglePacket) +
+                 packetBoxes_.capacity() * sizeof(grid_traversal::PacketBox);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -427,11 +449,16 @@ template <bool AnyHit>
     latticeOffset[axis] = (direction[axis] > 0.0 ? tDelta[axis] : 0.0) + contentMargin_ / direction[axis];
     latticeStep[axis] = latticeStep_[axis] / direction[axis];
   }
+  // The packets' boxes are tested in single precision (grid_traversal.h).
+  using Float4 = grid_traversal::PacketRay::Float4;
+  const Float4 packetStep{float(latticeStep[0]), float(latticeStep[1]), float(latticeStep[2]), 0.0f};
+  const Float4 infinity4{kInfinity, kInfinity, kInfinity, kInfinity};
 
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
   grid_traversal::Mailbox mailbox;
   const TrianglePacket* const packets = packets_.data();
+  const grid_traversal::PacketBox* const packetBoxes = packetBoxes_.data();
   const uint64_t* const occupied = occupied_.data();
   const uint32_t* const occupiedBefore = occupiedBefore_.data();
   const VoxelRow* const rows = rows_.data();
@@ -482,6 +509,7 @@ template <bool AnyHit>
     // The rows, and the content-box test: the part of the ray in the voxel
     // and before the best hit so far must cross the box.
     uint32_t first[kWalkAhead], end[kWalkAhead];
+    grid_traversal::PacketBoxClip clips[kWalkAhead];
     int kept = 0;
     for (int k = 0; k < count; ++k) {
       const uint32_t voxel = aheadIndex[k];
@@ -489,19 +517,29 @@ template <bool AnyHit>
       const VoxelRow& row = rows[occupiedBefore[voxel / 64] + countBits(before)];
       if (testBoxes) {
         double lower = aheadEnter[k], upper = std::min(aheadExit[k], tExit);
+        double plane[3];
         for (int axis = 0; axis < 3; ++axis) {
-          const double plane = aheadPlane[k][axis] - latticeOffset[axis];
-          const double a = plane + row.low[axis] * latticeStep[axis];
-          const double b = plane + row.high[axis] * latticeStep[axis];
+          plane[axis] = aheadPlane[k][axis] - latticeOffset[axis];
+          const double a = plane[axis] + row.low[axis] * latticeStep[axis];
+          const double b = plane[axis] + row.high[axis] * latticeStep[axis];
           lower = std::max(lower, std::min(a, b));
           upper = std::min(upper, std::max(a, b));
         }
         if (!(lower <= upper)) continue;
+        // The packets' boxes lie in the row's: only [lower, upper] counts.
+        clips[kept].planeLow = Float4{float(plane[0]), float(plane[1]), float(plane[2]), float(lower)};
+        clips[kept].planeHigh = Float4{float(plane[0]), float(plane[1]), float(plane[2]), float(upper)};
+        clips[kept].step = packetStep;
+      } else {
+        clips[kept] = {-infinity4, infinity4, Float4{}};
       }
       first[kept] = row.firstPacket;
       end[kept] = (&row)[1].firstPacket;
       aheadEnter[kept] = aheadEnter[k];
       aheadExit[kept] = aheadExit[k];
+      const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept]);
+      const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + end[kept]) - 1;
+      for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
       const char* const line = reinterpret_cast<const char*>(packets + first[kept]);
       const char* const last = reinterpret_cast<const char*>(packets + end[kept]) - 1;
       for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
@@ -514,7 +552,8 @@ template <bool AnyHit>
       if constexpr (!AnyHit) {
         if (best.found() && double(best.t) <= aheadEnter[k]) return true;
       }
-      if (grid_traversal::testPackets<AnyHit>(packets, first[k], end[k], mailbox, packetRay, frame, ray, best))
+      if (grid_traversal::testPackets<AnyHit>(packets, packetBoxes, first[k], end[k], clips[k], mailbox, packetRay,
+                                              frame, ray, best))
         return true;
       if constexpr (!AnyHit) {
         if (best.found() && double(best.t) <= aheadExit[k]) return true;

@@ -111,6 +111,9 @@ class UniformGrid final : public Accelerator {
   std::vector<VoxelRow> rows_;
   std::vector<grid_traversal::TrianglePacket, grid_traversal::LargeArrayAllocator<grid_traversal::TrianglePacket>>
       packets_;
+  // packetBoxes_[p]: the box of packets_[p] on its voxel's lattice.
+  std::vector<grid_traversal::PacketBox, grid_traversal::LargeArrayAllocator<grid_traversal::PacketBox>>
+      packetBoxes_;
   AcceleratorStats stats_;
 };
 
