@@ -314,40 +314,63 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // once: the mailbox). A packet's box: the union of its triangles'
   // bounding boxes grown by contentMargin_, clipped to the voxel grown by as
   // much (the ends of the lattice), rounded outwards to the lattice; the
-  // row's box, the union of its packets'.
+  // row's box, the union of its packets'. A voxel whose triangles fit in one
+  // packet and are those of the voxel before it (a run of voxels along a
+  // floor, a wall or a ceiling: most of the occupied voxels of a room) shares
+  // that voxel's packet, whose box then spans the whole lattice (the rows'
+  // boxes, each on its own voxel's lattice, do the culling).
   const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
-  // Lattice coordinates at or below / at or above a coordinate, clamped to
-  // the lattice (truncation is floor for the clamped values, which are >= 0).
-  const auto below = [&](double coordinate, double latticeLow, int axis) {
-    const double x = std::clamp((coordinate - latticeLow) * inverseStep[axis], 0.0, double(kLatticeSteps));
-    return uint8_t(x);
+  // The box on the lattice starting at latticeLow: low bounds rounded down,
+  // high bounds up, clamped to the lattice (truncation is floor for the
+  // clamped values, which are >= 0).
+  const auto latticeBox = [&](const Vec3& low, const Vec3& high, const double latticeLow[3]) {
+    grid_traversal::PacketBox box{};
+    for (int axis = 0; axis < 3; ++axis) {
+      const double a = (double(low[axis]) - contentMargin_ - latticeLow[axis]) * inverseStep[axis];
+      const double b = (double(high[axis]) + contentMargin_ - latticeLow[axis]) * inverseStep[axis];
+      const double lowStep = std::clamp(a, 0.0, double(kLatticeSteps));
+      const double highStep = std::clamp(b, 0.0, double(kLatticeSteps));
+      const uint32_t highFloor = uint32_t(highStep);
+      box.low[axis] = uint8_t(lowStep);
+      box.high[axis] = uint8_t(highFloor + (double(highFloor) < highStep));
+    }
+    return box;
   };
-  const auto above = [&](double coordinate, double latticeLow, int axis) {
-    const double x = std::clamp((coordinate - latticeLow) * inverseStep[axis], 0.0, double(kLatticeSteps));
-    const uint32_t q = uint32_t(x);
-    return uint8_t(q + (double(q) < x));
-  };
-  rows_.resize(size_t(occupiedTotal) + 1);
+  rows_.resize(occupiedTotal);
+  // At most packetTotal packets; the shared ones are left off at the end.
   packets_.resize(packetTotal);
   packetBoxes_.resize(packetTotal);
   TrianglePacket* packet = packets_.data();
   grid_traversal::PacketBox* box = packetBoxes_.data();
   VoxelRow* row = rows_.data();
-  uint32_t reference = 0;
+  uint32_t reference = 0, previousReference = 0;
+  Vec3 packetLow, packetHigh;  // the last packet's bounds
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
     for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1, ++row) {
       const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
       const uint32_t end = counts[voxel];
       const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
       double latticeLow[3];
-      for (int axis = 0; axis < 3; ++axis) {
-        latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
-        row->low[axis] = kLatticeSteps;
-        row->high[axis] = 0;
+      for (int axis = 0; axis < 3; ++axis) latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+      const uint32_t count = end - reference;
+      if (count <= 4 && count == reference - previousReference &&
+          std::equal(&sorted[reference], &sorted[end], &sorted[previousReference])) {
+        // Shared with the voxel before (row - 1), whose packet was the last written.
+        row->firstPacket = row[-1].firstPacket;
+        row->endPacket = row[-1].endPacket;
+        box[-1] = grid_traversal::PacketBox{{0, 0, 0, 0}, {kLatticeSteps, kLatticeSteps, kLatticeSteps, 0}};
+        const grid_traversal::PacketBox rowBox = latticeBox(packetLow, packetHigh, latticeLow);
+        std::memcpy(row->low, rowBox.low, 3);
+        std::memcpy(row->high, rowBox.high, 3);
+        previousReference = reference;
+        reference = end;
+        continue;
       }
       row->firstPacket = uint32_t(packet - packets_.data());
-      for (; reference < end; reference += 4, ++packet, ++box) {
-        Vec3 low(kInfinity), high(-kInfinity);
+      std::memset(row->low, kLatticeSteps, 3);
+      std::memset(row->high, 0, 3);
+      for (previousReference = reference; reference < end; reference += 4, ++packet, ++box) {
+        packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
         for (uint32_t lane = 0; lane < 4; ++lane) {
           const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
           Vec3 v0, v1, v2;
@@ -356,21 +379,21 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
           packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
           packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
           packet->primitive[lane] = primitive;
-          low = min(low, min(v0, min(v1, v2)));
-          high = max(high, max(v0, max(v1, v2)));
+          packetLow = min(packetLow, min(v0, min(v1, v2)));
+          packetHigh = max(packetHigh, max(v0, max(v1, v2)));
         }
+        *box = latticeBox(packetLow, packetHigh, latticeLow);
         for (int axis = 0; axis < 3; ++axis) {
-          box->low[axis] = below(double(low[axis]) - contentMargin_, latticeLow[axis], axis);
-          box->high[axis] = above(double(high[axis]) + contentMargin_, latticeLow[axis], axis);
           row->low[axis] = std::min(row->low[axis], box->low[axis]);
           row->high[axis] = std::max(row->high[axis], box->high[axis]);
         }
-        box->low[3] = box->high[3] = 0;
       }
+      row->endPacket = uint32_t(packet - packets_.data());
       reference = end;
     }
   }
-  row->firstPacket = uint32_t(packetTotal);
+  packets_.resize(size_t(packet - packets_.data()));
+  packetBoxes_.resize(packets_.size());
 
   stats_.leaves = occupiedTotal;
   stats_.nodes = voxelCount;
@@ -378,10 +401,11 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   stats_.triangleReferences = total;
   stats_.averageDepth = 1;
   stats_.maxDepth = 1;
+  // (The packets' and their boxes' capacity beyond their size, left by
+  // shared packets, is never touched, so never resident.)
   stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) +
                  occupiedBefore_.capacity() * sizeof(uint32_t) + rows_.capacity() * sizeof(VoxelRow) +
-                 packets_.capacity() * sizeof(TrianglePacket) +
-                 packetBoxes_.capacity() * sizeof(grid_traversal::PacketBox);
+                 packets_.size() * sizeof(TrianglePacket) + packetBoxes_.size() * sizeof(grid_traversal::PacketBox);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -534,7 +558,7 @@ template <bool AnyHit>
         clips[kept] = {-infinity4, infinity4, Float4{}};
       }
       first[kept] = row.firstPacket;
-      end[kept] = (&row)[1].firstPacket;
+      end[kept] = row.endPacket;
       aheadEnter[kept] = aheadEnter[k];
       aheadExit[kept] = aheadExit[k];
       const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept]);

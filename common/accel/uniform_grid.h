@@ -95,17 +95,16 @@ class UniformGrid final : public Accelerator {
   // before word w, so a voxel's row is found by counting bits.
   std::vector<uint64_t> occupied_;
   std::vector<uint32_t> occupiedBefore_;
-  // One row per occupied voxel, in voxel order, then one whose firstPacket
-  // ends the last run: the voxel's triangles are the packets
-  // packets_[row.firstPacket .. next row's firstPacket), by increasing
-  // primitive id, four to a packet, with their vertices (one copy per
-  // reference). low/high: the box its triangles' bounding boxes cover
-  // within the voxel, on a lattice of 255 steps across the voxel grown by
-  // two reference margins (rounded outwards), so a ray that misses it skips
-  // the voxel without loading a packet (uniform_grid.cpp says why that is
-  // exact).
+  // One row per occupied voxel, in voxel order: the voxel's triangles are
+  // the packets packets_[firstPacket .. endPacket), by increasing primitive
+  // id, four to a packet, with their vertices (one copy per reference; a
+  // voxel holding the one packet of the voxel before it shares it).
+  // low/high: the box its triangles' bounding boxes cover within the voxel,
+  // on a lattice of 255 steps across the voxel grown by two reference
+  // margins (rounded outwards), so a ray that misses it skips the voxel
+  // without loading a packet (uniform_grid.cpp says why that is exact).
   struct VoxelRow {
-    uint32_t firstPacket;
+    uint32_t firstPacket, endPacket;
     uint8_t low[3], high[3];
   };
   std::vector<VoxelRow> rows_;
