@@ -115,7 +115,7 @@ TEST(UniformGrid, HandlesFlatBounds) {
                     {float(x), float(y + 1), 1});
   const UniformGrid grid(floor.view());
   EXPECT_EQ(grid.resolution()[2], 1);
-  EXPECT_GT(grid.resolution()[0], 10);
+  EXPECT_GE(grid.resolution()[0], 8);  // a 2D grid of about density * 800 voxels
   // Rays starting inside the flat bounds lie in the floor's plane and miss.
   expectSameAsBruteForce(floor, grid, 8000, 500, 0.05);
   // Straight down onto a shared vertex: both bounds exclusive, ties by id.
@@ -184,13 +184,13 @@ TEST(UniformGrid, AutomaticResolutionFollowsTriangleCountAndShape) {
   EXPECT_EQ(automaticGridResolution({1, 1, 1}, 100000000, 3.0), (std::array<int, 3>{256, 256, 256}));
   EXPECT_EQ(automaticGridResolution({1, 1, 1}, 0, 3.0), (std::array<int, 3>{1, 1, 1}));
 
-  // The default: about 0.5 voxels per triangle.
+  // The default: about 0.125 voxels per triangle.
   const TestMesh mesh = mixedScene(6);
   const UniformGrid grid(mesh.view());
   const double voxels = double(grid.stats().nodes);
   const double triangles = double(mesh.indices.size() / 3);
-  EXPECT_GT(voxels, 0.25 * triangles);
-  EXPECT_LT(voxels, 1.0 * triangles);
+  EXPECT_GT(voxels, 0.0625 * triangles);
+  EXPECT_LT(voxels, 0.25 * triangles);
 }
 
 TEST(UniformGrid, ReportsStatistics) {
