@@ -1,10 +1,11 @@
 // Uniform grid: build (one pass over the triangles listing (voxel, triangle)
 // pairs and counting them per voxel, a counting sort of the triangles by
 // voxel, then one sequential pass that copies each voxel's triangles'
-// vertices into its run of 4-wide packets) and
-// traversal (3D-DDA that walks a few occupied voxels ahead of the tests and
-// prefetches them; 4-wide sign test in front of the scalar triangle test;
-// mailboxing).
+// vertices into its run of 4-wide packets and rounds their boxes onto the
+// voxel's lattice) and traversal (3D-DDA that walks a few occupied voxels
+// ahead of the tests, keeps those whose content box the ray crosses and
+// prefetches them; per voxel, the packets' boxes, then a 4-wide sign test in
+// front of the scalar triangle test for the packets they pass; mailboxing).
 //
 // Why the grid returns exactly brute force's hit. Traversal keeps the best
 // hit over every triangle tested so far (by closerThan) and stops after the
@@ -31,6 +32,22 @@
 // (the same operations, IEEE single precision, lane by lane); every other
 // triangle goes through intersectTriangle, which alone decides hits. The
 // vertices tested are the mesh's, copied bit for bit.
+//
+// The boxes skip only triangles whose hit cannot be the answer in that
+// voxel. P lies within the test's error e of X's bounding box and (up to
+// the DDA's far smaller error) in the voxel V where X is found, so P lies
+// at least 2m - e inside X's box grown by 2m (m the reference margin) and
+// clipped to V grown by 2m, and so inside every box built from it, however
+// rounded outwards onto V's lattice: the ray runs inside the box for a
+// stretch of 2m - e > m either side of P (in distance along the axes). So a
+// box test that misses the box only where the ray's computed distances stray
+// from the exact ones by less than m never skips X in V. The voxels' boxes
+// are tested in double (errors ~1e-16 of the distances); the packets' in
+// single precision, from the voxel's planes rounded to float: errors of a
+// few float ulps of the distance to the origin, below m for origins within
+// a few grid diagonals, the same condition as above. A skipped packet or
+// voxel leaves its triangles out of the mailbox, so they are still tested
+// where the ray crosses their boxes.
 //
 // Ties (equal t, smaller primitive wins) follow from the same argument: two
 // triangles hit at the same t share P, so both are referenced where P is.
