@@ -161,6 +161,7 @@ UniformGridOptions readUniformGridOptions(AcceleratorParameters& parameters) {
 
 namespace {
 
+using grid_traversal::PacketBoxes4;
 using grid_traversal::TrianglePacket;
 using grid_traversal::TriangleVoxelOverlap;
 
@@ -340,8 +341,11 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // The box on the lattice starting at latticeLow: low bounds rounded down,
   // high bounds up, clamped to the lattice (truncation is floor for the
   // clamped values, which are >= 0).
+  struct LatticeBox {
+    uint8_t low[3], high[3];
+  };
   const auto latticeBox = [&](const Vec3& low, const Vec3& high, const double latticeLow[3]) {
-    grid_traversal::PacketBox box{};
+    LatticeBox box;
     for (int axis = 0; axis < 3; ++axis) {
       const double a = (double(low[axis]) - contentMargin_ - latticeLow[axis]) * inverseStep[axis];
       const double b = (double(high[axis]) + contentMargin_ - latticeLow[axis]) * inverseStep[axis];
@@ -353,12 +357,19 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     }
     return box;
   };
+  const auto setPacketBox = [&](uint32_t packet, const LatticeBox& box) {
+    for (int axis = 0; axis < 3; ++axis) {
+      packetBoxes_[packet / 4].low[axis][packet % 4] = box.low[axis];
+      packetBoxes_[packet / 4].high[axis][packet % 4] = box.high[axis];
+    }
+  };
   rows_.resize(occupiedTotal);
   // At most packetTotal packets; the shared ones are left off at the end.
+  // Boxes of packets beyond the last are zeros (never read: masked off).
   packets_.resize(packetTotal);
-  packetBoxes_.resize(packetTotal);
+  packetBoxes_.resize((packetTotal + 3) / 4);
+  std::memset(static_cast<void*>(packetBoxes_.data()), 0, packetBoxes_.size() * sizeof(PacketBoxes4));
   TrianglePacket* packet = packets_.data();
-  grid_traversal::PacketBox* box = packetBoxes_.data();
   VoxelRow* row = rows_.data();
   uint32_t reference = 0, previousReference = 0;
   Vec3 packetLow, packetHigh;  // the last packet's bounds
@@ -375,8 +386,8 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
         // Shared with the voxel before (row - 1), whose packet was the last written.
         row->firstPacket = row[-1].firstPacket;
         row->endPacket = row[-1].endPacket;
-        box[-1] = grid_traversal::PacketBox{{0, 0, 0, 0}, {kLatticeSteps, kLatticeSteps, kLatticeSteps, 0}};
-        const grid_traversal::PacketBox rowBox = latticeBox(packetLow, packetHigh, latticeLow);
+        setPacketBox(row->firstPacket, LatticeBox{{0, 0, 0}, {kLatticeSteps, kLatticeSteps, kLatticeSteps}});
+        const LatticeBox rowBox = latticeBox(packetLow, packetHigh, latticeLow);
         std::memcpy(row->low, rowBox.low, 3);
         std::memcpy(row->high, rowBox.high, 3);
         previousReference = reference;
@@ -386,7 +397,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       row->firstPacket = uint32_t(packet - packets_.data());
       std::memset(row->low, kLatticeSteps, 3);
       std::memset(row->high, 0, 3);
-      for (previousReference = reference; reference < end; reference += 4, ++packet, ++box) {
+      for (previousReference = reference; reference < end; reference += 4, ++packet) {
         packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
         for (uint32_t lane = 0; lane < 4; ++lane) {
           const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
@@ -399,10 +410,11 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
           packetLow = min(packetLow, min(v0, min(v1, v2)));
           packetHigh = max(packetHigh, max(v0, max(v1, v2)));
         }
-        *box = latticeBox(packetLow, packetHigh, latticeLow);
+        const LatticeBox box = latticeBox(packetLow, packetHigh, latticeLow);
+        setPacketBox(uint32_t(packet - packets_.data()), box);
         for (int axis = 0; axis < 3; ++axis) {
-          row->low[axis] = std::min(row->low[axis], box->low[axis]);
-          row->high[axis] = std::max(row->high[axis], box->high[axis]);
+          row->low[axis] = std::min(row->low[axis], box.low[axis]);
+          row->high[axis] = std::max(row->high[axis], box.high[axis]);
         }
       }
       row->endPacket = uint32_t(packet - packets_.data());
@@ -410,7 +422,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     }
   }
   packets_.resize(size_t(packet - packets_.data()));
-  packetBoxes_.resize(packets_.size());
+  packetBoxes_.resize((packets_.size() + 3) / 4);
 
   stats_.leaves = occupiedTotal;
   stats_.nodes = voxelCount;
@@ -422,7 +434,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // shared packets, is never touched, so never resident.)
   stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) +
                  occupiedBefore_.capacity() * sizeof(uint32_t) + rows_.capacity() * sizeof(VoxelRow) +
-                 packets_.size() * sizeof(TrianglePacket) + packetBoxes_.size() * sizeof(grid_traversal::PacketBox);
+                 packets_.size() * sizeof(TrianglePacket) + packetBoxes_.size() * sizeof(PacketBoxes4);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -492,14 +504,13 @@ template <bool AnyHit>
   }
   // The packets' boxes are tested in single precision (grid_traversal.h).
   using Float4 = grid_traversal::PacketRay::Float4;
-  const Float4 packetStep{float(latticeStep[0]), float(latticeStep[1]), float(latticeStep[2]), 0.0f};
-  const Float4 infinity4{kInfinity, kInfinity, kInfinity, kInfinity};
+  const auto broadcast = [](float x) { return Float4{x, x, x, x}; };
 
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
   grid_traversal::Mailbox mailbox;
   const TrianglePacket* const packets = packets_.data();
-  const grid_traversal::PacketBox* const packetBoxes = packetBoxes_.data();
+  const PacketBoxes4* const packetBoxes = packetBoxes_.data();
   const uint64_t* const occupied = occupied_.data();
   const uint32_t* const occupiedBefore = occupiedBefore_.data();
   const VoxelRow* const rows = rows_.data();
@@ -568,18 +579,27 @@ template <bool AnyHit>
         }
         if (!(lower <= upper)) continue;
         // The packets' boxes lie in the row's: only [lower, upper] counts.
-        clips[kept].planeLow = Float4{float(plane[0]), float(plane[1]), float(plane[2]), float(lower)};
-        clips[kept].planeHigh = Float4{float(plane[0]), float(plane[1]), float(plane[2]), float(upper)};
-        clips[kept].step = packetStep;
+        for (int axis = 0; axis < 3; ++axis) {
+          clips[kept].planeLow[axis] = clips[kept].planeHigh[axis] = broadcast(float(plane[axis]));
+          clips[kept].step[axis] = broadcast(float(latticeStep[axis]));
+        }
+        clips[kept].lower = broadcast(float(lower));
+        clips[kept].upper = broadcast(float(upper));
       } else {
-        clips[kept] = {-infinity4, infinity4, Float4{}};
+        for (int axis = 0; axis < 3; ++axis) {
+          clips[kept].planeLow[axis] = broadcast(-kInfinity);
+          clips[kept].planeHigh[axis] = broadcast(kInfinity);
+          clips[kept].step[axis] = Float4{};
+        }
+        clips[kept].lower = broadcast(-kInfinity);
+        clips[kept].upper = broadcast(kInfinity);
       }
       first[kept] = row.firstPacket;
       end[kept] = row.endPacket;
       aheadEnter[kept] = aheadEnter[k];
       aheadExit[kept] = aheadExit[k];
-      const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept]);
-      const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + end[kept]) - 1;
+      const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept] / 4);
+      const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + (end[kept] + 3) / 4) - 1;
       for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
       const char* const line = reinterpret_cast<const char*>(packets + first[kept]);
       const char* const last = reinterpret_cast<const char*>(packets + end[kept]) - 1;

@@ -113,8 +113,8 @@ class UniformGrid final : public Accelerator {
   std::vector<VoxelRow> rows_;
   std::vector<grid_traversal::TrianglePacket, grid_traversal::LargeArrayAllocator<grid_traversal::TrianglePacket>>
       packets_;
-  // packetBoxes_[p]: the box of packets_[p] on its voxel's lattice.
-  std::vector<grid_traversal::PacketBox, grid_traversal::LargeArrayAllocator<grid_traversal::PacketBox>>
+  // packetBoxes_[b]: the boxes of packets_[4b .. 4b + 3], each on its voxel's lattice.
+  std::vector<grid_traversal::PacketBoxes4, grid_traversal::LargeArrayAllocator<grid_traversal::PacketBoxes4>>
       packetBoxes_;
   AcceleratorStats stats_;
 };
