@@ -379,7 +379,8 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       const uint32_t end = counts[voxel];
       const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
       double latticeLow[3];
-      for (int axis = 0; axis < 3; ++axis) latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+      for (int axis = 0; axis < 3; ++axis)
+        latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
       const uint32_t count = end - reference;
       if (count <= 4 && count == reference - previousReference &&
           std::equal(&sorted[reference], &sorted[end], &sorted[previousReference])) {
