@@ -45,20 +45,22 @@ inline bool clipToBox(const double origin[3], const double direction[3], const d
 // A direct-mapped cache of the primitives tested last, one per query (on
 // the stack, so concurrent queries share nothing): a triangle spanning
 // several voxels is tested once, its result does not depend on the voxel.
+// Slots: a power of two; a collision only repeats a test.
+template <uint32_t Slots>
 class Mailbox {
  public:
   Mailbox() { std::memset(slots_, 0xff, sizeof(slots_)); }   // kNoPrimitive everywhere
   // True the first time `primitive` is seen (recently); it is then recorded.
   bool firstVisit(uint32_t primitive) {
-    uint32_t& slot = slots_[primitive & (kSize - 1)];
+    uint32_t& slot = slots_[primitive & (Slots - 1)];
     if (slot == primitive) return false;
     slot = primitive;
     return true;
   }
 
  private:
-  static constexpr uint32_t kSize = 64;
-  uint32_t slots_[kSize];
+  static_assert((Slots & (Slots - 1)) == 0);
+  uint32_t slots_[Slots];
 };
 
 // Four triangles as a grid stores them, side by side per coordinate
@@ -227,9 +229,9 @@ inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxCli
 // (a hit, or an edge function exactly zero, which the scalar test
 // re-decides in double) go to intersectTriangle itself, once per primitive
 // (the mailbox), which alone decides hits.
-template <bool AnyHit>
+template <bool AnyHit, uint32_t Slots>
 inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes, uint32_t first, uint32_t end,
-                        const PacketBoxClip& clip, Mailbox& mailbox, const PacketRay& packetRay,
+                        const PacketBoxClip& clip, Mailbox<Slots>& mailbox, const PacketRay& packetRay,
                         const WatertightRay& frame, const Ray& ray, Hit& best) {
   using Float4 = PacketRay::Float4;
   using Int4 = int32_t __attribute__((vector_size(16)));
@@ -292,8 +294,8 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
 
 // Tests the triangles references[first, end) not tested yet, folding hits
 // into `best`. With AnyHit, returns true at the first hit.
-template <bool AnyHit>
-inline bool testReferences(const uint32_t* references, uint32_t first, uint32_t end, Mailbox& mailbox,
+template <bool AnyHit, uint32_t Slots>
+inline bool testReferences(const uint32_t* references, uint32_t first, uint32_t end, Mailbox<Slots>& mailbox,
                            const MeshView& mesh, const WatertightRay& frame, const Ray& ray, Hit& best) {
   for (uint32_t r = first; r < end; ++r) {
     const uint32_t primitive = references[r];

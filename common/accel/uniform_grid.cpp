@@ -12,10 +12,12 @@
 // first voxel whose exit distance is >= that hit's t. This is exact if every
 // triangle X whose computed hit tX is <= the final t is referenced in some
 // voxel visited by then. The point P = origin + tX * direction lies in a
-// visited voxel (the DDA runs in double, so its voxel boundaries are exact
-// far below float rounding), and P lies within the triangle test's rounding
-// error of X (the watertight test is backward stable: its t is exact for
-// vertices moved by a few float ulps of their distance to the ray origin).
+// visited voxel (the DDA's boundaries are computed in double and walked in
+// 64-bit fixed point, 2^-60 of the ray's stretch in the grid, so they are
+// exact far below float rounding), and P lies within the triangle test's
+// rounding error of X (the watertight test is backward stable: its t is
+// exact for vertices moved by a few float ulps of their distance to the ray
+// origin).
 // So each triangle is referenced in every voxel within a margin of its
 // bounding box (and of the triangle itself, when the overlap test refines
 // it: boxes of more than kBoxOnlyVoxels voxels), the margin being 1e-5 of
@@ -86,6 +88,9 @@ constexpr uint32_t kBoxOnlyVoxels = 8;
 constexpr int kWalkAhead = 4;
 constexpr int kPrefetchLines = 4;
 constexpr int kPrefetchBoxLines = 2;
+// Slots of a ray's mailbox: with the boxes and the 4-wide test, only a few
+// triangles per ray reach the scalar test.
+constexpr uint32_t kMailboxSlots = 16;
 // Steps of the lattice of the rows' content boxes (VoxelRow: one byte a bound).
 constexpr int kLatticeSteps = 255;
 
@@ -451,10 +456,25 @@ template <bool AnyHit>
   const double origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
   const double direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
   if (direction[0] == 0.0 && direction[1] == 0.0 && direction[2] == 0.0) return false;
+  // Distances along the ray are computed with the inverse direction (one
+  // division per axis); they differ from quotients by an ulp, far below the
+  // reference margin (see the top of the file).
+  const double inverse[3] = {1.0 / direction[0], 1.0 / direction[1], 1.0 / direction[2]};
 
-  // Clip [tMin, tMax] to the grid box.
+  // Clip [tMin, tMax] to the grid box (slabs). An axis the ray runs parallel
+  // to only decides whether the ray is inside the slab at all.
   double tEnter = ray.tMin, tExit = ray.tMax;
-  if (!grid_traversal::clipToBox(origin, direction, low_.data(), high_.data(), tEnter, tExit)) return false;
+  if (!(tEnter < tExit)) return false;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (direction[axis] == 0.0) {
+      if (origin[axis] < low_[axis] || origin[axis] > high_[axis]) return false;
+      continue;
+    }
+    const double a = (low_[axis] - origin[axis]) * inverse[axis], b = (high_[axis] - origin[axis]) * inverse[axis];
+    tEnter = std::max(tEnter, std::min(a, b));
+    tExit = std::min(tExit, std::max(a, b));
+  }
+  if (!(tEnter <= tExit)) return false;
 
   // DDA set-up: the voxel at the entry point, and per axis the distance to
   // the next voxel boundary (tNext), between boundaries (tDelta), the step
@@ -471,13 +491,13 @@ template <bool AnyHit>
     if (direction[axis] > 0.0) {
       indexStep[axis] = strides[axis];
       stepsLeft[axis] = resolution_[axis] - 1 - voxel;
-      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) / direction[axis];
-      tDelta[axis] = voxelSize_[axis] / direction[axis];
+      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = voxelSize_[axis] * inverse[axis];
     } else if (direction[axis] < 0.0) {
       indexStep[axis] = -strides[axis];
       stepsLeft[axis] = voxel;
-      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) / direction[axis];
-      tDelta[axis] = -voxelSize_[axis] / direction[axis];
+      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = -voxelSize_[axis] * inverse[axis];
     } else {
       indexStep[axis] = 0;
       stepsLeft[axis] = std::numeric_limits<int32_t>::max();  // never stepped
@@ -485,31 +505,49 @@ template <bool AnyHit>
       tDelta[axis] = 0.0;
     }
   }
-  // In scalars, so that the walk's state stays in registers.
-  double tx = tNext[0], ty = tNext[1], tz = tNext[2];
-  const uint64_t deltaX = std::bit_cast<uint64_t>(tDelta[0]), deltaY = std::bit_cast<uint64_t>(tDelta[1]),
-                 deltaZ = std::bit_cast<uint64_t>(tDelta[2]);
+  // The walk runs on 64-bit integers: distances beyond tEnter in units of
+  // 2^-60 of the ray's stretch in the grid (a resolution ~2^-60 of it, far
+  // finer than double's own after a few hundred additions), because integer
+  // compares and adds make each step's dependency chain about half as long
+  // as in double. Distances beyond 2^61 units (a boundary the ray meets
+  // only after leaving the grid, or never) are held at 2^61: never stepped
+  // to, and sums stay below 2^63.
+  constexpr double kUnits = 0x1p60, kFar = 0x1p61;
+  const double scale = kUnits / std::max(tExit - tEnter, 1e-280), unit = 1.0 / scale;
+  const auto toFixed = [&](double t) { return int64_t(std::clamp((t - tEnter) * scale, -kFar, kFar)); };
+  int64_t tx = toFixed(tNext[0]), ty = toFixed(tNext[1]), tz = toFixed(tNext[2]);
+  const int64_t deltaX = int64_t(std::min(tDelta[0] * scale, kFar)), deltaY = int64_t(std::min(tDelta[1] * scale, kFar)),
+                deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
+  int64_t fixedExit = toFixed(tExit);
   const int64_t stepX = indexStep[0], stepY = indexStep[1], stepZ = indexStep[2];
   int64_t leftX = stepsLeft[0], leftY = stepsLeft[1], leftZ = stepsLeft[2];
 
-  // Content boxes (VoxelRow): along each axis, the ray meets the lattice's
-  // first plane in the current voxel at that axis's exit distance (tx, ty,
-  // tz) minus latticeOffset, and each lattice step after it latticeStep
-  // later. A ray parallel to an axis never meets its planes: it tests no
-  // boxes (rare; the packets decide alone, as they may).
+  // Content boxes (VoxelRow): along each axis, the ray meets the first plane
+  // of the current voxel's lattice at latticeOrigin + left * latticeStride
+  // (left: the walk's steps left along the axis, which number the voxel's
+  // layer), and each lattice step after it latticeStep later. A ray parallel
+  // to an axis never meets its planes: it tests no boxes (rare; the packets
+  // decide alone, as they may).
   const bool testBoxes = direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0;
-  double latticeOffset[3], latticeStep[3];
+  double latticeOrigin[3], latticeStride[3], latticeStep[3];
   for (int axis = 0; axis < 3; ++axis) {
-    latticeOffset[axis] = (direction[axis] > 0.0 ? tDelta[axis] : 0.0) + contentMargin_ / direction[axis];
-    latticeStep[axis] = latticeStep_[axis] / direction[axis];
+    // The layer: resolution - 1 - left going up the axis, left going down.
+    const double layer = direction[axis] > 0.0 ? resolution_[axis] - 1 : 0.0;
+    const double stride = (direction[axis] > 0.0 ? -voxelSize_[axis] : voxelSize_[axis]) * inverse[axis];
+    latticeOrigin[axis] = (low_[axis] - contentMargin_ - origin[axis]) * inverse[axis] +
+                          layer * voxelSize_[axis] * inverse[axis];
+    latticeStride[axis] = stride;
+    latticeStep[axis] = latticeStep_[axis] * inverse[axis];
   }
   // The packets' boxes are tested in single precision (grid_traversal.h).
   using Float4 = grid_traversal::PacketRay::Float4;
   const auto broadcast = [](float x) { return Float4{x, x, x, x}; };
+  Float4 packetStep[3];
+  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? float(latticeStep[axis]) : 0.0f);
 
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
-  grid_traversal::Mailbox mailbox;
+  grid_traversal::Mailbox<kMailboxSlots> mailbox;
   const TrianglePacket* const packets = packets_.data();
   const PacketBoxes4* const packetBoxes = packetBoxes_.data();
   const uint64_t* const occupied = occupied_.data();
@@ -522,83 +560,82 @@ template <bool AnyHit>
   // of following one another (the triangles are tested in the walk's order
   // all the same).
   uint32_t aheadIndex[kWalkAhead + 1];
-  double aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1], aheadPlane[kWalkAhead + 1][3];
-  double tVoxelEnter = tEnter;
+  int64_t aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1], aheadLeft[kWalkAhead + 1][3];
+  int64_t fixedVoxelEnter = 0;
   bool walking = true;
   while (walking) {
     int count = 0;
     for (;;) {
-      const double tVoxelExit = std::min(tx, std::min(ty, tz));
+      // The axis whose boundary comes first (ties: x, then y), as masks
+      // rather than branches; its boundary is the voxel's exit.
+      const int64_t maskX = -int64_t((tx <= ty) & (tx <= tz));
+      const int64_t maskY = ~maskX & -int64_t(ty <= tz);
+      const int64_t maskZ = ~(maskX | maskY);
+      const int64_t fixedVoxelExit = (tx & maskX) | (ty & maskY) | (tz & maskZ);
       // Recorded always, kept only if occupied: no branch to mispredict.
       aheadIndex[count] = uint32_t(index);
-      aheadEnter[count] = tVoxelEnter;
-      aheadExit[count] = tVoxelExit;
-      aheadPlane[count][0] = tx, aheadPlane[count][1] = ty, aheadPlane[count][2] = tz;
+      aheadEnter[count] = fixedVoxelEnter;
+      aheadExit[count] = fixedVoxelExit;
+      aheadLeft[count][0] = leftX, aheadLeft[count][1] = leftY, aheadLeft[count][2] = leftZ;
       count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
-      if (tVoxelExit >= tExit) {
+      if (fixedVoxelExit >= fixedExit) {
         walking = false;
         break;
       }
-      // Step along the axis whose boundary comes first (ties: x, then y),
-      // chosen by masks rather than branches. tDelta masked to +0 adds
-      // nothing (and keeps an infinite tNext infinite).
-      const uint64_t maskX = -uint64_t((tx <= ty) & (tx <= tz));
-      const uint64_t maskY = ~maskX & -uint64_t(ty <= tz);
-      const uint64_t maskZ = ~(maskX | maskY);
-      index += int32_t((uint64_t(stepX) & maskX) | (uint64_t(stepY) & maskY) | (uint64_t(stepZ) & maskZ));
-      tx += std::bit_cast<double>(deltaX & maskX);
-      ty += std::bit_cast<double>(deltaY & maskY);
-      tz += std::bit_cast<double>(deltaZ & maskZ);
-      leftX += int64_t(maskX);
-      leftY += int64_t(maskY);
-      leftZ += int64_t(maskZ);
+      index += int32_t((stepX & maskX) | (stepY & maskY) | (stepZ & maskZ));
+      tx += deltaX & maskX;
+      ty += deltaY & maskY;
+      tz += deltaZ & maskZ;
+      leftX += maskX;
+      leftY += maskY;
+      leftZ += maskZ;
       if ((leftX | leftY | leftZ) < 0) {  // out of the grid
         walking = false;
         break;
       }
-      tVoxelEnter = tVoxelExit;
+      fixedVoxelEnter = fixedVoxelExit;
       if (count == kWalkAhead) break;
     }
     // The rows, and the content-box test: the part of the ray in the voxel
     // and before the best hit so far must cross the box.
     uint32_t first[kWalkAhead], end[kWalkAhead];
+    double enter[kWalkAhead], exit[kWalkAhead];
     grid_traversal::PacketBoxClip clips[kWalkAhead];
     int kept = 0;
     for (int k = 0; k < count; ++k) {
       const uint32_t voxel = aheadIndex[k];
       const uint64_t before = occupied[voxel / 64] & ((uint64_t(1) << (voxel % 64)) - 1);
       const VoxelRow& row = rows[occupiedBefore[voxel / 64] + countBits(before)];
+      const double voxelEnter = tEnter + double(aheadEnter[k]) * unit;
+      const double voxelExit = tEnter + double(aheadExit[k]) * unit;
+      grid_traversal::PacketBoxClip& clip = clips[kept];
       if (testBoxes) {
-        double lower = aheadEnter[k], upper = std::min(aheadExit[k], tExit);
-        double plane[3];
+        double lower = voxelEnter, upper = std::min(voxelExit, tExit);
         for (int axis = 0; axis < 3; ++axis) {
-          plane[axis] = aheadPlane[k][axis] - latticeOffset[axis];
-          const double a = plane[axis] + row.low[axis] * latticeStep[axis];
-          const double b = plane[axis] + row.high[axis] * latticeStep[axis];
+          const double start = latticeOrigin[axis] + double(aheadLeft[k][axis]) * latticeStride[axis];
+          const double a = start + row.low[axis] * latticeStep[axis];
+          const double b = start + row.high[axis] * latticeStep[axis];
           lower = std::max(lower, std::min(a, b));
           upper = std::min(upper, std::max(a, b));
+          clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(float(start));
         }
         if (!(lower <= upper)) continue;
         // The packets' boxes lie in the row's: only [lower, upper] counts.
-        for (int axis = 0; axis < 3; ++axis) {
-          clips[kept].planeLow[axis] = clips[kept].planeHigh[axis] = broadcast(float(plane[axis]));
-          clips[kept].step[axis] = broadcast(float(latticeStep[axis]));
-        }
-        clips[kept].lower = broadcast(float(lower));
-        clips[kept].upper = broadcast(float(upper));
+        clip.lower = broadcast(float(lower));
+        clip.upper = broadcast(float(upper));
       } else {
         for (int axis = 0; axis < 3; ++axis) {
-          clips[kept].planeLow[axis] = broadcast(-kInfinity);
-          clips[kept].planeHigh[axis] = broadcast(kInfinity);
-          clips[kept].step[axis] = Float4{};
+          clip.planeLow[axis] = broadcast(-kInfinity);
+          clip.planeHigh[axis] = broadcast(kInfinity);
         }
-        clips[kept].lower = broadcast(-kInfinity);
-        clips[kept].upper = broadcast(kInfinity);
+        clip.lower = broadcast(-kInfinity);
+        clip.upper = broadcast(kInfinity);
       }
+      for (int axis = 0; axis < 3; ++axis) clip.step[axis] = packetStep[axis];
       first[kept] = row.firstPacket;
       end[kept] = row.endPacket;
-      aheadEnter[kept] = aheadEnter[k];
-      aheadExit[kept] = aheadExit[k];
+      enter[kept] = voxelEnter;
+      exit[kept] = voxelExit;
       const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept] / 4);
       const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + (end[kept] + 3) / 4) - 1;
       for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
@@ -612,17 +649,20 @@ template <bool AnyHit>
       // nor can any voxel after the one holding it. (Hits beyond the current
       // voxel are kept, not re-tested: the mailbox would skip them.)
       if constexpr (!AnyHit) {
-        if (best.found() && double(best.t) <= aheadEnter[k]) return true;
+        if (best.found() && double(best.t) <= enter[k]) return true;
       }
       if (grid_traversal::testPackets<AnyHit>(packets, packetBoxes, first[k], end[k], clips[k], mailbox, packetRay,
                                               frame, ray, best))
         return true;
       if constexpr (!AnyHit) {
-        if (best.found() && double(best.t) <= aheadExit[k]) return true;
+        if (best.found() && double(best.t) <= exit[k]) return true;
       }
     }
     if constexpr (!AnyHit) {
-      if (best.found()) tExit = std::min(tExit, double(best.t));
+      if (best.found() && double(best.t) < tExit) {
+        tExit = double(best.t);
+        fixedExit = toFixed(tExit);
+      }
     }
   }
   return best.found();

@@ -83,8 +83,9 @@ class UniformGrid final : public Accelerator {
 
   MeshView mesh_;
   Bounds3 meshBounds_;
-  // Geometry of the grid, in double: traversal runs in double so that its
-  // voxel boundaries are exact to far below the triangle test's rounding.
+  // Geometry of the grid, in double: traversal computes its voxel boundaries
+  // in double (and walks them in 64-bit fixed point) so that they are exact
+  // to far below the triangle test's rounding.
   std::array<int, 3> resolution_{0, 0, 0};
   std::array<double, 3> low_{0, 0, 0}, high_{0, 0, 0};
   std::array<double, 3> voxelSize_{0, 0, 0}, inverseVoxelSize_{0, 0, 0};
