@@ -60,6 +60,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <emmintrin.h>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -345,28 +346,28 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
   // The box on the lattice starting at latticeLow: low bounds rounded down,
   // high bounds up, clamped to the lattice (truncation is floor for the
-  // clamped values, which are >= 0).
+  // clamped values, which are >= 0). Both bounds of an axis at once (SSE2).
   struct LatticeBox {
     uint8_t low[3], high[3];
   };
+  const __m128d steps = _mm_set1_pd(double(kLatticeSteps));
+  const __m128d grow = _mm_set_pd(contentMargin_, -contentMargin_);
   const auto latticeBox = [&](const Vec3& low, const Vec3& high, const double latticeLow[3]) {
     LatticeBox box;
     for (int axis = 0; axis < 3; ++axis) {
-      const double a = (double(low[axis]) - contentMargin_ - latticeLow[axis]) * inverseStep[axis];
-      const double b = (double(high[axis]) + contentMargin_ - latticeLow[axis]) * inverseStep[axis];
-      const double lowStep = std::clamp(a, 0.0, double(kLatticeSteps));
-      const double highStep = std::clamp(b, 0.0, double(kLatticeSteps));
-      const uint32_t highFloor = uint32_t(highStep);
-      box.low[axis] = uint8_t(lowStep);
-      box.high[axis] = uint8_t(highFloor + (double(highFloor) < highStep));
+      const __m128d bounds = _mm_add_pd(_mm_set_pd(double(high[axis]), double(low[axis])), grow);
+      const __m128d x = _mm_min_pd(
+          _mm_max_pd(_mm_mul_pd(_mm_sub_pd(bounds, _mm_set1_pd(latticeLow[axis])), _mm_set1_pd(inverseStep[axis])),
+                     _mm_setzero_pd()),
+          steps);
+      const __m128i truncated = _mm_cvttpd_epi32(x);
+      // The high bound's truncation is one short where the value is not whole.
+      const __m128i short1 = _mm_castpd_si128(_mm_cmplt_pd(_mm_cvtepi32_pd(truncated), x));
+      const __m128i rounded = _mm_sub_epi32(truncated, _mm_shuffle_epi32(short1, _MM_SHUFFLE(3, 3, 2, 0)));
+      box.low[axis] = uint8_t(_mm_cvtsi128_si32(truncated));
+      box.high[axis] = uint8_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(rounded, _MM_SHUFFLE(1, 1, 1, 1))));
     }
     return box;
-  };
-  const auto setPacketBox = [&](uint32_t packet, const LatticeBox& box) {
-    for (int axis = 0; axis < 3; ++axis) {
-      packetBoxes_[packet / 4].low[axis][packet % 4] = box.low[axis];
-      packetBoxes_[packet / 4].high[axis][packet % 4] = box.high[axis];
-    }
   };
   rows_.resize(occupiedTotal);
   // At most packetTotal packets; the shared ones are left off at the end.
@@ -374,7 +375,16 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   packets_.resize(packetTotal);
   packetBoxes_.resize((packetTotal + 3) / 4);
   std::memset(static_cast<void*>(packetBoxes_.data()), 0, packetBoxes_.size() * sizeof(PacketBoxes4));
-  TrianglePacket* packet = packets_.data();
+  PacketBoxes4* const packetBoxes = packetBoxes_.data();
+  const auto setPacketBox = [packetBoxes](uint32_t packet, const LatticeBox& box) {
+    PacketBoxes4& boxes = packetBoxes[packet / 4];
+    for (int axis = 0; axis < 3; ++axis) {
+      boxes.low[axis][packet % 4] = box.low[axis];
+      boxes.high[axis][packet % 4] = box.high[axis];
+    }
+  };
+  TrianglePacket* const firstPacket = packets_.data();
+  TrianglePacket* packet = firstPacket;
   VoxelRow* row = rows_.data();
   uint32_t reference = 0, previousReference = 0;
   Vec3 packetLow, packetHigh;  // the last packet's bounds
@@ -387,43 +397,42 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       for (int axis = 0; axis < 3; ++axis)
         latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
       const uint32_t count = end - reference;
+      LatticeBox rowBox;
       if (count <= 4 && count == reference - previousReference &&
           std::equal(&sorted[reference], &sorted[end], &sorted[previousReference])) {
         // Shared with the voxel before (row - 1), whose packet was the last written.
         row->firstPacket = row[-1].firstPacket;
         row->endPacket = row[-1].endPacket;
         setPacketBox(row->firstPacket, LatticeBox{{0, 0, 0}, {kLatticeSteps, kLatticeSteps, kLatticeSteps}});
-        const LatticeBox rowBox = latticeBox(packetLow, packetHigh, latticeLow);
-        std::memcpy(row->low, rowBox.low, 3);
-        std::memcpy(row->high, rowBox.high, 3);
-        previousReference = reference;
-        reference = end;
-        continue;
-      }
-      row->firstPacket = uint32_t(packet - packets_.data());
-      std::memset(row->low, kLatticeSteps, 3);
-      std::memset(row->high, 0, 3);
-      for (previousReference = reference; reference < end; reference += 4, ++packet) {
-        packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
-        for (uint32_t lane = 0; lane < 4; ++lane) {
-          const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
-          Vec3 v0, v1, v2;
-          mesh.triangle(primitive, v0, v1, v2);
-          packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
-          packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
-          packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
-          packet->primitive[lane] = primitive;
-          packetLow = min(packetLow, min(v0, min(v1, v2)));
-          packetHigh = max(packetHigh, max(v0, max(v1, v2)));
+        rowBox = latticeBox(packetLow, packetHigh, latticeLow);
+      } else {
+        row->firstPacket = uint32_t(packet - firstPacket);
+        rowBox = LatticeBox{{kLatticeSteps, kLatticeSteps, kLatticeSteps}, {0, 0, 0}};
+        for (uint32_t r = reference; r < end; r += 4, ++packet) {
+          packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
+          for (uint32_t lane = 0; lane < 4; ++lane) {
+            const uint32_t primitive = sorted[std::min(r + lane, end - 1)];
+            Vec3 v0, v1, v2;
+            mesh.triangle(primitive, v0, v1, v2);
+            packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
+            packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
+            packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
+            packet->primitive[lane] = primitive;
+            packetLow = min(packetLow, min(v0, min(v1, v2)));
+            packetHigh = max(packetHigh, max(v0, max(v1, v2)));
+          }
+          const LatticeBox box = latticeBox(packetLow, packetHigh, latticeLow);
+          setPacketBox(uint32_t(packet - firstPacket), box);
+          for (int axis = 0; axis < 3; ++axis) {
+            rowBox.low[axis] = std::min(rowBox.low[axis], box.low[axis]);
+            rowBox.high[axis] = std::max(rowBox.high[axis], box.high[axis]);
+          }
         }
-        const LatticeBox box = latticeBox(packetLow, packetHigh, latticeLow);
-        setPacketBox(uint32_t(packet - packets_.data()), box);
-        for (int axis = 0; axis < 3; ++axis) {
-          row->low[axis] = std::min(row->low[axis], box.low[axis]);
-          row->high[axis] = std::max(row->high[axis], box.high[axis]);
-        }
+        row->endPacket = uint32_t(packet - firstPacket);
       }
-      row->endPacket = uint32_t(packet - packets_.data());
+      std::memcpy(row->low, rowBox.low, 3);
+      std::memcpy(row->high, rowBox.high, 3);
+      previousReference = reference;
       reference = end;
     }
   }
