@@ -165,7 +165,8 @@ struct LargeArrayAllocator {
 struct PacketRay {
   using Float4 = float __attribute__((vector_size(16)));
   Float4 originX, originY, originZ;  // origin[kx], origin[ky], origin[kz]
-  Float4 shearX, shearY;             // Sx, Sy
+  Float4 shearX, shearY, scaleZ;     // Sx, Sy, Sz
+  Float4 tMin, tMax;
   int kx, ky, kz;
 
   PacketRay(const WatertightRay& frame, const Ray& ray) : kx(frame.kx), ky(frame.ky), kz(frame.kz) {
@@ -176,6 +177,9 @@ struct PacketRay {
     originZ = broadcast(origin[kz]);
     shearX = broadcast(frame.Sx);
     shearY = broadcast(frame.Sy);
+    scaleZ = broadcast(frame.Sz);
+    tMin = broadcast(ray.tMin);
+    tMax = broadcast(ray.tMax);
   }
 };
 
@@ -221,14 +225,16 @@ inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxCli
 // folding hits into `best`; with AnyHit, returns true at the first hit. The
 // boxes first, 64 at a time and without branches, then the packets they
 // pass, prefetched together so that their cache misses overlap. Four at a
-// time, the first steps of
-// intersectTriangle (translation, shear, edge functions, sign test) run on
-// all four lanes with the very operations of the scalar test, so each lane
-// gets the scalar test's U, V, W bit for bit: a lane is dropped only where
-// intersectTriangle would return false on that same sign test. The others
-// (a hit, or an edge function exactly zero, which the scalar test
-// re-decides in double) go to intersectTriangle itself, once per primitive
-// (the mailbox), which alone decides hits.
+// time, intersectTriangle's own steps (translation, shear, edge functions,
+// sign test, det, T and t = T / det) run on all four lanes with the very
+// operations of the scalar test, so each lane gets the scalar test's U, V,
+// W, det and t bit for bit: a lane is dropped only where intersectTriangle
+// would return false on the same sign test or the same check of t against
+// [tMin, tMax], or where its t would lose to the best hit so far (closerThan:
+// t > best.t never wins). The others go to intersectTriangle itself, once
+// per primitive (the mailbox), which alone decides hits; so do lanes with
+// an edge function exactly zero, which the scalar test re-decides in
+// double.
 template <bool AnyHit, uint32_t Slots>
 inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes, uint32_t first, uint32_t end,
                         const PacketBoxClip& clip, Mailbox<Slots>& mailbox, const PacketRay& packetRay,
@@ -271,7 +277,12 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
       const Int4 negative = (U < zero) | (V < zero) | (W < zero);
       const Int4 positive = (U > zero) | (V > zero) | (W > zero);
       const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
-      const Int4 candidate = ~(negative & positive) | anyZero;
+      const Float4 det = U + V + W;
+      const Float4 T = U * (packetRay.scaleZ * az) + V * (packetRay.scaleZ * bz) + W * (packetRay.scaleZ * cz);
+      const Float4 t = T / det;
+      Int4 inRange = (t > packetRay.tMin) & (t < packetRay.tMax);
+      if constexpr (!AnyHit) inRange &= t <= Float4{best.t, best.t, best.t, best.t};
+      const Int4 candidate = (~(negative & positive) & inRange) | anyZero;
       unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
                       unsigned(candidate[3] & 8);
       while (mask != 0) {
