@@ -43,12 +43,11 @@
 // rounded outwards onto V's lattice: the ray runs inside the box for a
 // stretch of 2m - e > m either side of P (in distance along the axes). So a
 // box test that misses the box only where the ray's computed distances stray
-// from the exact ones by less than m never skips X in V. The voxels' boxes
-// are tested in double (errors ~1e-16 of the distances); the packets' in
-// single precision, from the voxel's planes rounded to float: errors of a
-// few float ulps of the distance to the origin, below m for origins within
-// a few grid diagonals, the same condition as above. A skipped packet or
-// voxel leaves its triangles out of the mailbox, so they are still tested
+// from the exact ones by less than m never skips X in V. The boxes are
+// tested in single precision, from per-ray planes rounded to float: errors
+// of a few float ulps of the distance to the origin, below m for origins
+// within a few grid diagonals, the same condition as above. A skipped packet
+// or voxel leaves its triangles out of the mailbox, so they are still tested
 // where the ray crosses their boxes.
 //
 // Ties (equal t, smaller primitive wins) follow from the same argument: two
@@ -432,6 +431,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       }
       std::memcpy(row->low, rowBox.low, 3);
       std::memcpy(row->high, rowBox.high, 3);
+      row->low[3] = row->high[3] = 0;
       previousReference = reference;
       reference = end;
     }
@@ -534,25 +534,30 @@ template <bool AnyHit>
   // Content boxes (VoxelRow): along each axis, the ray meets the first plane
   // of the current voxel's lattice at latticeOrigin + left * latticeStride
   // (left: the walk's steps left along the axis, which number the voxel's
-  // layer), and each lattice step after it latticeStep later. A ray parallel
-  // to an axis never meets its planes: it tests no boxes (rare; the packets
-  // decide alone, as they may).
+  // layer), and each lattice step after it latticeStep later. In single
+  // precision, four lanes x, y, z and a fourth that carries the voxel's span
+  // (-inf or +inf, no step). A ray parallel to an axis never meets its
+  // planes: it tests no boxes (rare; the packets decide alone, as they may).
   const bool testBoxes = direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0;
-  double latticeOrigin[3], latticeStride[3], latticeStep[3];
+  float latticeOrigin[3], latticeStride[3], latticeStep[3];
   for (int axis = 0; axis < 3; ++axis) {
     // The layer: resolution - 1 - left going up the axis, left going down.
     const double layer = direction[axis] > 0.0 ? resolution_[axis] - 1 : 0.0;
     const double stride = (direction[axis] > 0.0 ? -voxelSize_[axis] : voxelSize_[axis]) * inverse[axis];
-    latticeOrigin[axis] = (low_[axis] - contentMargin_ - origin[axis]) * inverse[axis] +
-                          layer * voxelSize_[axis] * inverse[axis];
-    latticeStride[axis] = stride;
-    latticeStep[axis] = latticeStep_[axis] * inverse[axis];
+    latticeOrigin[axis] = float((low_[axis] - contentMargin_ - origin[axis]) * inverse[axis] +
+                                layer * voxelSize_[axis] * inverse[axis]);
+    latticeStride[axis] = float(stride);
+    latticeStep[axis] = float(latticeStep_[axis] * inverse[axis]);
   }
-  // The packets' boxes are tested in single precision (grid_traversal.h).
+  const __m128 originLow = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], -kInfinity);
+  const __m128 originHigh = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], kInfinity);
+  const __m128 stride4 = _mm_setr_ps(latticeStride[0], latticeStride[1], latticeStride[2], 0.0f);
+  const __m128 step4 = _mm_setr_ps(latticeStep[0], latticeStep[1], latticeStep[2], 0.0f);
+  // The packets' boxes: the same lattice (grid_traversal.h).
   using Float4 = grid_traversal::PacketRay::Float4;
   const auto broadcast = [](float x) { return Float4{x, x, x, x}; };
   Float4 packetStep[3];
-  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? float(latticeStep[axis]) : 0.0f);
+  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? latticeStep[axis] : 0.0f);
 
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
@@ -569,7 +574,8 @@ template <bool AnyHit>
   // of following one another (the triangles are tested in the walk's order
   // all the same).
   uint32_t aheadIndex[kWalkAhead + 1];
-  int64_t aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1], aheadLeft[kWalkAhead + 1][3];
+  int64_t aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
+  int32_t aheadLeft[kWalkAhead + 1][4] = {};  // x, y, z, and 0
   int64_t fixedVoxelEnter = 0;
   bool walking = true;
   while (walking) {
@@ -585,7 +591,7 @@ template <bool AnyHit>
       aheadIndex[count] = uint32_t(index);
       aheadEnter[count] = fixedVoxelEnter;
       aheadExit[count] = fixedVoxelExit;
-      aheadLeft[count][0] = leftX, aheadLeft[count][1] = leftY, aheadLeft[count][2] = leftZ;
+      aheadLeft[count][0] = int32_t(leftX), aheadLeft[count][1] = int32_t(leftY), aheadLeft[count][2] = int32_t(leftZ);
       count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
       if (fixedVoxelExit >= fixedExit) {
         walking = false;
@@ -619,19 +625,28 @@ template <bool AnyHit>
       const double voxelExit = tEnter + double(aheadExit[k]) * unit;
       grid_traversal::PacketBoxClip& clip = clips[kept];
       if (testBoxes) {
-        double lower = voxelEnter, upper = std::min(voxelExit, tExit);
-        for (int axis = 0; axis < 3; ++axis) {
-          const double start = latticeOrigin[axis] + double(aheadLeft[k][axis]) * latticeStride[axis];
-          const double a = start + row.low[axis] * latticeStep[axis];
-          const double b = start + row.high[axis] * latticeStep[axis];
-          lower = std::max(lower, std::min(a, b));
-          upper = std::min(upper, std::max(a, b));
-          clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(float(start));
-        }
+        const __m128i left = _mm_loadu_si128(reinterpret_cast<const __m128i*>(aheadLeft[k]));
+        const __m128 layers = _mm_mul_ps(_mm_cvtepi32_ps(left), stride4);
+        const __m128 startLow = _mm_add_ps(originLow, layers), startHigh = _mm_add_ps(originHigh, layers);
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i bytes = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row.low)), zero);
+        const __m128 a = _mm_add_ps(startLow, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(bytes, zero)), step4));
+        const __m128 b = _mm_add_ps(startHigh, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(bytes, zero)), step4));
+        // The latest entry and the earliest exit over the axes.
+        __m128 enterAll = _mm_min_ps(a, b), exitAll = _mm_max_ps(a, b);
+        enterAll = _mm_max_ps(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 0, 3, 2)));
+        exitAll = _mm_min_ps(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 0, 3, 2)));
+        enterAll = _mm_max_ss(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 1, 1, 1)));
+        exitAll = _mm_min_ss(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 1, 1, 1)));
+        const float lower = std::max(_mm_cvtss_f32(enterAll), float(voxelEnter));
+        const float upper = std::min(_mm_cvtss_f32(exitAll), float(std::min(voxelExit, tExit)));
         if (!(lower <= upper)) continue;
         // The packets' boxes lie in the row's: only [lower, upper] counts.
-        clip.lower = broadcast(float(lower));
-        clip.upper = broadcast(float(upper));
+        alignas(16) float start[4];
+        _mm_store_ps(start, startLow);
+        for (int axis = 0; axis < 3; ++axis) clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(start[axis]);
+        clip.lower = broadcast(lower);
+        clip.upper = broadcast(upper);
       } else {
         for (int axis = 0; axis < 3; ++axis) {
           clip.planeLow[axis] = broadcast(-kInfinity);

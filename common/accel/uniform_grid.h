@@ -109,7 +109,7 @@ class UniformGrid final : public Accelerator {
   // without loading a packet (uniform_grid.cpp says why that is exact).
   struct VoxelRow {
     uint32_t firstPacket, endPacket;
-    uint8_t low[3], high[3];
+    uint8_t low[4], high[4];  // x, y, z, and 0
   };
   std::vector<VoxelRow> rows_;
   std::vector<grid_traversal::TrianglePacket, grid_traversal::LargeArrayAllocator<grid_traversal::TrianglePacket>>
