@@ -73,7 +73,8 @@ class UniformGrid final : public Accelerator {
 
   // Voxels per axis ({0, 0, 0} for an empty mesh).
   std::array<int, 3> resolution() const { return resolution_; }
-  // The box the voxels tile: the mesh bounds, slightly padded.
+  // The box the voxels tile: the bounds of the vertices' finite coordinates
+  // (the mesh bounds, when every vertex is used and finite), slightly padded.
   std::array<double, 3> gridLow() const { return low_; }
   std::array<double, 3> voxelSize() const { return voxelSize_; }
 
