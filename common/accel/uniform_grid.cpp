@@ -1,9 +1,8 @@
 // Uniform grid: build (the grid's box from one sequential read of the
-// vertices, one pass over the triangles listing (voxel, triangle)
-// pairs and counting them per voxel, a counting sort of the triangles by
-// voxel, then one sequential pass that copies each voxel's triangles'
-// vertices into its run of 4-wide packets and rounds their boxes onto the
-// voxel's lattice) and traversal (3D-DDA that walks a few occupied voxels
+// vertices, one pass over the triangles listing their voxels and counting
+// them per voxel, a counting sort of the triangles by voxel, then one
+// sequential pass that copies each voxel's triangles' vertices into its run
+// of 4-wide packets and rounds their boxes onto the voxel's lattice) and traversal (3D-DDA that walks a few occupied voxels
 // ahead of the tests, keeps those whose content box the ray crosses and
 // prefetches them; per voxel, the packets' boxes, then a 4-wide sign test in
 // front of the scalar triangle test for the packets they pass; mailboxing).
@@ -84,6 +83,9 @@ constexpr double kGridPadding = 1e-4;
 // A triangle whose grown bounding box spans at most this many voxels is
 // referenced in all of them, without the triangle-box overlap test.
 constexpr uint32_t kBoxOnlyVoxels = 8;
+// The build's flag on a triangle's first reference (voxel indices are below
+// 512^3 = 2^27).
+constexpr uint32_t kFirstVoxel = 0x80000000u;
 // Traversal: occupied voxels the walk gathers ahead of the tests, and cache
 // lines of triangles prefetched per voxel.
 constexpr int kWalkAhead = 4;
@@ -269,31 +271,33 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     return static_cast<uint32_t>(std::min(std::max((coordinate - low) * inverse, 0.0), last));
   };
 
-  // Pass 1: the voxels of every triangle, as (voxel, primitive) pairs in
-  // increasing primitive order, counted per voxel (in voxelStart_[voxel + 1]).
-  // A triangle is referenced in every voxel its bounding box, grown by the
-  // margin, touches; where that box spans more than kBoxOnlyVoxels voxels
-  // and at least two axes, only in those the triangle itself (grown by the
-  // margin) overlaps. Referencing more voxels than the triangle touches costs
-  // only tests, never exactness (see the top of the file).
+  // Pass 1: the voxels of every triangle, in increasing primitive order,
+  // counted per voxel. A triangle is referenced in every voxel its bounding
+  // box, grown by the margin, touches; where that box spans more than
+  // kBoxOnlyVoxels voxels and at least two axes, only in those the triangle
+  // itself (grown by the margin) overlaps. Referencing more voxels than the
+  // triangle touches costs only tests, never exactness (see the top of the
+  // file). Each reference is its voxel, flagged (kFirstVoxel) where a
+  // triangle's references begin: the primitive ids follow from the order,
+  // with the triangles left out (not finite, or in no voxel) listed apart.
   std::vector<uint32_t> counts(voxelCount, 0);
   // Uninitialised, grown by hand: push_back's checks cost more than the rest
   // of a one-voxel triangle's work.
-  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> pairVoxel, pairPrimitive;
-  size_t pairCount = 0;
-  pairVoxel.resize(2 * size_t(triangleCount) + 1024);
-  pairPrimitive.resize(pairVoxel.size());
-  const auto add = [&](uint32_t voxel, uint32_t primitive) {
-    if (pairCount == pairVoxel.size()) [[unlikely]] {
-      pairVoxel.resize(2 * pairCount);
-      pairPrimitive.resize(2 * pairCount);
-    }
+  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> references;
+  std::vector<uint32_t> leftOut;
+  size_t referenceCount = 0;
+  references.resize(2 * size_t(triangleCount) + 1024);
+  uint32_t first = kFirstVoxel;  // the flag for the triangle's next reference
+  const auto add = [&](uint32_t voxel) {
+    if (referenceCount == references.size()) [[unlikely]]
+      references.resize(2 * referenceCount);
     ++counts[voxel];
-    pairVoxel[pairCount] = voxel;
-    pairPrimitive[pairCount] = primitive;
-    ++pairCount;
+    references[referenceCount++] = voxel | first;
+    first = 0;
   };
   for (uint32_t primitive = 0; primitive < triangleCount; ++primitive) {
+    if (first == 0) first = kFirstVoxel;  // the previous triangle was placed
+    else if (primitive > 0) leftOut.push_back(primitive - 1);
     Vec3 v0, v1, v2;
     mesh.triangle(primitive, v0, v1, v2);
     const Vec3 lo = min(v0, min(v1, v2)), hi = max(v0, max(v1, v2));
@@ -306,7 +310,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     const uint32_t z0 = voxelIndex(double(lo.z) - margin, lowZ, inverseZ, lastZ);
     const uint32_t z1 = voxelIndex(double(hi.z) + margin, lowZ, inverseZ, lastZ);
     if (x0 == x1 && y0 == y1 && z0 == z1) {  // the common case: one voxel
-      add(x0 + strideY * y0 + strideZ * z0, primitive);
+      add(x0 + strideY * y0 + strideZ * z0);
       continue;
     }
     const uint32_t boxVoxels = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
@@ -316,7 +320,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     if (spannedAxes < 2 || boxVoxels <= kBoxOnlyVoxels) {
       for (uint32_t z = z0; z <= z1; ++z)
         for (uint32_t y = y0; y <= y1; ++y)
-          for (uint32_t x = x0; x <= x1; ++x) add(x + strideY * y + strideZ * z, primitive);
+          for (uint32_t x = x0; x <= x1; ++x) add(x + strideY * y + strideZ * z);
       continue;
     }
     const TriangleVoxelOverlap overlap(v0, v1, v2, voxelHalfSize);
@@ -326,14 +330,15 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
         const double centerY = lowY + (y + 0.5) * voxelSize_[1];
         for (uint32_t x = x0; x <= x1; ++x)
           if (overlap.overlaps(lowX + (x + 0.5) * voxelSize_[0], centerY, centerZ))
-            add(x + strideY * y + strideZ * z, primitive);
+            add(x + strideY * y + strideZ * z);
       }
     }
   }
+  if (first != 0 && triangleCount > 0) leftOut.push_back(triangleCount - 1);
 
   // The occupancy bits and the rows' ranks; counts[voxel] becomes the
   // voxel's first place in `sorted` below.
-  const uint64_t total = pairCount;
+  const uint64_t total = referenceCount;
   if (total > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
   occupied_.assign((voxelCount + 63) / 64, 0);
@@ -358,11 +363,19 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     throw std::invalid_argument("grid: more than 2^32 triangle packets; use a lower res");
 
   // Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
-  // array small enough to stay in cache). Pairs come in increasing primitive
-  // order, so each voxel's list is increasing. After it, counts[v] is voxel
-  // v's end in `sorted`.
+  // array small enough to stay in cache). References come in increasing
+  // primitive order, so each voxel's list is increasing. After it, counts[v]
+  // is voxel v's end in `sorted`.
   std::vector<uint32_t> sorted(total);
-  for (uint64_t pair = 0; pair < total; ++pair) sorted[counts[pairVoxel[pair]]++] = pairPrimitive[pair];
+  leftOut.push_back(kNoPrimitive);  // a sentinel: no placed primitive has that id
+  const uint32_t* nextLeftOut = leftOut.data();
+  uint32_t primitive = kNoPrimitive;  // + 1 wraps to 0 at the first reference
+  for (uint64_t r = 0; r < total; ++r) {
+    const uint32_t reference = references[r];
+    primitive += reference >> 31;  // kFirstVoxel: the next placed triangle's
+    while (primitive == *nextLeftOut) [[unlikely]] ++primitive, ++nextLeftOut;
+    sorted[counts[reference & ~kFirstVoxel]++] = primitive;
+  }
 
   // Pass 3: the rows and the packets, written in order, voxel by voxel; each
   // voxel's last packet padded with copies of its last triangle (tested

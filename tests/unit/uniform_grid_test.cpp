@@ -106,6 +106,31 @@ TEST(UniformGrid, MatchesBruteForceFarFromTheWorldOrigin) {
   expectSameAsBruteForce(far, grid, 10000, 400);
 }
 
+TEST(UniformGrid, MatchesBruteForceWithNonFiniteTriangles) {
+  // Triangles with a NaN or infinite vertex are left out (brute force never
+  // hits them): the first, the last, a run, and every seventh. Rays come
+  // from the intact mesh.
+  const TestMesh intact = mixedScene(9);
+  TestMesh mesh = intact;
+  const size_t count = mesh.triangleCount();
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const auto poison = [&](size_t triangle, float value) { mesh.positions[3 * mesh.indices[3 * triangle] + 1] = value; };
+  poison(0, nan);
+  poison(count - 1, -inf);
+  for (size_t t = count / 2; t < count / 2 + 5; ++t) poison(t, inf);
+  for (size_t t = 3; t < count; t += 7) poison(t, nan);
+  const UniformGrid grid(mesh.view());
+  const BruteForce brute(mesh.view());
+  int hits = 0, mismatches = 0;
+  for (const Ray& ray : testRays(intact, grid, 6000, 700)) {
+    const Hit expected = brute.intersect(ray);
+    hits += expected.found();
+    mismatches += !accel_test::sameBits(grid.intersect(ray), expected) || grid.occluded(ray) != expected.found();
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(hits, 600);
+}
+
 TEST(UniformGrid, HandlesFlatBounds) {
   // A floor: every vertex at z = 1, so the bounds have no thickness.
   TestMesh floor;
