@@ -2,10 +2,11 @@
 // vertices, one pass over the triangles listing their voxels and counting
 // them per voxel, a counting sort of the triangles by voxel, then one
 // sequential pass that copies each voxel's triangles' vertices into its run
-// of 4-wide packets and rounds their boxes onto the voxel's lattice) and traversal (3D-DDA that walks a few occupied voxels
-// ahead of the tests, keeps those whose content box the ray crosses and
-// prefetches them; per voxel, the packets' boxes, then a 4-wide sign test in
-// front of the scalar triangle test for the packets they pass; mailboxing).
+// of 4-wide packets and rounds their boxes onto the voxel's lattice) and
+// traversal (3D-DDA that walks a few occupied voxels ahead of the tests,
+// keeps those whose content box the ray crosses and prefetches them; per
+// voxel, the packets' boxes, then a 4-wide sign test in front of the scalar
+// triangle test for the packets they pass; mailboxing).
 //
 // Why the grid returns exactly brute force's hit. Traversal keeps the best
 // hit over every triangle tested so far (by closerThan) and stops after the
@@ -388,30 +389,35 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   // that voxel's packet, whose box then spans the whole lattice (the rows'
   // boxes, each on its own voxel's lattice, do the culling).
   const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
-  // The box on the lattice starting at latticeLow: low bounds rounded down,
-  // high bounds up, clamped to the lattice (truncation is floor for the
-  // clamped values, which are >= 0). Both bounds of an axis at once (SSE2).
-  struct LatticeBox {
-    uint8_t low[3], high[3];
+  // A box on a voxel's lattice, as the bytes of VoxelRow::low and high: the
+  // low bounds rounded down, the high bounds up, clamped to the lattice
+  // (truncation is floor for the clamped values, which are >= 0). In single
+  // precision, all six at once: the bounds are measured from lattice origins
+  // rounded to float away from the box (the low bounds' origin up, the high
+  // bounds' down), so the rounding only grows the box but for the
+  // subtraction's and the scaling's own, ~1e-7 of the grid or of a step,
+  // nothing beside the margin (see the top of the file).
+  const __m128 inverseStep4 = _mm_setr_ps(float(inverseStep[0]), float(inverseStep[1]), float(inverseStep[2]), 0.0f);
+  const __m128 zero4 = _mm_setzero_ps(), top4 = _mm_set1_ps(float(kLatticeSteps));
+  const auto latticeBox = [&](const Vec3& low, const Vec3& high, __m128 originLow, __m128 originHigh) {
+    const __m128 a = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(low.x, low.y, low.z, 0.0f), originLow), inverseStep4), zero4),
+        top4);
+    const __m128 b = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(high.x, high.y, high.z, 0.0f), originHigh), inverseStep4), zero4),
+        top4);
+    const __m128i highFloor = _mm_cvttps_epi32(b);
+    // Where b is not whole its truncation is one short: subtract the all-ones mask.
+    const __m128i highSteps = _mm_sub_epi32(highFloor, _mm_castps_si128(_mm_cmplt_ps(_mm_cvtepi32_ps(highFloor), b)));
+    return _mm_packus_epi16(_mm_packs_epi32(_mm_cvttps_epi32(a), highSteps), _mm_setzero_si128());
   };
-  const __m128d steps = _mm_set1_pd(double(kLatticeSteps));
-  const __m128d grow = _mm_set_pd(contentMargin_, -contentMargin_);
-  const auto latticeBox = [&](const Vec3& low, const Vec3& high, const double latticeLow[3]) {
-    LatticeBox box;
-    for (int axis = 0; axis < 3; ++axis) {
-      const __m128d bounds = _mm_add_pd(_mm_set_pd(double(high[axis]), double(low[axis])), grow);
-      const __m128d x = _mm_min_pd(
-          _mm_max_pd(_mm_mul_pd(_mm_sub_pd(bounds, _mm_set1_pd(latticeLow[axis])), _mm_set1_pd(inverseStep[axis])),
-                     _mm_setzero_pd()),
-          steps);
-      const __m128i truncated = _mm_cvttpd_epi32(x);
-      // The high bound's truncation is one short where the value is not whole.
-      const __m128i short1 = _mm_castpd_si128(_mm_cmplt_pd(_mm_cvtepi32_pd(truncated), x));
-      const __m128i rounded = _mm_sub_epi32(truncated, _mm_shuffle_epi32(short1, _MM_SHUFFLE(3, 3, 2, 0)));
-      box.low[axis] = uint8_t(_mm_cvtsi128_si32(truncated));
-      box.high[axis] = uint8_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(rounded, _MM_SHUFFLE(1, 1, 1, 1))));
-    }
-    return box;
+  const auto roundUp = [](double x) {
+    const float f = float(x);
+    return double(f) < x ? std::nextafter(f, kInfinity) : f;
+  };
+  const auto roundDown = [](double x) {
+    const float f = float(x);
+    return double(f) > x ? std::nextafter(f, -kInfinity) : f;
   };
   rows_.resize(occupiedTotal);
   // At most packetTotal packets; the shared ones are left off at the end.
@@ -420,13 +426,18 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   packetBoxes_.resize((packetTotal + 3) / 4);
   std::memset(static_cast<void*>(packetBoxes_.data()), 0, packetBoxes_.size() * sizeof(PacketBoxes4));
   PacketBoxes4* const packetBoxes = packetBoxes_.data();
-  const auto setPacketBox = [packetBoxes](uint32_t packet, const LatticeBox& box) {
+  const auto setPacketBox = [packetBoxes](uint32_t packet, __m128i box) {
+    const uint64_t bytes = uint64_t(_mm_cvtsi128_si64(box));
     PacketBoxes4& boxes = packetBoxes[packet / 4];
     for (int axis = 0; axis < 3; ++axis) {
-      boxes.low[axis][packet % 4] = box.low[axis];
-      boxes.high[axis][packet % 4] = box.high[axis];
+      boxes.low[axis][packet % 4] = uint8_t(bytes >> (8 * axis));
+      boxes.high[axis][packet % 4] = uint8_t(bytes >> (32 + 8 * axis));
     }
   };
+  // Bytes 0-3: low bounds, 4-7: high bounds (the row's box, and the mask
+  // that keeps the minima of the first and the maxima of the second).
+  const __m128i lowHalf = _mm_set_epi32(0, 0, 0, -1);
+  const __m128i wholeLattice = _mm_set_epi32(0, 0, 0x00ffffff, 0);
   TrianglePacket* const firstPacket = packets_.data();
   TrianglePacket* packet = firstPacket;
   VoxelRow* row = rows_.data();
@@ -437,21 +448,25 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
       const uint32_t end = counts[voxel];
       const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
-      double latticeLow[3];
-      for (int axis = 0; axis < 3; ++axis)
-        latticeLow[axis] = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+      float originLow[4] = {}, originHigh[4] = {};
+      for (int axis = 0; axis < 3; ++axis) {
+        const double latticeLow = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+        originLow[axis] = roundUp(latticeLow + contentMargin_);
+        originHigh[axis] = roundDown(latticeLow - contentMargin_);
+      }
+      const __m128 low4 = _mm_loadu_ps(originLow), high4 = _mm_loadu_ps(originHigh);
       const uint32_t count = end - reference;
-      LatticeBox rowBox;
+      __m128i rowBox;
       if (count <= 4 && count == reference - previousReference &&
           std::equal(&sorted[reference], &sorted[end], &sorted[previousReference])) {
         // Shared with the voxel before (row - 1), whose packet was the last written.
         row->firstPacket = row[-1].firstPacket;
         row->endPacket = row[-1].endPacket;
-        setPacketBox(row->firstPacket, LatticeBox{{0, 0, 0}, {kLatticeSteps, kLatticeSteps, kLatticeSteps}});
-        rowBox = latticeBox(packetLow, packetHigh, latticeLow);
+        setPacketBox(row->firstPacket, wholeLattice);
+        rowBox = latticeBox(packetLow, packetHigh, low4, high4);
       } else {
         row->firstPacket = uint32_t(packet - firstPacket);
-        rowBox = LatticeBox{{kLatticeSteps, kLatticeSteps, kLatticeSteps}, {0, 0, 0}};
+        __m128i rowLow = _mm_set1_epi8(char(0xff)), rowHigh = _mm_setzero_si128();
         for (uint32_t r = reference; r < end; r += 4, ++packet) {
           packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
           for (uint32_t lane = 0; lane < 4; ++lane) {
@@ -465,18 +480,15 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
             packetLow = min(packetLow, min(v0, min(v1, v2)));
             packetHigh = max(packetHigh, max(v0, max(v1, v2)));
           }
-          const LatticeBox box = latticeBox(packetLow, packetHigh, latticeLow);
+          const __m128i box = latticeBox(packetLow, packetHigh, low4, high4);
           setPacketBox(uint32_t(packet - firstPacket), box);
-          for (int axis = 0; axis < 3; ++axis) {
-            rowBox.low[axis] = std::min(rowBox.low[axis], box.low[axis]);
-            rowBox.high[axis] = std::max(rowBox.high[axis], box.high[axis]);
-          }
+          rowLow = _mm_min_epu8(rowLow, box);
+          rowHigh = _mm_max_epu8(rowHigh, box);
         }
+        rowBox = _mm_or_si128(_mm_and_si128(lowHalf, rowLow), _mm_andnot_si128(lowHalf, rowHigh));
         row->endPacket = uint32_t(packet - firstPacket);
       }
-      std::memcpy(row->low, rowBox.low, 3);
-      std::memcpy(row->high, rowBox.high, 3);
-      row->low[3] = row->high[3] = 0;
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(row->low), rowBox);
       previousReference = reference;
       reference = end;
     }
@@ -570,8 +582,9 @@ template <bool AnyHit>
   const double scale = kUnits / std::max(tExit - tEnter, 1e-280), unit = 1.0 / scale;
   const auto toFixed = [&](double t) { return int64_t(std::clamp((t - tEnter) * scale, -kFar, kFar)); };
   int64_t tx = toFixed(tNext[0]), ty = toFixed(tNext[1]), tz = toFixed(tNext[2]);
-  const int64_t deltaX = int64_t(std::min(tDelta[0] * scale, kFar)), deltaY = int64_t(std::min(tDelta[1] * scale, kFar)),
-                deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
+  const int64_t deltaX = int64_t(std::min(tDelta[0] * scale, kFar));
+  const int64_t deltaY = int64_t(std::min(tDelta[1] * scale, kFar));
+  const int64_t deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
   int64_t fixedExit = toFixed(tExit);
   const int64_t stepX = indexStep[0], stepY = indexStep[1], stepZ = indexStep[2];
   int64_t leftX = stepsLeft[0], leftY = stepsLeft[1], leftZ = stepsLeft[2];
