@@ -41,15 +41,17 @@
 // the DDA's far smaller error) in the voxel V where X is found, so P lies
 // at least 2m - e inside X's box grown by 2m (m the reference margin) and
 // clipped to V grown by 2m, and so inside every box built from it, however
-// rounded outwards onto V's lattice: the ray runs inside the box for a
-// stretch of 2m - e > m either side of P (in distance along the axes). So a
-// box test that misses the box only where the ray's computed distances stray
-// from the exact ones by less than m never skips X in V. The boxes are
-// tested in single precision, from per-ray planes rounded to float: errors
-// of a few float ulps of the distance to the origin, below m for origins
-// within a few grid diagonals, the same condition as above. A skipped packet
-// or voxel leaves its triangles out of the mailbox, so they are still tested
-// where the ray crosses their boxes.
+// rounded outwards onto V's lattice (the build's own rounding, in single
+// precision, may move a bound inwards by ~1e-7 of the grid: nothing beside
+// m): the ray runs inside the box for a stretch of 2m - e > m either side
+// of P (in distance along the axes). So a box test that misses the box only
+// where the ray's computed distances stray from the exact ones by less than
+// m never skips X in V. The boxes are tested in single precision, from
+// per-ray planes rounded to float: errors of a few float ulps of the
+// distance to the origin, below m for origins within a few grid diagonals,
+// the same condition as above. A skipped packet or voxel leaves its
+// triangles out of the mailbox, so they are still tested where the ray
+// crosses their boxes.
 //
 // Ties (equal t, smaller primitive wins) follow from the same argument: two
 // triangles hit at the same t share P, so both are referenced where P is.
