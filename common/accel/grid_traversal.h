@@ -1,8 +1,8 @@
 // The pieces `grid` and `hgrid` share: the ray clipped to the grid's box, a
 // voxel's triangles tested through a mailbox (as references into the mesh,
-// or as 4-wide packets of copied vertices), and for the builds the
-// triangle-voxel overlap test and an allocator for large arrays. Inline:
-// the tests sit in the innermost loop of tracing.
+// or as 4-wide packets of copied vertices behind their boxes), and for the
+// builds the triangle-voxel overlap test and an allocator for large arrays.
+// Inline: the tests sit in the innermost loop of tracing.
 #pragma once
 
 #include <algorithm>
@@ -279,9 +279,9 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
       const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
       const Float4 det = U + V + W;
       const Float4 T = U * (packetRay.scaleZ * az) + V * (packetRay.scaleZ * bz) + W * (packetRay.scaleZ * cz);
-      const Float4 t = T / det;
-      Int4 inRange = (t > packetRay.tMin) & (t < packetRay.tMax);
-      if constexpr (!AnyHit) inRange &= t <= Float4{best.t, best.t, best.t, best.t};
+      const Float4 hitT = T / det;
+      Int4 inRange = (hitT > packetRay.tMin) & (hitT < packetRay.tMax);
+      if constexpr (!AnyHit) inRange &= hitT <= Float4{best.t, best.t, best.t, best.t};
       const Int4 candidate = (~(negative & positive) & inRange) | anyZero;
       unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
                       unsigned(candidate[3] & 8);

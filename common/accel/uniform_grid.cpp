@@ -32,9 +32,10 @@
 // hit so far is at or before its entry (then it lies in an earlier voxel,
 // which the walk's rule above would have stopped after). The 4-wide test
 // drops a triangle only where intersectTriangle itself would return false
-// (the same operations, IEEE single precision, lane by lane); every other
-// triangle goes through intersectTriangle, which alone decides hits. The
-// vertices tested are the mesh's, copied bit for bit.
+// (the same operations, IEEE single precision, lane by lane) or where the
+// t it would return is beyond the best hit so far (so could not replace
+// it); every other triangle goes through intersectTriangle, which alone
+// decides hits. The vertices tested are the mesh's, copied bit for bit.
 //
 // The boxes skip only triangles whose hit cannot be the answer in that
 // voxel. P lies within the test's error e of X's bounding box and (up to
@@ -90,7 +91,7 @@ constexpr uint32_t kBoxOnlyVoxels = 8;
 // 512^3 = 2^27).
 constexpr uint32_t kFirstVoxel = 0x80000000u;
 // Traversal: occupied voxels the walk gathers ahead of the tests, and cache
-// lines of triangles prefetched per voxel.
+// lines of triangles and of their boxes prefetched per voxel kept.
 constexpr int kWalkAhead = 4;
 constexpr int kPrefetchLines = 4;
 constexpr int kPrefetchBoxLines = 2;
@@ -99,7 +100,6 @@ constexpr int kPrefetchBoxLines = 2;
 constexpr uint32_t kMailboxSlots = 16;
 // Steps of the lattice of the rows' content boxes (VoxelRow: one byte a bound).
 constexpr int kLatticeSteps = 255;
-
 
 // The set bits of x: baseline x86-64 has no popcnt instruction, and GCC
 // makes std::popcount a library call there.
