@@ -1,15 +1,17 @@
 // The pieces `grid` and `hgrid` share: the ray clipped to the grid's box, a
 // voxel's triangles tested through a mailbox (as references into the mesh,
-// or as 4-wide packets of copied vertices), and for the builds the
-// triangle-voxel overlap test and an allocator for large arrays. Inline:
-// the tests sit in the innermost loop of tracing.
+// or as 4-wide packets of copied vertices behind their boxes), and for the
+// builds the triangle-voxel overlap test and an allocator for large arrays.
+// Inline: the tests sit in the innermost loop of tracing.
 #pragma once
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <emmintrin.h>
 #include <new>
 #include <utility>
 
@@ -43,20 +45,22 @@ inline bool clipToBox(const double origin[3], const double direction[3], const d
 // A direct-mapped cache of the primitives tested last, one per query (on
 // the stack, so concurrent queries share nothing): a triangle spanning
 // several voxels is tested once, its result does not depend on the voxel.
+// Slots: a power of two; a collision only repeats a test.
+template <uint32_t Slots>
 class Mailbox {
  public:
   Mailbox() { std::memset(slots_, 0xff, sizeof(slots_)); }   // kNoPrimitive everywhere
   // True the first time `primitive` is seen (recently); it is then recorded.
   bool firstVisit(uint32_t primitive) {
-    uint32_t& slot = slots_[primitive & (kSize - 1)];
+    uint32_t& slot = slots_[primitive & (Slots - 1)];
     if (slot == primitive) return false;
     slot = primitive;
     return true;
   }
 
  private:
-  static constexpr uint32_t kSize = 64;
-  uint32_t slots_[kSize];
+  static_assert((Slots & (Slots - 1)) == 0);
+  uint32_t slots_[Slots];
 };
 
 // Four triangles as a grid stores them, side by side per coordinate
@@ -68,6 +72,17 @@ struct TrianglePacket {
   uint32_t primitive[4];
 };
 static_assert(sizeof(TrianglePacket) == 160);
+
+// The boxes of four consecutive packets (block b: packets 4b .. 4b + 3),
+// each the box of its four triangles on the lattice of its voxel's content
+// box (uniform_grid.h): low[axis][packet], high[axis][packet]. Kept apart
+// from the packets, side by side, so that testing a voxel's boxes reads a
+// line or two, four boxes at a time, and only the packets whose box the ray
+// crosses are loaded.
+struct PacketBoxes4 {
+  uint8_t low[3][4], high[3][4];
+};
+static_assert(sizeof(PacketBoxes4) == 24);
 
 // For the builds of `grid` and `hgrid`: the separating-axis test of
 // triangleOverlapsBoxBeyondBounds (the 9 edge cross products and the
@@ -150,7 +165,8 @@ struct LargeArrayAllocator {
 struct PacketRay {
   using Float4 = float __attribute__((vector_size(16)));
   Float4 originX, originY, originZ;  // origin[kx], origin[ky], origin[kz]
-  Float4 shearX, shearY;             // Sx, Sy
+  Float4 shearX, shearY, scaleZ;     // Sx, Sy, Sz
+  Float4 tMin, tMax;
   int kx, ky, kz;
 
   PacketRay(const WatertightRay& frame, const Ray& ray) : kx(frame.kx), ky(frame.ky), kz(frame.kz) {
@@ -161,21 +177,68 @@ struct PacketRay {
     originZ = broadcast(origin[kz]);
     shearX = broadcast(frame.Sx);
     shearY = broadcast(frame.Sy);
+    scaleZ = broadcast(frame.Sz);
+    tMin = broadcast(ray.tMin);
+    tMax = broadcast(ray.tMax);
   }
 };
 
-// Tests the triangles of packets[first, end), folding hits into `best`; with
-// AnyHit, returns true at the first hit. Four at a time, the first steps of
-// intersectTriangle (translation, shear, edge functions, sign test) run on
-// all four lanes with the very operations of the scalar test, so each lane
-// gets the scalar test's U, V, W bit for bit: a lane is dropped only where
-// intersectTriangle would return false on that same sign test. The others
-// (a hit, or an edge function exactly zero, which the scalar test
-// re-decides in double) go to intersectTriangle itself, once per primitive
-// (the mailbox), which alone decides hits.
-template <bool AnyHit>
-inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t end, Mailbox& mailbox,
-                        const PacketRay& packetRay, const WatertightRay& frame, const Ray& ray, Hit& best) {
+// Where a ray crosses the lattice of a voxel's packet boxes, as distances
+// along it (each value broadcast to the four lanes): lattice coordinate q of
+// axis a at planeLow[a] + q * step[a] for the boxes' low sides, planeHigh[a]
+// + q * step[a] for their high sides (planeLow = planeHigh, but for a ray
+// that tests no boxes: -inf and +inf, and no step); lower to upper, the span
+// of the ray that counts.
+struct PacketBoxClip {
+  PacketRay::Float4 planeLow[3], planeHigh[3], step[3];
+  PacketRay::Float4 lower, upper;
+};
+
+// Which of the four boxes the ray crosses within the span of the clip (bit k:
+// packet 4b + k). SSE2 (the x86-64 baseline), which GCC's vector extensions
+// do not reach here: they widen the bytes one by one.
+inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxClip& clip) {
+  const __m128i zero = _mm_setzero_si128();
+  // low x, y, z, high x (16 bytes), then high y, z (8 bytes), widened to 16 then 32 bits.
+  const __m128i first = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&boxes));
+  const __m128i second = _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&boxes.high[1]));
+  const __m128i lowXY = _mm_unpacklo_epi8(first, zero), lowZhighX = _mm_unpackhi_epi8(first, zero);
+  const __m128i highYZ = _mm_unpacklo_epi8(second, zero);
+  const __m128 low[3] = {_mm_cvtepi32_ps(_mm_unpacklo_epi16(lowXY, zero)),
+                         _mm_cvtepi32_ps(_mm_unpackhi_epi16(lowXY, zero)),
+                         _mm_cvtepi32_ps(_mm_unpacklo_epi16(lowZhighX, zero))};
+  const __m128 high[3] = {_mm_cvtepi32_ps(_mm_unpackhi_epi16(lowZhighX, zero)),
+                          _mm_cvtepi32_ps(_mm_unpacklo_epi16(highYZ, zero)),
+                          _mm_cvtepi32_ps(_mm_unpackhi_epi16(highYZ, zero))};
+  // The latest entry and the earliest exit over the axes and the span.
+  __m128 enter = clip.lower, exit = clip.upper;
+  for (int axis = 0; axis < 3; ++axis) {
+    const __m128 a = _mm_add_ps(clip.planeLow[axis], _mm_mul_ps(low[axis], clip.step[axis]));
+    const __m128 b = _mm_add_ps(clip.planeHigh[axis], _mm_mul_ps(high[axis], clip.step[axis]));
+    enter = _mm_max_ps(enter, _mm_min_ps(a, b));
+    exit = _mm_min_ps(exit, _mm_max_ps(a, b));
+  }
+  return unsigned(_mm_movemask_ps(_mm_cmple_ps(enter, exit)));
+}
+
+// Tests the triangles of packets[first, end) whose box the ray crosses,
+// folding hits into `best`; with AnyHit, returns true at the first hit. The
+// boxes first, 64 at a time and without branches, then the packets they
+// pass, prefetched together so that their cache misses overlap. Four at a
+// time, intersectTriangle's own steps (translation, shear, edge functions,
+// sign test, det, T and t = T / det) run on all four lanes with the very
+// operations of the scalar test, so each lane gets the scalar test's U, V,
+// W, det and t bit for bit: a lane is dropped only where intersectTriangle
+// would return false on the same sign test or the same check of t against
+// [tMin, tMax], or where its t would lose to the best hit so far (closerThan:
+// t > best.t never wins). The others go to intersectTriangle itself, once
+// per primitive (the mailbox), which alone decides hits; so do lanes with
+// an edge function exactly zero, which the scalar test re-decides in
+// double.
+template <bool AnyHit, uint32_t Slots>
+inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes, uint32_t first, uint32_t end,
+                        const PacketBoxClip& clip, Mailbox<Slots>& mailbox, const PacketRay& packetRay,
+                        const WatertightRay& frame, const Ray& ray, Hit& best) {
   using Float4 = PacketRay::Float4;
   using Int4 = int32_t __attribute__((vector_size(16)));
   const auto load = [](const float* p) {
@@ -184,39 +247,57 @@ inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t 
     return value;
   };
   const int kx = packetRay.kx, ky = packetRay.ky, kz = packetRay.kz;
-  for (uint32_t p = first; p < end; ++p) {
-    const TrianglePacket& packet = packets[p];
-    const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
-    const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
-    const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
-    const Float4 Ax = (load(packet.v[0][kx]) - packetRay.originX) - packetRay.shearX * az;
-    const Float4 Ay = (load(packet.v[0][ky]) - packetRay.originY) - packetRay.shearY * az;
-    const Float4 Bx = (load(packet.v[1][kx]) - packetRay.originX) - packetRay.shearX * bz;
-    const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
-    const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
-    const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
-    const Float4 U = Cx * By - Cy * Bx;
-    const Float4 V = Ax * Cy - Ay * Cx;
-    const Float4 W = Bx * Ay - By * Ax;
-    const Float4 zero{};
-    const Int4 negative = (U < zero) | (V < zero) | (W < zero);
-    const Int4 positive = (U > zero) | (V > zero) | (W > zero);
-    const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
-    const Int4 candidate = ~(negative & positive) | anyZero;
-    unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
-                    unsigned(candidate[3] & 8);
-    while (mask != 0) {
-      const int lane = __builtin_ctz(mask);
-      mask &= mask - 1;
-      const uint32_t primitive = packet.primitive[lane];
-      if (!mailbox.firstVisit(primitive)) continue;
-      const Vec3 v0{packet.v[0][0][lane], packet.v[0][1][lane], packet.v[0][2][lane]};
-      const Vec3 v1{packet.v[1][0][lane], packet.v[1][1][lane], packet.v[1][2][lane]};
-      const Vec3 v2{packet.v[2][0][lane], packet.v[2][1][lane], packet.v[2][2][lane]};
-      float t, u, v;
-      if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
-      if constexpr (AnyHit) return true;
-      if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
+  const uint32_t endBlock = (end + 3) / 4;
+  for (uint32_t block = first / 4; block < endBlock; block += 16) {
+    const uint32_t blocks = std::min(endBlock - block, 16u), base = 4 * block;
+    uint64_t crossed = 0;
+    for (uint32_t k = 0; k < blocks; ++k) crossed |= uint64_t(crossedPacketBoxes(boxes[block + k], clip)) << (4 * k);
+    // Only the voxel's own packets (its first and last blocks may hold others).
+    if (first > base) crossed &= ~uint64_t(0) << (first - base);
+    if (end - base < 64) crossed &= (uint64_t(1) << (end - base)) - 1;
+    for (uint64_t bits = crossed; bits != 0; bits &= bits - 1) {
+      const char* const start = reinterpret_cast<const char*>(packets + base + std::countr_zero(bits));
+      for (int offset : {0, 64, 128, int(sizeof(TrianglePacket)) - 1}) __builtin_prefetch(start + offset);
+    }
+    for (; crossed != 0; crossed &= crossed - 1) {
+      const TrianglePacket& packet = packets[base + std::countr_zero(crossed)];
+      const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
+      const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
+      const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
+      const Float4 Ax = (load(packet.v[0][kx]) - packetRay.originX) - packetRay.shearX * az;
+      const Float4 Ay = (load(packet.v[0][ky]) - packetRay.originY) - packetRay.shearY * az;
+      const Float4 Bx = (load(packet.v[1][kx]) - packetRay.originX) - packetRay.shearX * bz;
+      const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
+      const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
+      const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
+      const Float4 U = Cx * By - Cy * Bx;
+      const Float4 V = Ax * Cy - Ay * Cx;
+      const Float4 W = Bx * Ay - By * Ax;
+      const Float4 zero{};
+      const Int4 negative = (U < zero) | (V < zero) | (W < zero);
+      const Int4 positive = (U > zero) | (V > zero) | (W > zero);
+      const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
+      const Float4 det = U + V + W;
+      const Float4 T = U * (packetRay.scaleZ * az) + V * (packetRay.scaleZ * bz) + W * (packetRay.scaleZ * cz);
+      const Float4 hitT = T / det;
+      Int4 inRange = (hitT > packetRay.tMin) & (hitT < packetRay.tMax);
+      if constexpr (!AnyHit) inRange &= hitT <= Float4{best.t, best.t, best.t, best.t};
+      const Int4 candidate = (~(negative & positive) & inRange) | anyZero;
+      unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
+                      unsigned(candidate[3] & 8);
+      while (mask != 0) {
+        const int lane = __builtin_ctz(mask);
+        mask &= mask - 1;
+        const uint32_t primitive = packet.primitive[lane];
+        if (!mailbox.firstVisit(primitive)) continue;
+        const Vec3 v0{packet.v[0][0][lane], packet.v[0][1][lane], packet.v[0][2][lane]};
+        const Vec3 v1{packet.v[1][0][lane], packet.v[1][1][lane], packet.v[1][2][lane]};
+        const Vec3 v2{packet.v[2][0][lane], packet.v[2][1][lane], packet.v[2][2][lane]};
+        float t, u, v;
+        if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
+        if constexpr (AnyHit) return true;
+        if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
+      }
     }
   }
   return false;
@@ -224,8 +305,8 @@ inline bool testPackets(const TrianglePacket* packets, uint32_t first, uint32_t 
 
 // Tests the triangles references[first, end) not tested yet, folding hits
 // into `best`. With AnyHit, returns true at the first hit.
-template <bool AnyHit>
-inline bool testReferences(const uint32_t* references, uint32_t first, uint32_t end, Mailbox& mailbox,
+template <bool AnyHit, uint32_t Slots>
+inline bool testReferences(const uint32_t* references, uint32_t first, uint32_t end, Mailbox<Slots>& mailbox,
                            const MeshView& mesh, const WatertightRay& frame, const Ray& ray, Hit& best) {
   for (uint32_t r = first; r < end; ++r) {
     const uint32_t primitive = references[r];

@@ -377,7 +377,7 @@ bool HierarchicalGrid::traverse(const Ray& ray, Hit& best) const {
   stack[0].start(top, origin, direction, inverseDirection, tEnter, tExit);
 
   const WatertightRay frame(ray.direction);
-  grid_traversal::Mailbox mailbox;
+  grid_traversal::Mailbox<64> mailbox;
   const uint32_t* const references = references_.data();
   const Node* const nodes = nodes_.data();
   const uint64_t* const occupied = occupied_.data();

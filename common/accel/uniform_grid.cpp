@@ -1,20 +1,24 @@
-// Uniform grid: build (one pass over the triangles listing (voxel, triangle)
-// pairs and counting them per voxel, a counting sort of the triangles by
-// voxel, then one sequential pass that copies each voxel's triangles'
-// vertices into its run of 4-wide packets) and
-// traversal (3D-DDA that walks a few occupied voxels ahead of the tests and
-// prefetches them; 4-wide sign test in front of the scalar triangle test;
-// mailboxing).
+// Uniform grid: build (the grid's box from one sequential read of the
+// vertices, one pass over the triangles listing their voxels and counting
+// them per voxel, a counting sort of the triangles by voxel, then one
+// sequential pass that copies each voxel's triangles' vertices into its run
+// of 4-wide packets and rounds their boxes onto the voxel's lattice) and
+// traversal (3D-DDA that walks a few occupied voxels ahead of the tests,
+// keeps those whose content box the ray crosses and prefetches them; per
+// voxel, the packets' boxes, then a 4-wide sign test in front of the scalar
+// triangle test for the packets they pass; mailboxing).
 //
 // Why the grid returns exactly brute force's hit. Traversal keeps the best
 // hit over every triangle tested so far (by closerThan) and stops after the
 // first voxel whose exit distance is >= that hit's t. This is exact if every
 // triangle X whose computed hit tX is <= the final t is referenced in some
 // voxel visited by then. The point P = origin + tX * direction lies in a
-// visited voxel (the DDA runs in double, so its voxel boundaries are exact
-// far below float rounding), and P lies within the triangle test's rounding
-// error of X (the watertight test is backward stable: its t is exact for
-// vertices moved by a few float ulps of their distance to the ray origin).
+// visited voxel (the DDA's boundaries are computed in double and walked in
+// 64-bit fixed point, 2^-60 of the ray's stretch in the grid, so they are
+// exact far below float rounding), and P lies within the triangle test's
+// rounding error of X (the watertight test is backward stable: its t is
+// exact for vertices moved by a few float ulps of their distance to the ray
+// origin).
 // So each triangle is referenced in every voxel within a margin of its
 // bounding box (and of the triangle itself, when the overlap test refines
 // it: boxes of more than kBoxOnlyVoxels voxels), the margin being 1e-5 of
@@ -28,9 +32,27 @@
 // hit so far is at or before its entry (then it lies in an earlier voxel,
 // which the walk's rule above would have stopped after). The 4-wide test
 // drops a triangle only where intersectTriangle itself would return false
-// (the same operations, IEEE single precision, lane by lane); every other
-// triangle goes through intersectTriangle, which alone decides hits. The
-// vertices tested are the mesh's, copied bit for bit.
+// (the same operations, IEEE single precision, lane by lane) or where the
+// t it would return is beyond the best hit so far (so could not replace
+// it); every other triangle goes through intersectTriangle, which alone
+// decides hits. The vertices tested are the mesh's, copied bit for bit.
+//
+// The boxes skip only triangles whose hit cannot be the answer in that
+// voxel. P lies within the test's error e of X's bounding box and (up to
+// the DDA's far smaller error) in the voxel V where X is found, so P lies
+// at least 2m - e inside X's box grown by 2m (m the reference margin) and
+// clipped to V grown by 2m, and so inside every box built from it, however
+// rounded outwards onto V's lattice (the build's own rounding, in single
+// precision, may move a bound inwards by ~1e-7 of the grid: nothing beside
+// m): the ray runs inside the box for a stretch of 2m - e > m either side
+// of P (in distance along the axes). So a box test that misses the box only
+// where the ray's computed distances stray from the exact ones by less than
+// m never skips X in V. The boxes are tested in single precision, from
+// per-ray planes rounded to float: errors of a few float ulps of the
+// distance to the origin, below m for origins within a few grid diagonals,
+// the same condition as above. A skipped packet or voxel leaves its
+// triangles out of the mailbox, so they are still tested where the ray
+// crosses their boxes.
 //
 // Ties (equal t, smaller primitive wins) follow from the same argument: two
 // triangles hit at the same t share P, so both are referenced where P is.
@@ -41,6 +63,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <emmintrin.h>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -64,11 +87,59 @@ constexpr double kGridPadding = 1e-4;
 // A triangle whose grown bounding box spans at most this many voxels is
 // referenced in all of them, without the triangle-box overlap test.
 constexpr uint32_t kBoxOnlyVoxels = 8;
+// The build's flag on a triangle's first reference (voxel indices are below
+// 512^3 = 2^27).
+constexpr uint32_t kFirstVoxel = 0x80000000u;
 // Traversal: occupied voxels the walk gathers ahead of the tests, and cache
-// lines of triangles prefetched per voxel.
+// lines of triangles and of their boxes prefetched per voxel kept.
 constexpr int kWalkAhead = 4;
-constexpr int kPrefetchLines = 8;
+constexpr int kPrefetchLines = 4;
+constexpr int kPrefetchBoxLines = 2;
+// Slots of a ray's mailbox: with the boxes and the 4-wide test, only a few
+// triangles per ray reach the scalar test.
+constexpr uint32_t kMailboxSlots = 16;
+// Steps of the lattice of the rows' content boxes (VoxelRow: one byte a bound).
+constexpr int kLatticeSteps = 255;
 
+// The set bits of x: baseline x86-64 has no popcnt instruction, and GCC
+// makes std::popcount a library call there.
+inline uint32_t countBits(uint64_t x) {
+  x -= (x >> 1) & 0x5555555555555555u;
+  x = (x & 0x3333333333333333u) + ((x >> 2) & 0x3333333333333333u);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fu;
+  return uint32_t((x * 0x0101010101010101u) >> 56);
+}
+
+// The bounds of the finite coordinates of the vertices: four vertices (12
+// floats) at a time in three SSE registers, whose lanes cycle through x, y,
+// z. A superset of the bounds of the triangles that can be placed, and one
+// sequential read instead of a gather through the indices.
+Bounds3 finiteCoordinateBounds(const float* positions, size_t vertexCount) {
+  const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity), zero = _mm_setzero_ps();
+  __m128 low[3] = {infinity, infinity, infinity}, high[3] = {minusInfinity, minusInfinity, minusInfinity};
+  const size_t blocks = vertexCount / 4;
+  for (size_t block = 0; block < blocks; ++block) {
+    for (int r = 0; r < 3; ++r) {
+      const __m128 v = _mm_loadu_ps(positions + 12 * block + 4 * r);
+      const __m128 finite = _mm_cmpeq_ps(_mm_sub_ps(v, v), zero);  // x - x is 0 exactly when x is finite
+      low[r] = _mm_min_ps(low[r], _mm_or_ps(_mm_and_ps(finite, v), _mm_andnot_ps(finite, infinity)));
+      high[r] = _mm_max_ps(high[r], _mm_or_ps(_mm_and_ps(finite, v), _mm_andnot_ps(finite, minusInfinity)));
+    }
+  }
+  alignas(16) float lanesLow[12], lanesHigh[12];
+  for (int r = 0; r < 3; ++r) _mm_store_ps(lanesLow + 4 * r, low[r]), _mm_store_ps(lanesHigh + 4 * r, high[r]);
+  Bounds3 bounds;
+  for (int lane = 0; lane < 12; ++lane) {
+    bounds.lo[lane % 3] = std::min(bounds.lo[lane % 3], lanesLow[lane]);
+    bounds.hi[lane % 3] = std::max(bounds.hi[lane % 3], lanesHigh[lane]);
+  }
+  for (size_t i = 12 * blocks; i < 3 * vertexCount; ++i) {
+    if (!(positions[i] - positions[i] == 0.0f)) continue;
+    bounds.lo[i % 3] = std::min(bounds.lo[i % 3], positions[i]);
+    bounds.hi[i % 3] = std::max(bounds.hi[i % 3], positions[i]);
+  }
+  return bounds;
+}
 
 // Whether all six coordinates are finite, as isFinite(a) && isFinite(b),
 // branch-free: x - x is 0 exactly when x is finite (NaN otherwise).
@@ -132,6 +203,7 @@ UniformGridOptions readUniformGridOptions(AcceleratorParameters& parameters) {
 
 namespace {
 
+using grid_traversal::PacketBoxes4;
 using grid_traversal::TrianglePacket;
 using grid_traversal::TriangleVoxelOverlap;
 
@@ -146,18 +218,16 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
                                 " triangles exceed the 32-bit primitive ids; split the cell");
   const uint32_t triangleCount = static_cast<uint32_t>(mesh.triangleCount);
 
-  // Bounds over the triangles that can be placed. Triangles with a
-  // non-finite vertex cannot be, and are left out (such input should be
-  // refused at import).
-  for (uint32_t primitive = 0; primitive < triangleCount; ++primitive) {
-    const Bounds3 box = mesh.triangleBounds(primitive);
-    if (finite(box.lo, box.hi)) meshBounds_.extend(box);
-  }
+  // The grid's box holds every triangle that can be placed (triangles with
+  // a non-finite vertex cannot be, and are left out: such input should be
+  // refused at import): the bounds of the vertices' finite coordinates.
+  // (meshBounds_, over the placed triangles alone, comes with pass 1.)
+  const Bounds3 vertexBounds =
+      triangleCount == 0 ? Bounds3() : finiteCoordinateBounds(mesh.positions, mesh.vertexCount);
 
   stats_.spec = std::string(spec);
-  if (meshBounds_.empty()) {
-    voxelStart_.assign(1, 0);
-    stats_.bytes = sizeof(*this) + sizeof(uint32_t);
+  if (vertexBounds.empty()) {
+    stats_.bytes = sizeof(*this);
     stats_.buildMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return;
@@ -165,17 +235,17 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
 
   // Grid box: the bounds padded on every axis, so flat bounds get a
   // thickness and no triangle touches a face of the grid.
-  const Vec3 extent = meshBounds_.diagonal();
+  const Vec3 extent = vertexBounds.diagonal();
   double scale = maxComponent(extent);
   if (scale == 0.0) {
     // Every vertex is the same point: any small box will do.
-    const Vec3 magnitude = max(-meshBounds_.lo, meshBounds_.hi);
+    const Vec3 magnitude = max(-vertexBounds.lo, vertexBounds.hi);
     scale = std::max(1e-6 * maxComponent(magnitude), 1e-30);
   }
   const double padding = kGridPadding * scale;
   for (int axis = 0; axis < 3; ++axis) {
-    low_[axis] = double(meshBounds_.lo[axis]) - padding;
-    high_[axis] = double(meshBounds_.hi[axis]) + padding;
+    low_[axis] = double(vertexBounds.lo[axis]) - padding;
+    high_[axis] = double(vertexBounds.hi[axis]) + padding;
   }
   const std::array<double, 3> gridExtent{high_[0] - low_[0], high_[1] - low_[1],
                                          high_[2] - low_[2]};
@@ -189,6 +259,8 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   const double margin = kReferenceMargin * std::max({gridExtent[0], gridExtent[1], gridExtent[2]});
   const Double3 voxelHalfSize{0.5 * voxelSize_[0] + margin, 0.5 * voxelSize_[1] + margin,
                               0.5 * voxelSize_[2] + margin};
+  contentMargin_ = 2 * margin;
+  for (int axis = 0; axis < 3; ++axis) latticeStep_[axis] = (voxelSize_[axis] + 2 * contentMargin_) / kLatticeSteps;
 
   const uint64_t voxelCount = uint64_t(resolution_[0]) * resolution_[1] * resolution_[2];
   const uint32_t strideY = uint32_t(resolution_[0]);
@@ -202,36 +274,38 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     return static_cast<uint32_t>(std::min(std::max((coordinate - low) * inverse, 0.0), last));
   };
 
-  // Pass 1: the voxels of every triangle, as (voxel, primitive) pairs in
-  // increasing primitive order, counted per voxel (in voxelStart_[voxel + 1]).
-  // A triangle is referenced in every voxel its bounding box, grown by the
-  // margin, touches; where that box spans more than kBoxOnlyVoxels voxels
-  // and at least two axes, only in those the triangle itself (grown by the
-  // margin) overlaps. Referencing more voxels than the triangle touches costs
-  // only tests, never exactness (see the top of the file).
-  voxelStart_.assign(voxelCount + 1, 0);
-  uint32_t* const counts = voxelStart_.data() + 1;
+  // Pass 1: the voxels of every triangle, in increasing primitive order,
+  // counted per voxel. A triangle is referenced in every voxel its bounding
+  // box, grown by the margin, touches; where that box spans more than
+  // kBoxOnlyVoxels voxels and at least two axes, only in those the triangle
+  // itself (grown by the margin) overlaps. Referencing more voxels than the
+  // triangle touches costs only tests, never exactness (see the top of the
+  // file). Each reference is its voxel, flagged (kFirstVoxel) where a
+  // triangle's references begin: the primitive ids follow from the order,
+  // with the triangles left out (not finite, or in no voxel) listed apart.
+  std::vector<uint32_t> counts(voxelCount, 0);
   // Uninitialised, grown by hand: push_back's checks cost more than the rest
   // of a one-voxel triangle's work.
-  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> pairVoxel, pairPrimitive;
-  size_t pairCount = 0;
-  pairVoxel.resize(2 * size_t(triangleCount) + 1024);
-  pairPrimitive.resize(pairVoxel.size());
-  const auto add = [&](uint32_t voxel, uint32_t primitive) {
-    if (pairCount == pairVoxel.size()) [[unlikely]] {
-      pairVoxel.resize(2 * pairCount);
-      pairPrimitive.resize(2 * pairCount);
-    }
+  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> references;
+  std::vector<uint32_t> leftOut;
+  size_t referenceCount = 0;
+  references.resize(2 * size_t(triangleCount) + 1024);
+  uint32_t first = kFirstVoxel;  // the flag for the triangle's next reference
+  const auto add = [&](uint32_t voxel) {
+    if (referenceCount == references.size()) [[unlikely]]
+      references.resize(2 * referenceCount);
     ++counts[voxel];
-    pairVoxel[pairCount] = voxel;
-    pairPrimitive[pairCount] = primitive;
-    ++pairCount;
+    references[referenceCount++] = voxel | first;
+    first = 0;
   };
   for (uint32_t primitive = 0; primitive < triangleCount; ++primitive) {
+    if (first == 0) first = kFirstVoxel;  // the previous triangle was placed
+    else if (primitive > 0) leftOut.push_back(primitive - 1);
     Vec3 v0, v1, v2;
     mesh.triangle(primitive, v0, v1, v2);
     const Vec3 lo = min(v0, min(v1, v2)), hi = max(v0, max(v1, v2));
     if (!finite(lo, hi)) continue;
+    meshBounds_.extend(Bounds3(lo, hi));
     const uint32_t x0 = voxelIndex(double(lo.x) - margin, lowX, inverseX, lastX);
     const uint32_t x1 = voxelIndex(double(hi.x) + margin, lowX, inverseX, lastX);
     const uint32_t y0 = voxelIndex(double(lo.y) - margin, lowY, inverseY, lastY);
@@ -239,7 +313,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     const uint32_t z0 = voxelIndex(double(lo.z) - margin, lowZ, inverseZ, lastZ);
     const uint32_t z1 = voxelIndex(double(hi.z) + margin, lowZ, inverseZ, lastZ);
     if (x0 == x1 && y0 == y1 && z0 == z1) {  // the common case: one voxel
-      add(x0 + strideY * y0 + strideZ * z0, primitive);
+      add(x0 + strideY * y0 + strideZ * z0);
       continue;
     }
     const uint32_t boxVoxels = (x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1);
@@ -249,7 +323,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     if (spannedAxes < 2 || boxVoxels <= kBoxOnlyVoxels) {
       for (uint32_t z = z0; z <= z1; ++z)
         for (uint32_t y = y0; y <= y1; ++y)
-          for (uint32_t x = x0; x <= x1; ++x) add(x + strideY * y + strideZ * z, primitive);
+          for (uint32_t x = x0; x <= x1; ++x) add(x + strideY * y + strideZ * z);
       continue;
     }
     const TriangleVoxelOverlap overlap(v0, v1, v2, voxelHalfSize);
@@ -259,76 +333,182 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
         const double centerY = lowY + (y + 0.5) * voxelSize_[1];
         for (uint32_t x = x0; x <= x1; ++x)
           if (overlap.overlaps(lowX + (x + 0.5) * voxelSize_[0], centerY, centerZ))
-            add(x + strideY * y + strideZ * z, primitive);
+            add(x + strideY * y + strideZ * z);
       }
     }
   }
+  if (first != 0 && triangleCount > 0) leftOut.push_back(triangleCount - 1);
 
-  // Each voxel's run of packets: voxelStart_[voxel + 1] becomes its end (a
-  // prefix sum of the counts stored there), firstReference[voxel] its first
-  // place in `sorted` below; and the occupancy bits.
-  const uint64_t total = pairCount;
+  // The occupancy bits and the rows' ranks; counts[voxel] becomes the
+  // voxel's first place in `sorted` below.
+  const uint64_t total = referenceCount;
   if (total > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
-  std::vector<uint32_t> firstReference(voxelCount);
   occupied_.assign((voxelCount + 63) / 64, 0);
+  occupiedBefore_.resize(occupied_.size());
   uint64_t packetTotal = 0;
-  uint32_t referenceTotal = 0;
+  uint32_t referenceTotal = 0, occupiedTotal = 0;
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
     const uint64_t end = std::min<uint64_t>(voxelCount, (word + 1) * 64);
     uint64_t bits = 0;
     for (uint64_t voxel = word * 64; voxel < end; ++voxel) {
       const uint32_t count = counts[voxel];
       bits |= uint64_t(count != 0) << (voxel % 64);
-      firstReference[voxel] = referenceTotal;
+      counts[voxel] = referenceTotal;
       referenceTotal += count;
       packetTotal += (count + 3) / 4;
-      counts[voxel] = uint32_t(packetTotal);
     }
     occupied_[word] = bits;
-    stats_.leaves += uint64_t(std::popcount(bits));
+    occupiedBefore_[word] = occupiedTotal;
+    occupiedTotal += uint32_t(std::popcount(bits));
   }
   if (packetTotal > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle packets; use a lower res");
 
   // Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
-  // array small enough to stay in cache). Pairs come in increasing primitive
-  // order, so each voxel's list is increasing. After it, firstReference[v]
+  // array small enough to stay in cache). References come in increasing
+  // primitive order, so each voxel's list is increasing. After it, counts[v]
   // is voxel v's end in `sorted`.
   std::vector<uint32_t> sorted(total);
-  for (uint64_t pair = 0; pair < total; ++pair) sorted[firstReference[pairVoxel[pair]]++] = pairPrimitive[pair];
+  leftOut.push_back(kNoPrimitive);  // a sentinel: no placed primitive has that id
+  const uint32_t* nextLeftOut = leftOut.data();
+  uint32_t primitive = kNoPrimitive;  // + 1 wraps to 0 at the first reference
+  for (uint64_t r = 0; r < total; ++r) {
+    const uint32_t reference = references[r];
+    primitive += reference >> 31;  // kFirstVoxel: the next placed triangle's
+    while (primitive == *nextLeftOut) [[unlikely]] ++primitive, ++nextLeftOut;
+    sorted[counts[reference & ~kFirstVoxel]++] = primitive;
+  }
 
-  // Pass 3: the packets, written in order, voxel by voxel; each voxel's last
-  // packet padded with copies of its last triangle (tested once: the mailbox).
+  // Pass 3: the rows and the packets, written in order, voxel by voxel; each
+  // voxel's last packet padded with copies of its last triangle (tested
+  // once: the mailbox). A packet's box: the union of its triangles'
+  // bounding boxes grown by contentMargin_, clipped to the voxel grown by as
+  // much (the ends of the lattice), rounded outwards to the lattice; the
+  // row's box, the union of its packets'. A voxel whose triangles fit in one
+  // packet and are those of the voxel before it (a run of voxels along a
+  // floor, a wall or a ceiling: most of the occupied voxels of a room) shares
+  // that voxel's packet, whose box then spans the whole lattice (the rows'
+  // boxes, each on its own voxel's lattice, do the culling).
+  const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
+  // A box on a voxel's lattice, as the bytes of VoxelRow::low and high: the
+  // low bounds rounded down, the high bounds up, clamped to the lattice
+  // (truncation is floor for the clamped values, which are >= 0). In single
+  // precision, all six at once: the bounds are measured from lattice origins
+  // rounded to float away from the box (the low bounds' origin up, the high
+  // bounds' down), so the rounding only grows the box but for the
+  // subtraction's and the scaling's own, ~1e-7 of the grid or of a step,
+  // nothing beside the margin (see the top of the file).
+  const __m128 inverseStep4 = _mm_setr_ps(float(inverseStep[0]), float(inverseStep[1]), float(inverseStep[2]), 0.0f);
+  const __m128 zero4 = _mm_setzero_ps(), top4 = _mm_set1_ps(float(kLatticeSteps));
+  const auto latticeBox = [&](const Vec3& low, const Vec3& high, __m128 originLow, __m128 originHigh) {
+    const __m128 a = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(low.x, low.y, low.z, 0.0f), originLow), inverseStep4), zero4),
+        top4);
+    const __m128 b = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(high.x, high.y, high.z, 0.0f), originHigh), inverseStep4), zero4),
+        top4);
+    const __m128i highFloor = _mm_cvttps_epi32(b);
+    // Where b is not whole its truncation is one short: subtract the all-ones mask.
+    const __m128i highSteps = _mm_sub_epi32(highFloor, _mm_castps_si128(_mm_cmplt_ps(_mm_cvtepi32_ps(highFloor), b)));
+    return _mm_packus_epi16(_mm_packs_epi32(_mm_cvttps_epi32(a), highSteps), _mm_setzero_si128());
+  };
+  const auto roundUp = [](double x) {
+    const float f = float(x);
+    return double(f) < x ? std::nextafter(f, kInfinity) : f;
+  };
+  const auto roundDown = [](double x) {
+    const float f = float(x);
+    return double(f) > x ? std::nextafter(f, -kInfinity) : f;
+  };
+  rows_.resize(occupiedTotal);
+  // At most packetTotal packets; the shared ones are left off at the end.
+  // Boxes of packets beyond the last are zeros (never read: masked off).
   packets_.resize(packetTotal);
-  TrianglePacket* packet = packets_.data();
-  uint32_t reference = 0;
+  packetBoxes_.resize((packetTotal + 3) / 4);
+  std::memset(static_cast<void*>(packetBoxes_.data()), 0, packetBoxes_.size() * sizeof(PacketBoxes4));
+  PacketBoxes4* const packetBoxes = packetBoxes_.data();
+  const auto setPacketBox = [packetBoxes](uint32_t packet, __m128i box) {
+    const uint64_t bytes = uint64_t(_mm_cvtsi128_si64(box));
+    PacketBoxes4& boxes = packetBoxes[packet / 4];
+    for (int axis = 0; axis < 3; ++axis) {
+      boxes.low[axis][packet % 4] = uint8_t(bytes >> (8 * axis));
+      boxes.high[axis][packet % 4] = uint8_t(bytes >> (32 + 8 * axis));
+    }
+  };
+  // Bytes 0-3: low bounds, 4-7: high bounds (the row's box, and the mask
+  // that keeps the minima of the first and the maxima of the second).
+  const __m128i lowHalf = _mm_set_epi32(0, 0, 0, -1);
+  const __m128i wholeLattice = _mm_set_epi32(0, 0, 0x00ffffff, 0);
+  TrianglePacket* const firstPacket = packets_.data();
+  TrianglePacket* packet = firstPacket;
+  VoxelRow* row = rows_.data();
+  uint32_t reference = 0, previousReference = 0;
+  Vec3 packetLow, packetHigh;  // the last packet's bounds
   for (uint64_t word = 0; word < occupied_.size(); ++word) {
-    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1) {
-      const uint64_t voxel = word * 64 + uint64_t(std::countr_zero(bits));
-      const uint32_t end = firstReference[voxel];
-      for (; reference < end; reference += 4, ++packet) {
-        for (uint32_t lane = 0; lane < 4; ++lane) {
-          const uint32_t primitive = sorted[std::min(reference + lane, end - 1)];
-          Vec3 v0, v1, v2;
-          mesh.triangle(primitive, v0, v1, v2);
-          packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
-          packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
-          packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
-          packet->primitive[lane] = primitive;
-        }
+    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1, ++row) {
+      const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
+      const uint32_t end = counts[voxel];
+      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
+      float originLow[4] = {}, originHigh[4] = {};
+      for (int axis = 0; axis < 3; ++axis) {
+        const double latticeLow = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
+        originLow[axis] = roundUp(latticeLow + contentMargin_);
+        originHigh[axis] = roundDown(latticeLow - contentMargin_);
       }
+      const __m128 low4 = _mm_loadu_ps(originLow), high4 = _mm_loadu_ps(originHigh);
+      const uint32_t count = end - reference;
+      __m128i rowBox;
+      if (count <= 4 && count == reference - previousReference &&
+          std::equal(&sorted[reference], &sorted[end], &sorted[previousReference])) {
+        // Shared with the voxel before (row - 1), whose packet was the last written.
+        row->firstPacket = row[-1].firstPacket;
+        row->endPacket = row[-1].endPacket;
+        setPacketBox(row->firstPacket, wholeLattice);
+        rowBox = latticeBox(packetLow, packetHigh, low4, high4);
+      } else {
+        row->firstPacket = uint32_t(packet - firstPacket);
+        __m128i rowLow = _mm_set1_epi8(char(0xff)), rowHigh = _mm_setzero_si128();
+        for (uint32_t r = reference; r < end; r += 4, ++packet) {
+          packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
+          for (uint32_t lane = 0; lane < 4; ++lane) {
+            const uint32_t primitive = sorted[std::min(r + lane, end - 1)];
+            Vec3 v0, v1, v2;
+            mesh.triangle(primitive, v0, v1, v2);
+            packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
+            packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
+            packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
+            packet->primitive[lane] = primitive;
+            packetLow = min(packetLow, min(v0, min(v1, v2)));
+            packetHigh = max(packetHigh, max(v0, max(v1, v2)));
+          }
+          const __m128i box = latticeBox(packetLow, packetHigh, low4, high4);
+          setPacketBox(uint32_t(packet - firstPacket), box);
+          rowLow = _mm_min_epu8(rowLow, box);
+          rowHigh = _mm_max_epu8(rowHigh, box);
+        }
+        rowBox = _mm_or_si128(_mm_and_si128(lowHalf, rowLow), _mm_andnot_si128(lowHalf, rowHigh));
+        row->endPacket = uint32_t(packet - firstPacket);
+      }
+      _mm_storel_epi64(reinterpret_cast<__m128i*>(row->low), rowBox);
+      previousReference = reference;
       reference = end;
     }
   }
+  packets_.resize(size_t(packet - packets_.data()));
+  packetBoxes_.resize((packets_.size() + 3) / 4);
 
+  stats_.leaves = occupiedTotal;
   stats_.nodes = voxelCount;
   stats_.emptyLeaves = voxelCount - stats_.leaves;
   stats_.triangleReferences = total;
   stats_.averageDepth = 1;
   stats_.maxDepth = 1;
-  stats_.bytes = sizeof(*this) + voxelStart_.capacity() * sizeof(uint32_t) +
-                 packets_.capacity() * sizeof(TrianglePacket) + occupied_.capacity() * sizeof(uint64_t);
+  // (The packets' and their boxes' capacity beyond their size, left by
+  // shared packets, is never touched, so never resident.)
+  stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) +
+                 occupiedBefore_.capacity() * sizeof(uint32_t) + rows_.capacity() * sizeof(VoxelRow) +
+                 packets_.size() * sizeof(TrianglePacket) + packetBoxes_.size() * sizeof(PacketBoxes4);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
@@ -344,10 +524,25 @@ template <bool AnyHit>
   const double origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
   const double direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
   if (direction[0] == 0.0 && direction[1] == 0.0 && direction[2] == 0.0) return false;
+  // Distances along the ray are computed with the inverse direction (one
+  // division per axis); they differ from quotients by an ulp, far below the
+  // reference margin (see the top of the file).
+  const double inverse[3] = {1.0 / direction[0], 1.0 / direction[1], 1.0 / direction[2]};
 
-  // Clip [tMin, tMax] to the grid box.
+  // Clip [tMin, tMax] to the grid box (slabs). An axis the ray runs parallel
+  // to only decides whether the ray is inside the slab at all.
   double tEnter = ray.tMin, tExit = ray.tMax;
-  if (!grid_traversal::clipToBox(origin, direction, low_.data(), high_.data(), tEnter, tExit)) return false;
+  if (!(tEnter < tExit)) return false;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (direction[axis] == 0.0) {
+      if (origin[axis] < low_[axis] || origin[axis] > high_[axis]) return false;
+      continue;
+    }
+    const double a = (low_[axis] - origin[axis]) * inverse[axis], b = (high_[axis] - origin[axis]) * inverse[axis];
+    tEnter = std::max(tEnter, std::min(a, b));
+    tExit = std::min(tExit, std::max(a, b));
+  }
+  if (!(tEnter <= tExit)) return false;
 
   // DDA set-up: the voxel at the entry point, and per axis the distance to
   // the next voxel boundary (tNext), between boundaries (tDelta), the step
@@ -364,13 +559,13 @@ template <bool AnyHit>
     if (direction[axis] > 0.0) {
       indexStep[axis] = strides[axis];
       stepsLeft[axis] = resolution_[axis] - 1 - voxel;
-      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) / direction[axis];
-      tDelta[axis] = voxelSize_[axis] / direction[axis];
+      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = voxelSize_[axis] * inverse[axis];
     } else if (direction[axis] < 0.0) {
       indexStep[axis] = -strides[axis];
       stepsLeft[axis] = voxel;
-      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) / direction[axis];
-      tDelta[axis] = -voxelSize_[axis] / direction[axis];
+      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = -voxelSize_[axis] * inverse[axis];
     } else {
       indexStep[axis] = 0;
       stepsLeft[axis] = std::numeric_limits<int32_t>::max();  // never stepped
@@ -378,84 +573,180 @@ template <bool AnyHit>
       tDelta[axis] = 0.0;
     }
   }
-  // In scalars, so that the walk's state stays in registers.
-  double tx = tNext[0], ty = tNext[1], tz = tNext[2];
-  const uint64_t deltaX = std::bit_cast<uint64_t>(tDelta[0]), deltaY = std::bit_cast<uint64_t>(tDelta[1]),
-                 deltaZ = std::bit_cast<uint64_t>(tDelta[2]);
+  // The walk runs on 64-bit integers: distances beyond tEnter in units of
+  // 2^-60 of the ray's stretch in the grid (a resolution ~2^-60 of it, far
+  // finer than double's own after a few hundred additions), because integer
+  // compares and adds make each step's dependency chain about half as long
+  // as in double. Distances beyond 2^61 units (a boundary the ray meets
+  // only after leaving the grid, or never) are held at 2^61: never stepped
+  // to, and sums stay below 2^63.
+  constexpr double kUnits = 0x1p60, kFar = 0x1p61;
+  const double scale = kUnits / std::max(tExit - tEnter, 1e-280), unit = 1.0 / scale;
+  const auto toFixed = [&](double t) { return int64_t(std::clamp((t - tEnter) * scale, -kFar, kFar)); };
+  int64_t tx = toFixed(tNext[0]), ty = toFixed(tNext[1]), tz = toFixed(tNext[2]);
+  const int64_t deltaX = int64_t(std::min(tDelta[0] * scale, kFar));
+  const int64_t deltaY = int64_t(std::min(tDelta[1] * scale, kFar));
+  const int64_t deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
+  int64_t fixedExit = toFixed(tExit);
   const int64_t stepX = indexStep[0], stepY = indexStep[1], stepZ = indexStep[2];
   int64_t leftX = stepsLeft[0], leftY = stepsLeft[1], leftZ = stepsLeft[2];
 
+  // Content boxes (VoxelRow): along each axis, the ray meets the first plane
+  // of the current voxel's lattice at latticeOrigin + left * latticeStride
+  // (left: the walk's steps left along the axis, which number the voxel's
+  // layer), and each lattice step after it latticeStep later. In single
+  // precision, four lanes x, y, z and a fourth that carries the voxel's span
+  // (-inf or +inf, no step). A ray parallel to an axis never meets its
+  // planes: it tests no boxes (rare; the packets decide alone, as they may).
+  const bool testBoxes = direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0;
+  float latticeOrigin[3], latticeStride[3], latticeStep[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    // The layer: resolution - 1 - left going up the axis, left going down.
+    const double layer = direction[axis] > 0.0 ? resolution_[axis] - 1 : 0.0;
+    const double stride = (direction[axis] > 0.0 ? -voxelSize_[axis] : voxelSize_[axis]) * inverse[axis];
+    latticeOrigin[axis] = float((low_[axis] - contentMargin_ - origin[axis]) * inverse[axis] +
+                                layer * voxelSize_[axis] * inverse[axis]);
+    latticeStride[axis] = float(stride);
+    latticeStep[axis] = float(latticeStep_[axis] * inverse[axis]);
+  }
+  const __m128 originLow = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], -kInfinity);
+  const __m128 originHigh = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], kInfinity);
+  const __m128 stride4 = _mm_setr_ps(latticeStride[0], latticeStride[1], latticeStride[2], 0.0f);
+  const __m128 step4 = _mm_setr_ps(latticeStep[0], latticeStep[1], latticeStep[2], 0.0f);
+  // The packets' boxes: the same lattice (grid_traversal.h).
+  using Float4 = grid_traversal::PacketRay::Float4;
+  const auto broadcast = [](float x) { return Float4{x, x, x, x}; };
+  Float4 packetStep[3];
+  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? latticeStep[axis] : 0.0f);
+
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
-  grid_traversal::Mailbox mailbox;
+  grid_traversal::Mailbox<kMailboxSlots> mailbox;
   const TrianglePacket* const packets = packets_.data();
-  const uint32_t* const voxelStart = voxelStart_.data();
+  const PacketBoxes4* const packetBoxes = packetBoxes_.data();
   const uint64_t* const occupied = occupied_.data();
+  const uint32_t* const occupiedBefore = occupiedBefore_.data();
+  const VoxelRow* const rows = rows_.data();
 
   // The walk runs ahead of the tests: it gathers the next few occupied
-  // voxels along the ray and prefetches their rows and triangles, so that
-  // their cache misses overlap instead of following one another (the
-  // triangles are tested in the walk's order all the same).
+  // voxels along the ray, keeps those whose content box the ray crosses and
+  // prefetches their triangles, so that their cache misses overlap instead
+  // of following one another (the triangles are tested in the walk's order
+  // all the same).
   uint32_t aheadIndex[kWalkAhead + 1];
-  double aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
-  double tVoxelEnter = tEnter;
+  int64_t aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
+  int32_t aheadLeft[kWalkAhead + 1][4] = {};  // x, y, z, and 0
+  int64_t fixedVoxelEnter = 0;
   bool walking = true;
   while (walking) {
     int count = 0;
     for (;;) {
-      const double tVoxelExit = std::min(tx, std::min(ty, tz));
+      // The axis whose boundary comes first (ties: x, then y), as masks
+      // rather than branches; its boundary is the voxel's exit.
+      const int64_t maskX = -int64_t((tx <= ty) & (tx <= tz));
+      const int64_t maskY = ~maskX & -int64_t(ty <= tz);
+      const int64_t maskZ = ~(maskX | maskY);
+      const int64_t fixedVoxelExit = (tx & maskX) | (ty & maskY) | (tz & maskZ);
       // Recorded always, kept only if occupied: no branch to mispredict.
       aheadIndex[count] = uint32_t(index);
-      aheadEnter[count] = tVoxelEnter;
-      aheadExit[count] = tVoxelExit;
+      aheadEnter[count] = fixedVoxelEnter;
+      aheadExit[count] = fixedVoxelExit;
+      aheadLeft[count][0] = int32_t(leftX), aheadLeft[count][1] = int32_t(leftY), aheadLeft[count][2] = int32_t(leftZ);
       count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
-      if (tVoxelExit >= tExit) {
+      if (fixedVoxelExit >= fixedExit) {
         walking = false;
         break;
       }
-      // Step along the axis whose boundary comes first (ties: x, then y),
-      // chosen by masks rather than branches. tDelta masked to +0 adds
-      // nothing (and keeps an infinite tNext infinite).
-      const uint64_t maskX = -uint64_t((tx <= ty) & (tx <= tz));
-      const uint64_t maskY = ~maskX & -uint64_t(ty <= tz);
-      const uint64_t maskZ = ~(maskX | maskY);
-      index += int32_t((uint64_t(stepX) & maskX) | (uint64_t(stepY) & maskY) | (uint64_t(stepZ) & maskZ));
-      tx += std::bit_cast<double>(deltaX & maskX);
-      ty += std::bit_cast<double>(deltaY & maskY);
-      tz += std::bit_cast<double>(deltaZ & maskZ);
-      leftX += int64_t(maskX);
-      leftY += int64_t(maskY);
-      leftZ += int64_t(maskZ);
+      index += int32_t((stepX & maskX) | (stepY & maskY) | (stepZ & maskZ));
+      tx += deltaX & maskX;
+      ty += deltaY & maskY;
+      tz += deltaZ & maskZ;
+      leftX += maskX;
+      leftY += maskY;
+      leftZ += maskZ;
       if ((leftX | leftY | leftZ) < 0) {  // out of the grid
         walking = false;
         break;
       }
-      tVoxelEnter = tVoxelExit;
+      fixedVoxelEnter = fixedVoxelExit;
       if (count == kWalkAhead) break;
     }
+    // The rows, and the content-box test: the part of the ray in the voxel
+    // and before the best hit so far must cross the box.
     uint32_t first[kWalkAhead], end[kWalkAhead];
+    double enter[kWalkAhead], exit[kWalkAhead];
+    grid_traversal::PacketBoxClip clips[kWalkAhead];
+    int kept = 0;
     for (int k = 0; k < count; ++k) {
-      first[k] = voxelStart[aheadIndex[k]];
-      end[k] = voxelStart[aheadIndex[k] + 1];
-      const char* const line = reinterpret_cast<const char*>(packets + first[k]);
-      const char* const last = reinterpret_cast<const char*>(packets + end[k]) - 1;
+      const uint32_t voxel = aheadIndex[k];
+      const uint64_t before = occupied[voxel / 64] & ((uint64_t(1) << (voxel % 64)) - 1);
+      const VoxelRow& row = rows[occupiedBefore[voxel / 64] + countBits(before)];
+      const double voxelEnter = tEnter + double(aheadEnter[k]) * unit;
+      const double voxelExit = tEnter + double(aheadExit[k]) * unit;
+      grid_traversal::PacketBoxClip& clip = clips[kept];
+      if (testBoxes) {
+        const __m128i left = _mm_loadu_si128(reinterpret_cast<const __m128i*>(aheadLeft[k]));
+        const __m128 layers = _mm_mul_ps(_mm_cvtepi32_ps(left), stride4);
+        const __m128 startLow = _mm_add_ps(originLow, layers), startHigh = _mm_add_ps(originHigh, layers);
+        const __m128i zero = _mm_setzero_si128();
+        const __m128i bytes = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row.low)), zero);
+        const __m128 a = _mm_add_ps(startLow, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(bytes, zero)), step4));
+        const __m128 b = _mm_add_ps(startHigh, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(bytes, zero)), step4));
+        // The latest entry and the earliest exit over the axes.
+        __m128 enterAll = _mm_min_ps(a, b), exitAll = _mm_max_ps(a, b);
+        enterAll = _mm_max_ps(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 0, 3, 2)));
+        exitAll = _mm_min_ps(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 0, 3, 2)));
+        enterAll = _mm_max_ss(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 1, 1, 1)));
+        exitAll = _mm_min_ss(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 1, 1, 1)));
+        const float lower = std::max(_mm_cvtss_f32(enterAll), float(voxelEnter));
+        const float upper = std::min(_mm_cvtss_f32(exitAll), float(std::min(voxelExit, tExit)));
+        if (!(lower <= upper)) continue;
+        // The packets' boxes lie in the row's: only [lower, upper] counts.
+        alignas(16) float start[4];
+        _mm_store_ps(start, startLow);
+        for (int axis = 0; axis < 3; ++axis) clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(start[axis]);
+        clip.lower = broadcast(lower);
+        clip.upper = broadcast(upper);
+      } else {
+        for (int axis = 0; axis < 3; ++axis) {
+          clip.planeLow[axis] = broadcast(-kInfinity);
+          clip.planeHigh[axis] = broadcast(kInfinity);
+        }
+        clip.lower = broadcast(-kInfinity);
+        clip.upper = broadcast(kInfinity);
+      }
+      for (int axis = 0; axis < 3; ++axis) clip.step[axis] = packetStep[axis];
+      first[kept] = row.firstPacket;
+      end[kept] = row.endPacket;
+      enter[kept] = voxelEnter;
+      exit[kept] = voxelExit;
+      const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept] / 4);
+      const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + (end[kept] + 3) / 4) - 1;
+      for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
+      const char* const line = reinterpret_cast<const char*>(packets + first[kept]);
+      const char* const last = reinterpret_cast<const char*>(packets + end[kept]) - 1;
       for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
+      ++kept;
     }
-    for (int k = 0; k < count; ++k) {
+    for (int k = 0; k < kept; ++k) {
       // A voxel entered at or beyond the best hit cannot hold a nearer one;
       // nor can any voxel after the one holding it. (Hits beyond the current
       // voxel are kept, not re-tested: the mailbox would skip them.)
       if constexpr (!AnyHit) {
-        if (best.found() && double(best.t) <= aheadEnter[k]) return true;
+        if (best.found() && double(best.t) <= enter[k]) return true;
       }
-      if (grid_traversal::testPackets<AnyHit>(packets, first[k], end[k], mailbox, packetRay, frame, ray, best))
+      if (grid_traversal::testPackets<AnyHit>(packets, packetBoxes, first[k], end[k], clips[k], mailbox, packetRay,
+                                              frame, ray, best))
         return true;
       if constexpr (!AnyHit) {
-        if (best.found() && double(best.t) <= aheadExit[k]) return true;
+        if (best.found() && double(best.t) <= exit[k]) return true;
       }
     }
     if constexpr (!AnyHit) {
-      if (best.found()) tExit = std::min(tExit, double(best.t));
+      if (best.found() && double(best.t) < tExit) {
+        tExit = double(best.t);
+        fixedExit = toFixed(tExit);
+      }
     }
   }
   return best.found();
