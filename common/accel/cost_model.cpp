@@ -136,15 +136,16 @@ std::vector<double> fitNonNegativeRelative(const std::vector<std::vector<double>
 
 CostModel CostModel::builtIn() {
   // `portico bench calibrate` on the 2-core development machine (Debian
-  // bookworm VM, AVX-512), 2026-11-22, with the packet grid of that day:
-  // 25 cells (24 of l-shape, 3 halls), 20 000 photon-like rays each.
+  // bookworm VM, AVX-512), 2026-11-23, with that day's grid (content and
+  // packet boxes) and binned kd:sah builder: 25 cells (24 of l-shape, 3
+  // halls), 20 000 photon-like rays each.
   CostModel model;
   model.origin = "built-in (development machine)";
-  model.families["grid"] = {{0.003103, 3.852e-05, 1.373e-05}, {273.3, 11.13, 5.862}};
-  model.families["hgrid"] = {{0, 0.0002083, 3.631e-05}, {102.5, 50.15}};
-  model.families["kd:median"] = {{0, 0.0007726, 0}, {0, 99.54}};
-  model.families["kd:sah"] = {{0.001267, 0.0006668, 0.0001704}, {44.56, 31.45}};
-  model.families["kd:bbox"] = {{0, 0, 0.0001865}, {0, 74.9}};
+  model.families["grid"] = {{0.00362, 3.586e-05, 1.662e-05}, {317.5, 7.19, 1.182}};
+  model.families["hgrid"] = {{0, 0.0003053, 2.602e-05}, {94.36, 47.84}};
+  model.families["kd:median"] = {{0, 0.0007099, 0}, {0, 94.39}};
+  model.families["kd:sah"] = {{0, 6.481e-05, 8.671e-05}, {33.21, 30.25}};
+  model.families["kd:bbox"] = {{0, 0, 0.00017}, {0, 70.65}};
   return model;
 }
 
