@@ -193,6 +193,7 @@ void Coordinator::onReady(const std::string& identity) {
     sendError(identity, "say Hello first");
     return;
   }
+  it->second.ready = true;
   it->second.idle = it->second.leases.empty();
 }
 
@@ -211,8 +212,8 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
 
 void Coordinator::dispatch() {
   for (auto& [identity, worker] : workers_) {
-    if (!worker.idle) continue;
-    if (!assignWork(worker)) break;   // nothing left to hand out
+    for (size_t k = 0; k < WorkerInfo::kLeasesInFlight && worker.wantsLease(); ++k)
+      if (!assignWork(worker)) return;   // nothing left to hand out
   }
 }
 
@@ -256,9 +257,8 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   }
   const uint64_t lease = opened.id;
   if (!lease) return true;
-  worker.leaseStartedMs = wallMs();
-  worker.leaseWork = 0;
-  for (const QueuedBatch& batch : batches) worker.leaseWork += batch.work;
+  int64_t leaseWork = 0;
+  for (const QueuedBatch& batch : batches) leaseWork += batch.work;
   capnp::MallocMessageBuilder message;
   auto assign = message.initRoot<wire::Envelope>().initAssign();
   assign.setLease(lease);
@@ -267,8 +267,8 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
   assign.setCell(chosen->cell);
   assign.setSpec(job->reader());
-  assign.setLeaseWork(worker.leaseWork);
-  assign.setCellWork(std::max(chosen->work, worker.leaseWork));
+  assign.setLeaseWork(leaseWork);
+  assign.setCellWork(std::max(chosen->work, leaseWork));
   auto list = assign.initBatches(static_cast<unsigned>(batches.size()));
   for (size_t i = 0; i < batches.size(); ++i) {
     net::PackedReader reader(batches[i].payload.data(), batches[i].payload.size());
@@ -276,7 +276,7 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   }
   send(worker.identity, message);
   worker.idle = false;
-  worker.leases.insert(lease);
+  worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork});
   worker.remember(chosen->job, chosen->cell);
   if (opened.attempt > 1)
     spdlog::info("lease {} -> {}: job {} cell {} phase {}, attempt {} ({} batches)", lease, worker.name, chosen->job,
@@ -292,7 +292,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   auto lease = store_.lease(leaseId);
   auto worker = workers_.find(identity);
   if (worker != workers_.end()) {
-    if (worker->second.leases.count(leaseId)) worker->second.recordLease(wallMs());
+    worker->second.recordLease(leaseId, wallMs());
     worker->second.leases.erase(leaseId);
     worker->second.idle = worker->second.leases.empty();
   }
@@ -305,7 +305,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   // commit (the coordinator's longest step) then overlaps the worker's
   // tracing instead of idling it. The new lease cannot hold this Result's
   // crossings, which are not queued yet; any order of leases gives the same bits.
-  if (worker != workers_.end() && worker->second.idle) assignWork(worker->second);
+  if (worker != workers_.end() && worker->second.wantsLease()) assignWork(worker->second);
   auto job = store_.job(lease->job);
   const bool active = job && isActive(job->state) && phaseOf(job->state) == lease->phase;
   JobContext* context = nullptr;

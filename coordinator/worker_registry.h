@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <deque>
 #include <map>
-#include <set>
 #include <string>
 #include <utility>
 
@@ -18,14 +17,26 @@ struct WorkerInfo {
   uint32_t cores = 1;
   uint64_t memoryBytes = 0;
   int64_t lastSeenMs = 0;
-  bool idle = false;          // sent Ready and holds no lease
-  std::set<uint64_t> leases;
+  bool ready = false;         // sent Ready: it takes leases
+  bool idle = false;          // ready and holds no lease (shown by status)
+  // Its leases in flight: when each was sent, and the work it holds.
+  struct LeaseInFlight {
+    int64_t sentMs = 0;
+    int64_t work = 0;
+  };
+  std::map<uint64_t, LeaseInFlight> leases;
+  // A worker holds up to two leases: the next one is on its way (or already
+  // queued there) while it traces the current one, so it never waits for
+  // the round trip through the coordinator. Leases hold a cell's pending
+  // work, often well under the second they may hold, and that round trip
+  // was about a fifth of a worker's time in a photon pass.
+  static constexpr size_t kLeasesInFlight = 2;
+  bool wantsLease() const { return ready && leases.size() < kLeasesInFlight; }
   // Cells it recently traced, newest at the back: it likely still caches them.
   std::deque<std::pair<uint64_t, uint32_t>> recentCells;
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.
   double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured
-  int64_t leaseStartedMs = 0;
-  int64_t leaseWork = 0;
+  int64_t lastResultMs = 0;   // when its last Result arrived
 
   static constexpr double kLeaseSeconds = 1.0;
   static constexpr int64_t kMinLeaseWork = 1000;
@@ -34,12 +45,18 @@ struct WorkerInfo {
     if (workPerSecond <= 0) return std::min<int64_t>(maxWork, 10 * kMinLeaseWork);   // a first, short lease to measure
     return std::clamp<int64_t>(int64_t(workPerSecond * kLeaseSeconds), std::min(kMinLeaseWork, maxWork), maxWork);
   }
-  // A finished lease: fold its speed into the estimate (leases under 20 ms
-  // measure the round trip more than the tracing).
-  void recordLease(int64_t nowMs) {
-    const int64_t elapsed = nowMs - leaseStartedMs;
-    if (leaseWork <= 0 || elapsed < 20) return;
-    const double rate = double(leaseWork) * 1000.0 / double(elapsed);
+  // A lease's Result arrived: fold its speed into the estimate. A queued
+  // lease starts when the one before it ends, so it is timed from the later
+  // of its sending and the previous Result. Leases under 20 ms measure the
+  // round trip more than the tracing.
+  void recordLease(uint64_t lease, int64_t nowMs) {
+    auto it = leases.find(lease);
+    const int64_t previousResultMs = lastResultMs;
+    lastResultMs = nowMs;
+    if (it == leases.end()) return;
+    const int64_t elapsed = nowMs - std::max(it->second.sentMs, previousResultMs);
+    if (it->second.work <= 0 || elapsed < 20) return;
+    const double rate = double(it->second.work) * 1000.0 / double(elapsed);
     workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
   }
 

@@ -5,6 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <deque>
 #include <fstream>
 #include <future>
 #include <optional>
@@ -129,6 +130,11 @@ int WorkerSession::run() {
     bool welcomed = false;
     uint64_t coordinatorMaxFrame = 0;   // 0: not announced (an older coordinator)
     std::optional<ActiveLease> lease;
+    // Leases that came while one runs: the coordinator sends the next lease
+    // before this one ends (WorkerInfo::kLeasesInFlight), so that it is
+    // here the moment the tracing thread is free.
+    std::deque<std::unique_ptr<net::Decoded>> queued;
+    constexpr size_t kMostQueued = 4;   // more than the coordinator sends: refuse beyond it
     bool reconnect = false;
     const auto failLease = [&](const std::string& why) {
       const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
@@ -212,9 +218,9 @@ int WorkerSession::run() {
                 break;
               case wire::Envelope::HEARTBEAT: break;
               case wire::Envelope::ASSIGN: {
-                if (lease) {
-                  spdlog::warn("coordinator assigned lease {} while {} is running; refusing",
-                               envelope.getAssign().getLease(), lease->assign->envelope().getAssign().getLease());
+                if (queued.size() >= kMostQueued) {
+                  spdlog::warn("coordinator assigned lease {} with {} leases queued; refusing",
+                               envelope.getAssign().getLease(), queued.size());
                   capnp::MallocMessageBuilder message;
                   auto failure = message.initRoot<wire::Envelope>().initFailure();
                   failure.setLease(envelope.getAssign().getLease());
@@ -222,10 +228,7 @@ int WorkerSession::run() {
                   send(socket, message);
                   break;
                 }
-                lease.emplace();
-                lease->assign = std::make_unique<net::Decoded>(frame);
-                cache_.beginLease();   // what the previous lease pinned may go now
-                advanceLease();
+                queued.push_back(std::make_unique<net::Decoded>(frame));   // started below
                 break;
               }
               case wire::Envelope::FILE_CHUNK: {
@@ -307,6 +310,15 @@ int WorkerSession::run() {
         lease.reset();
       }
 
+      // The next queued lease starts as soon as none runs (one that fails
+      // at once, e.g. on a missing file, makes way for the one after it).
+      while (!lease && !queued.empty()) {
+        lease.emplace();
+        lease->assign = std::move(queued.front());
+        queued.pop_front();
+        cache_.beginLease();   // what the previous lease pinned may go now
+        advanceLease();
+      }
       if (now - lastSent >= options_.heartbeatMs) {
         sendSimple(socket, [](wire::Envelope::Builder e) { e.setHeartbeat(); });
         lastSent = now;
