@@ -1,0 +1,48 @@
+// The coordinator's view of a worker: lease sizing and leases in flight.
+#include <gtest/gtest.h>
+
+#include "coordinator/worker_registry.h"
+
+namespace portico {
+namespace {
+
+TEST(WorkerInfo, TakesASecondLeaseOnlyAfterReadyAndAtMostTwo) {
+  WorkerInfo worker;
+  EXPECT_FALSE(worker.wantsLease());   // no Ready yet
+  worker.ready = true;
+  EXPECT_TRUE(worker.wantsLease());
+  worker.leases.emplace(1, WorkerInfo::LeaseInFlight{0, 1000});
+  EXPECT_TRUE(worker.wantsLease());    // the next one goes out while it traces
+  worker.leases.emplace(2, WorkerInfo::LeaseInFlight{0, 1000});
+  EXPECT_FALSE(worker.wantsLease());
+  worker.leases.erase(1);
+  EXPECT_TRUE(worker.wantsLease());
+}
+
+// Both leases sent at 0 ms, 1000 rays each; results at 100 and 200 ms. The
+// second waited behind the first, so its speed is 1000 rays in 100 ms, not
+// in 200 ms: the estimate must not halve because leases queue.
+TEST(WorkerInfo, TimesAQueuedLeaseFromThePreviousResult) {
+  WorkerInfo worker;
+  worker.ready = true;
+  worker.leases.emplace(1, WorkerInfo::LeaseInFlight{0, 1000});
+  worker.leases.emplace(2, WorkerInfo::LeaseInFlight{0, 1000});
+  worker.recordLease(1, 100);
+  worker.leases.erase(1);
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 10000.0);
+  worker.recordLease(2, 200);
+  worker.leases.erase(2);
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 10000.0);
+  EXPECT_EQ(worker.nextLeaseWork(50000), 10000);
+  // A lease under 20 ms measures the round trip, not the tracing: ignored.
+  worker.leases.emplace(3, WorkerInfo::LeaseInFlight{200, 5000});
+  worker.recordLease(3, 210);
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 10000.0);
+  // An unknown lease (dropped result) changes nothing but the clock.
+  worker.recordLease(99, 300);
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 10000.0);
+  EXPECT_EQ(worker.lastResultMs, 300);
+}
+
+}  // namespace
+}  // namespace portico
