@@ -195,9 +195,10 @@ struct PacketBoxClip {
 };
 
 // Which of the four boxes the ray crosses within the span of the clip (bit k:
-// packet 4b + k). SSE2 (the x86-64 baseline), which GCC's vector extensions
+// packet 4b + k); entries[k]: where the ray enters box k within that span
+// (the latest entry over the axes and the span's start). SSE2 (the x86-64 baseline), which GCC's vector extensions
 // do not reach here: they widen the bytes one by one.
-inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxClip& clip) {
+inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxClip& clip, float* entries) {
   const __m128i zero = _mm_setzero_si128();
   // low x, y, z, high x (16 bytes), then high y, z (8 bytes), widened to 16 then 32 bits.
   const __m128i first = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&boxes));
@@ -218,13 +219,19 @@ inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxCli
     enter = _mm_max_ps(enter, _mm_min_ps(a, b));
     exit = _mm_min_ps(exit, _mm_max_ps(a, b));
   }
+  _mm_storeu_ps(entries, enter);
   return unsigned(_mm_movemask_ps(_mm_cmple_ps(enter, exit)));
 }
 
 // Tests the triangles of packets[first, end) whose box the ray crosses,
 // folding hits into `best`; with AnyHit, returns true at the first hit. The
 // boxes first, 64 at a time and without branches, then the packets they
-// pass, prefetched together so that their cache misses overlap. Four at a
+// pass, prefetched together so that their cache misses overlap. A closest-
+// hit query skips a packet whose box the ray enters only beyond the best hit
+// found so far (often one found in an earlier packet of the voxel): the box
+// test's own argument (uniform_grid.cpp) puts the computed entry before the
+// hit of any triangle of the packet that the voxel must test, so such a
+// triangle cannot win. Four at a
 // time, intersectTriangle's own steps (translation, shear, edge functions,
 // sign test, det, T and t = T / det) run on all four lanes with the very
 // operations of the scalar test, so each lane gets the scalar test's U, V,
@@ -251,7 +258,9 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
   for (uint32_t block = first / 4; block < endBlock; block += 16) {
     const uint32_t blocks = std::min(endBlock - block, 16u), base = 4 * block;
     uint64_t crossed = 0;
-    for (uint32_t k = 0; k < blocks; ++k) crossed |= uint64_t(crossedPacketBoxes(boxes[block + k], clip)) << (4 * k);
+    float entries[64];
+    for (uint32_t k = 0; k < blocks; ++k)
+      crossed |= uint64_t(crossedPacketBoxes(boxes[block + k], clip, entries + 4 * k)) << (4 * k);
     // Only the voxel's own packets (its first and last blocks may hold others).
     if (first > base) crossed &= ~uint64_t(0) << (first - base);
     if (end - base < 64) crossed &= (uint64_t(1) << (end - base)) - 1;
@@ -260,6 +269,9 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
       for (int offset : {0, 64, 128, int(sizeof(TrianglePacket)) - 1}) __builtin_prefetch(start + offset);
     }
     for (; crossed != 0; crossed &= crossed - 1) {
+      if constexpr (!AnyHit) {
+        if (entries[std::countr_zero(crossed)] > best.t) continue;
+      }
       const TrianglePacket& packet = packets[base + std::countr_zero(crossed)];
       const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
       const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;

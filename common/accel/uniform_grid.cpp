@@ -6,7 +6,8 @@
 // traversal (3D-DDA that walks a few occupied voxels ahead of the tests,
 // keeps those whose content box the ray crosses and prefetches them; per
 // voxel, the packets' boxes, then a 4-wide sign test in front of the scalar
-// triangle test for the packets they pass; mailboxing).
+// triangle test for the packets they pass and the ray enters before the
+// best hit so far; mailboxing).
 //
 // Why the grid returns exactly brute force's hit. Traversal keeps the best
 // hit over every triangle tested so far (by closerThan) and stops after the
@@ -50,7 +51,13 @@
 // m never skips X in V. The boxes are tested in single precision, from
 // per-ray planes rounded to float: errors of a few float ulps of the
 // distance to the origin, below m for origins within a few grid diagonals,
-// the same condition as above. A skipped packet or voxel leaves its
+// the same condition as above. The same bound lets a closest-hit query skip
+// a crossed packet whose box the ray enters, as computed, beyond the best
+// hit so far: X, hit at tX in V, lies in a box the ray enters more than
+// m - e before tX, and V's entry (the span's start) is before tX too but
+// where P lies within rounding of it, and then X is tested in the voxel
+// before (P within m of it); so the entry is below tX, and tX beyond the
+// best hit cannot win (ties included). A skipped packet or voxel leaves its
 // triangles out of the mailbox, so they are still tested where the ray
 // crosses their boxes.
 //
