@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 3;   # 2: fetchFile / fileChunk (cells over the wire); 3: flat Result frames
+const protocolVersion :UInt32 = 2;   # 2: fetchFile / fileChunk (cells over the wire)
 
 enum Phase {
   photons @0;
