@@ -194,7 +194,6 @@ void Coordinator::onReady(const std::string& identity) {
     return;
   }
   it->second.ready = true;
-  it->second.idle = it->second.leases.empty();
 }
 
 Coordinator::JobContext& Coordinator::context(uint64_t job) {
@@ -275,7 +274,6 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
     list.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
   }
   send(worker.identity, message);
-  worker.idle = false;
   worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork});
   worker.remember(chosen->job, chosen->cell);
   if (opened.attempt > 1)
@@ -294,7 +292,6 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   if (worker != workers_.end()) {
     worker->second.recordLease(leaseId, wallMs());
     worker->second.leases.erase(leaseId);
-    worker->second.idle = worker->second.leases.empty();
   }
   // Results are idempotent: one for an unknown, closed or foreign lease is dropped.
   if (!lease || lease->state != "open" || lease->worker != identity) {
@@ -364,7 +361,6 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
   auto lease = store_.lease(leaseId);
   if (auto worker = workers_.find(identity); worker != workers_.end()) {
     worker->second.leases.erase(leaseId);
-    worker->second.idle = worker->second.leases.empty();
   }
   if (!lease || lease->state != "open" || lease->worker != identity) return;
   const std::string message = fmt::format("cell {}: {}", lease->cell, failure.getMessage().cStr());

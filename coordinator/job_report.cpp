@@ -121,7 +121,7 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
     nlohmann::json cells = nlohmann::json::array();
     for (const auto& [job, cell] : w.recentCells) cells.push_back({{"job", job}, {"cell", cell}});
     list.push_back({{"name", w.name},
-                    {"idle", w.idle},
+                    {"idle", w.idle()},
                     {"leases", w.leases.size()},
                     {"last_seen_ms_ago", nowMs - w.lastSeenMs},
                     {"cells", cells}});

@@ -18,7 +18,6 @@ struct WorkerInfo {
   uint64_t memoryBytes = 0;
   int64_t lastSeenMs = 0;
   bool ready = false;         // sent Ready: it takes leases
-  bool idle = false;          // ready and holds no lease (shown by status)
   // Its leases in flight: when each was sent, and the work it holds.
   struct LeaseInFlight {
     int64_t sentMs = 0;
@@ -32,6 +31,7 @@ struct WorkerInfo {
   // was about a fifth of a worker's time in a photon pass.
   static constexpr size_t kLeasesInFlight = 2;
   bool wantsLease() const { return ready && leases.size() < kLeasesInFlight; }
+  bool idle() const { return ready && leases.empty(); }   // shown by status
   // Cells it recently traced, newest at the back: it likely still caches them.
   std::deque<std::pair<uint64_t, uint32_t>> recentCells;
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.

@@ -136,14 +136,17 @@ int WorkerSession::run() {
     std::deque<std::unique_ptr<net::Decoded>> queued;
     constexpr size_t kMostQueued = 4;   // more than the coordinator sends: refuse beyond it
     bool reconnect = false;
-    const auto failLease = [&](const std::string& why) {
-      const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
-      spdlog::error("lease {} failed: {}", leaseId, why);
+    const auto sendFailure = [&](uint64_t leaseId, const std::string& why) {
       capnp::MallocMessageBuilder message;
       auto failure = message.initRoot<wire::Envelope>().initFailure();
       failure.setLease(leaseId);
       failure.setMessage(why);
       send(socket, message);
+    };
+    const auto failLease = [&](const std::string& why) {
+      const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
+      spdlog::error("lease {} failed: {}", leaseId, why);
+      sendFailure(leaseId, why);
       lease.reset();
     };
     // A new lease waits for what it lacks, one request at a time: the
@@ -221,11 +224,7 @@ int WorkerSession::run() {
                 if (queued.size() >= kMostQueued) {
                   spdlog::warn("coordinator assigned lease {} with {} leases queued; refusing",
                                envelope.getAssign().getLease(), queued.size());
-                  capnp::MallocMessageBuilder message;
-                  auto failure = message.initRoot<wire::Envelope>().initFailure();
-                  failure.setLease(envelope.getAssign().getLease());
-                  failure.setMessage("worker busy");
-                  send(socket, message);
+                  sendFailure(envelope.getAssign().getLease(), "worker busy");
                   break;
                 }
                 queued.push_back(std::make_unique<net::Decoded>(frame));   // started below
@@ -294,17 +293,9 @@ int WorkerSession::run() {
           ++leasesDone;
         } catch (const std::exception& e) {
           spdlog::error("lease {} failed: {}", leaseId, e.what());
-          capnp::MallocMessageBuilder message;
-          auto failure = message.initRoot<wire::Envelope>().initFailure();
-          failure.setLease(leaseId);
-          failure.setMessage(e.what());
-          send(socket, message);
+          sendFailure(leaseId, e.what());
         } catch (const kj::Exception& e) {
-          capnp::MallocMessageBuilder message;
-          auto failure = message.initRoot<wire::Envelope>().initFailure();
-          failure.setLease(leaseId);
-          failure.setMessage(fmt::format("malformed lease: {}", e.getDescription().cStr()));
-          send(socket, message);
+          sendFailure(leaseId, fmt::format("malformed lease: {}", e.getDescription().cStr()));
         }
         lastSent = steadyMs();
         lease.reset();
