@@ -40,9 +40,9 @@ CellShape cellShape(const MeshView& mesh);
 
 // One structure with its parameters, as a spec string, and its family.
 struct AcceleratorCandidate {
-  std::string spec;      // "grid:res=24", "kd:sah", ...
+  std::string spec;      // "grid", "grid:res=24", "kd:sah", ...
   std::string family;    // "grid", "hgrid", "kd:median", "kd:sah", "kd:bbox"
-  int gridResolution = 0;  // R for grid candidates
+  int gridResolution = 0;  // R for grid:res=R; 0 for plain `grid` (its automatic resolution)
 };
 
 struct CostPrediction {
@@ -74,12 +74,17 @@ class CostModel {
   // The calibration at defaultPath() when it exists, else builtIn().
   static CostModel loadDefault();
 
-  // Every candidate the model knows for this cell (grid resolutions whose
-  // voxel count stays within a sane multiple of the triangle count).
+  // Every candidate the model knows for this cell: plain `grid` first, then
+  // grid resolutions whose voxel count stays within a sane multiple of the
+  // triangle count, then the other families.
   std::vector<AcceleratorCandidate> candidates(const CellShape& cell) const;
   CostPrediction predict(const AcceleratorCandidate& candidate, const CellShape& cell) const;
-  // The cheapest candidate for `rays` rays (ties: the earlier candidate).
+  // The cheapest candidate for `rays` rays (ties: the earlier candidate),
+  // plain `grid` kept unless another is predicted cheaper by a margin.
   CostPrediction choose(const CellShape& cell, double rays) const;
+  // What choose() multiplies a candidate's predicted cost by: below 1 for
+  // the plain grid, 1 for the others.
+  static double choiceWeight(const AcceleratorCandidate& candidate);
   // The prediction for a concrete spec string ("grid:res=24", "kd:sah", ...)
   // as listed by candidates(); nullopt-like: traceNsPerRay < 0 when unknown.
   CostPrediction predictSpec(const std::string& spec, const CellShape& cell) const;

@@ -53,11 +53,12 @@ struct Measurement {
 const std::vector<int> kMeasuredGridResolutions{4, 8, 16, 32, 64, 128};
 
 // The candidates measured on a cell: the model's own, with the grid
-// resolutions thinned to kMeasuredGridResolutions.
+// resolutions thinned to kMeasuredGridResolutions (plain `grid`, at its own
+// resolution, always measured).
 std::vector<AcceleratorCandidate> measuredCandidates(const CostModel& model, const CellShape& shape) {
   std::vector<AcceleratorCandidate> list;
   for (const AcceleratorCandidate& c : model.candidates(shape))
-    if (c.family != "grid" ||
+    if (c.family != "grid" || c.gridResolution == 0 ||
         std::find(kMeasuredGridResolutions.begin(), kMeasuredGridResolutions.end(), c.gridResolution) !=
             kMeasuredGridResolutions.end())
       list.push_back(c);

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <random>
 
+#include "common/accel/uniform_grid.h"
 #include "worker/accelerator_choice.h"
 
 namespace portico {
@@ -70,13 +71,16 @@ TEST(CostModel, GridCandidatesStayWithinTheVoxelBudgetAndFollowTheShape) {
 }
 
 TEST(CostModel, MoreRaysNeverBuyACheaperBuildOrASlowerTrace) {
-  // The choice minimises build + rays x trace: as rays grow, the chosen
-  // structure's predicted build time can only grow and its per-ray time only fall.
+  // The choice minimises build + rays x trace, each candidate's weighted by
+  // choiceWeight: as rays grow, the chosen structure's weighted build time
+  // can only grow and its weighted per-ray time only fall.
   const CostModel model = CostModel::builtIn();
   for (double triangles : {200.0, 5000.0, 60000.0, 400000.0}) {
     double lastBuild = 0, lastTrace = 1e300;
     for (double rays = 1; rays <= 1e9; rays *= 4) {
-      const CostPrediction p = model.choose(room(triangles), rays);
+      CostPrediction p = model.choose(room(triangles), rays);
+      p.buildMs *= CostModel::choiceWeight(p.candidate);
+      p.traceNsPerRay *= CostModel::choiceWeight(p.candidate);
       EXPECT_GE(p.buildMs, lastBuild - 1e-12) << triangles << " triangles, " << rays << " rays";
       EXPECT_LE(p.traceNsPerRay, lastTrace + 1e-12) << triangles << " triangles, " << rays << " rays";
       lastBuild = p.buildMs;
@@ -95,6 +99,28 @@ TEST(CostModel, PredictsWhatItsCoefficientsSay) {
   EXPECT_LT(model.predictSpec("embree", room(1024)).traceNsPerRay, 0);   // not a candidate
 }
 
+
+TEST(CostModel, PlainGridIsACandidateAtItsOwnResolutionAndWinsCloseCalls) {
+  CostModel model = CostModel::builtIn();
+  const CellShape cell = room(7400);
+  const auto list = model.candidates(cell);
+  ASSERT_FALSE(list.empty());
+  EXPECT_EQ(list.front().spec, "grid");
+  // Its features are those of the resolution the grid picks itself.
+  const auto automatic = automaticGridResolution(cell.extent, 7400, UniformGridOptions{}.density);
+  EXPECT_DOUBLE_EQ(buildFeatures(list.front(), cell)[2], double(automatic[0]) * automatic[1] * automatic[2]);
+  // Make every grid cost the same per ray and nothing to build, the other
+  // families dearer: then the plain grid ties with every grid:res=R and wins.
+  model.families["grid"] = {{0, 0, 0}, {100, 0, 0}};
+  for (const char* family : {"hgrid", "kd:median", "kd:sah", "kd:bbox"}) model.families[family] = {{1, 0, 0}, {200, 0}};
+  EXPECT_EQ(model.choose(cell, 1e6).candidate.spec, "grid");
+  // kd:sah 5 % cheaper per ray: within the margin, the plain grid stays.
+  model.families["kd:sah"] = {{0, 0, 0}, {95, 0}};
+  EXPECT_EQ(model.choose(cell, 1e6).candidate.spec, "grid");
+  // 20 % cheaper: kd:sah.
+  model.families["kd:sah"] = {{0, 0, 0}, {80, 0}};
+  EXPECT_EQ(model.choose(cell, 1e6).candidate.spec, "kd:sah");
+}
 class CalibrationFile : public ::testing::Test {
  protected:
   void SetUp() override {
