@@ -25,7 +25,15 @@ JobState jobStateFromString(std::string_view text) {
   throw std::runtime_error(fmt::format("jobs.db: unknown job state '{}'", text));
 }
 
-JobStore::JobStore(const std::string& path) : db_(path, sql::Database::Mode::ReadWriteCreate) {
+JobStore::JobStore(const std::string& path)
+    : db_(path, sql::Database::Mode::ReadWriteCreate),
+      photons_(path + "-photons", [this](uint64_t job) {
+        auto& s = db_.prepare("SELECT COALESCE(MAX(file_offset + file_size), 0) FROM photons WHERE job = ?");
+        s.bind(1, int64_t(job));
+        const int64_t end = s.step() ? s.columnInt(0) : 0;
+        s.reset();
+        return end;
+      }) {
   db_.exec("PRAGMA journal_mode = WAL");
   // NORMAL is durable across process crashes in WAL mode (only an OS crash
   // can lose the last commits), which is the failure portico guards against.
@@ -105,6 +113,18 @@ void JobStore::migrate() {
     sql::Transaction tx(db_);
     db_.exec("ALTER TABLE batches ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0");
     db_.setUserVersion(2);
+    tx.commit();
+  }
+  if (version < 3) {
+    // Photon payloads move to append-only files (photon_files.h); rows keep
+    // where each lies. Rows written before keep their blob (file_offset NULL).
+    sql::Transaction tx(db_);
+    db_.exec(R"sql(
+      ALTER TABLE photons ADD COLUMN file_offset INTEGER;
+      ALTER TABLE photons ADD COLUMN file_size INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE photons ADD COLUMN file_crc INTEGER NOT NULL DEFAULT 0;
+    )sql");
+    db_.setUserVersion(3);
     tx.commit();
   }
 }
@@ -335,20 +355,41 @@ std::map<std::string, int64_t> JobStore::counters(uint64_t job) {
 }
 
 void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload) {
-  auto& s = db_.prepare("INSERT INTO photons(job, cell, count, payload) VALUES (?, ?, ?, ?)");
-  s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bindBlob(4, payload.data(), payload.size());
+  const PhotonExtent extent = photons_.append(job, payload);
+  auto& s = db_.prepare(
+      "INSERT INTO photons(job, cell, count, payload, file_offset, file_size, file_crc) VALUES (?, ?, ?, x'', ?, ?, ?)");
+  s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bind(4, extent.offset).bind(5, extent.size);
+  s.bind(6, int64_t(extent.crc));
   s.run();
 }
 
 std::vector<std::string> JobStore::photonBatches(uint64_t job, uint32_t cell) {
-  auto& s = db_.prepare("SELECT payload FROM photons WHERE job = ? AND cell = ? ORDER BY id");
+  // Where each batch lies first (rows of schema version 2 and older hold it
+  // as a blob), then the reads, so that a damaged file leaves no statement open.
+  struct Stored {
+    std::optional<std::string> blob;
+    PhotonExtent extent;
+  };
+  std::vector<Stored> stored;
+  auto& s = db_.prepare(
+      "SELECT file_offset IS NULL, payload, file_offset, file_size, file_crc FROM photons "
+      "WHERE job = ? AND cell = ? ORDER BY id");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell));
-  std::vector<std::string> result;
   while (s.step()) {
-    auto blob = s.columnBlob(0);
-    result.emplace_back(reinterpret_cast<const char*>(blob.data()), blob.size());
+    Stored batch;
+    if (s.columnInt(0) != 0) {
+      auto blob = s.columnBlob(1);
+      batch.blob.emplace(reinterpret_cast<const char*>(blob.data()), blob.size());
+    } else {
+      batch.extent = {s.columnInt(2), s.columnInt(3), uint32_t(s.columnInt(4))};
+    }
+    stored.push_back(std::move(batch));
   }
   s.reset();
+  std::vector<std::string> result;
+  result.reserve(stored.size());
+  for (Stored& batch : stored)
+    result.push_back(batch.blob ? std::move(*batch.blob) : photons_.read(job, batch.extent));
   return result;
 }
 

@@ -14,6 +14,7 @@
 
 #include "common/transport/film.h"
 #include "common/util/sqlite.h"
+#include "coordinator/photon_files.h"
 
 namespace portico {
 
@@ -60,7 +61,7 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 2;
+  static constexpr int kSchemaVersion = 3;
   explicit JobStore(const std::string& path);
 
   sql::Database& database() { return db_; }
@@ -101,9 +102,13 @@ class JobStore {
   void addCounter(uint64_t job, std::string_view name, int64_t delta);
   std::map<std::string, int64_t> counters(uint64_t job);
 
-  // `payload` is copied by SQLite: a view into a Result will do.
+  // The payload goes to the job's photon file (photon_files.h) at once, its
+  // place into jobs.db with the caller's transaction: a view into a Result
+  // will do.
   void addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload);
+  // In the order they were added; throws naming the file when one is damaged.
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
+  std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf(job); }
 
   static constexpr uint32_t kFilmChunkPixels = 4096;
   void addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb>& sums, uint64_t pixelCount);
@@ -112,6 +117,7 @@ class JobStore {
  private:
   void migrate();
   sql::Database db_;
+  PhotonFiles photons_;
 };
 
 }  // namespace portico

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 
 namespace portico {
@@ -18,6 +19,7 @@ class JobStoreTest : public ::testing::Test {
   }
   void TearDown() override {
     for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path_.string() + suffix);
+    std::filesystem::remove_all(path_.string() + "-photons");
   }
   std::filesystem::path path_;
 };
@@ -112,8 +114,11 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
     JobStore store(path_.string());
     const uint64_t job = store.createJob("spec", 1);
     store.addBatch(job, 2, 0, BatchKind::Rays, 40, "queued");
-    // Back to version 1's shape: no attempts column.
+    // Back to version 1's shape: no attempts column, photons as blobs.
     store.database().exec("ALTER TABLE batches DROP COLUMN attempts");
+    for (const char* column : {"file_offset", "file_size", "file_crc"})
+      store.database().exec(std::string("ALTER TABLE photons DROP COLUMN ") + column);
+    store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
     store.database().setUserVersion(1);
   }
   JobStore migrated(path_.string());
@@ -123,6 +128,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
   ASSERT_EQ(batches.size(), 1u);
   EXPECT_EQ(batches[0].payload, "queued");
   EXPECT_EQ(lease.attempt, 1u);
+  EXPECT_EQ(migrated.photonBatches(1, 7), std::vector<std::string>{std::string("\x01\x02")});
 }
 
 TEST_F(JobStoreTest, FilmChunksAccumulate) {
@@ -184,6 +190,75 @@ TEST_F(JobStoreTest, PhotonTablesRoundTripThroughDiskWithoutLoss) {
   EXPECT_EQ(decoded.size(), 1000u + 1001 + 1002 + 1003 + 1004);
   EXPECT_EQ(reopened.photonBatches(1, 4).size(), 1u);
   EXPECT_TRUE(reopened.photonBatches(1, 5).empty());
+}
+
+TEST_F(JobStoreTest, PhotonBatchesLiveInAFileBesideTheDatabaseAndOnlyCommittedOnesCount) {
+  const std::string first(240, 'a'), lost(480, 'b'), second(72, 'c');
+  std::filesystem::path file;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    file = store.photonFile(job);
+    store.addPhotons(job, 0, 10, first);
+    {
+      // A Result whose transaction rolls back: its bytes are written, no row.
+      sql::Transaction tx(store.database());
+      store.addPhotons(job, 0, 20, lost);
+    }
+    EXPECT_EQ(std::filesystem::file_size(file), first.size() + lost.size());
+    EXPECT_EQ(store.photonBatches(job, 0), std::vector<std::string>{first});
+  }
+  // Not in jobs.db: the database holds where the batch lies, not its bytes.
+  {
+    JobStore reopened(path_.string());
+    auto& s = reopened.database().prepare("SELECT SUM(LENGTH(payload)) FROM photons");
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.columnInt(0), 0);
+    s.reset();
+    // A new coordinator writes over the bytes of the uncommitted batch.
+    reopened.addPhotons(1, 0, 3, second);
+    EXPECT_EQ(std::filesystem::file_size(file), first.size() + second.size());
+    EXPECT_EQ(reopened.photonBatches(1, 0), (std::vector<std::string>{first, second}));
+  }
+}
+
+TEST_F(JobStoreTest, ADamagedPhotonFileIsReportedNamingTheFile) {
+  std::filesystem::path file;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    file = store.photonFile(job);
+    store.addPhotons(job, 2, 10, std::string(240, 'x'));
+  }
+  {
+    std::FILE* f = std::fopen(file.c_str(), "r+b");
+    ASSERT_NE(f, nullptr);
+    std::fseek(f, 100, SEEK_SET);
+    std::fputc('y', f);
+    std::fclose(f);
+  }
+  JobStore reopened(path_.string());
+  try {
+    reopened.photonBatches(1, 2);
+    FAIL() << "a damaged batch was returned";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+  }
+  // The database is still usable.
+  EXPECT_TRUE(reopened.photonBatches(1, 3).empty());
+}
+
+TEST_F(JobStoreTest, PhotonBlobsOfAnEarlierSchemaAreStillRead) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  // A row as schema version 2 wrote it: the payload in jobs.db.
+  auto& s = store.database().prepare("INSERT INTO photons(job, cell, count, payload) VALUES (?, 5, 1, ?)");
+  const std::string old(24, 'o');
+  s.bind(1, int64_t(job)).bindBlob(2, old.data(), old.size());
+  s.run();
+  store.addPhotons(job, 5, 1, std::string(24, 'n'));
+  EXPECT_EQ(store.photonBatches(job, 5), (std::vector<std::string>{old, std::string(24, 'n')}));
 }
 
 }  // namespace
