@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/accel/kd_build.h"
+#include "common/accel/kd_layout.h"
 
 namespace portico {
 
@@ -52,9 +53,8 @@ KdTree::KdTree(const MeshView& mesh, const KdTreeOptions& options, std::string_v
       buildKdTreeSah(mesh, options, tree_);
       break;
   }
-  tree_.nodes.shrink_to_fit();
+  layOutInCacheLines(tree_);  // (a fresh vector of the exact size: nothing to shrink)
   tree_.primitives.shrink_to_fit();
-  kd_leaf_packets::buildLeafPackets(mesh, tree_, leafPackets_);
 
   stats_.spec = std::string(spec);
   stats_.nodes = tree_.nodes.empty() ? 0 : tree_.nodes.size() - 1;  // not the padding node
@@ -65,9 +65,7 @@ KdTree::KdTree(const MeshView& mesh, const KdTreeOptions& options, std::string_v
   stats_.averageDepth = filledLeaves > 0 ? tree_.depthSum / double(filledLeaves) : 0.0;
   stats_.maxDepth = tree_.maxDepth;
   stats_.bytes = sizeof(*this) + tree_.nodes.capacity() * sizeof(KdNode) +
-                 tree_.primitives.capacity() * sizeof(uint32_t) +
-                 leafPackets_.nodes.capacity() * sizeof(KdNode) +
-                 leafPackets_.packets.capacity() * sizeof(kd_leaf_packets::TrianglePacket);
+                 tree_.primitives.capacity() * sizeof(uint32_t);
   stats_.buildMs =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }

@@ -36,7 +36,6 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/accel/kd_leaf_packets.h"
 #include "common/accel/kd_node.h"
 
 namespace portico {
@@ -81,7 +80,6 @@ class KdTree final : public Accelerator {
 
   MeshView mesh_;
   KdTreeData tree_;
-  kd_leaf_packets::LeafPackets leafPackets_;  // what the traversal reads: tree_'s nodes, leaves as packets
   AcceleratorStats stats_;
 };
 
