@@ -5,7 +5,9 @@
 #pragma once
 
 #include <bit>
+#include <cstddef>
 #include <cstdint>
+#include <new>
 #include <vector>
 
 #include "common/math.h"
@@ -45,11 +47,26 @@ struct KdNode {
 };
 static_assert(sizeof(KdNode) == 8);
 
+// Storage aligned to a cache line: the node layout (kd_layout.h) maps pairs
+// of siblings onto 64-byte lines.
+template <typename T>
+struct CacheLineAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t kAlignment{64};
+  CacheLineAllocator() = default;
+  template <typename U>
+  CacheLineAllocator(const CacheLineAllocator<U>&) noexcept {}
+  T* allocate(size_t count) { return static_cast<T*>(::operator new(count * sizeof(T), kAlignment)); }
+  void deallocate(T* pointer, size_t) noexcept { ::operator delete(pointer, kAlignment); }
+  template <typename U>
+  bool operator==(const CacheLineAllocator<U>&) const noexcept { return true; }
+};
+
 // A built kd-tree. nodes[0] is the root and nodes[1] unused padding (so that
 // sibling pairs are 16-byte aligned); an empty tree (no triangle that can be
 // hit) has no nodes.
 struct KdTreeData {
-  std::vector<KdNode> nodes;
+  std::vector<KdNode, CacheLineAllocator<KdNode>> nodes;
   std::vector<uint32_t> primitives;  // the triangles of the leaves, leaf after leaf
   Bounds3 bounds;                    // of the triangles in the tree: the root's box
 

@@ -139,6 +139,11 @@ template <bool AnyHit>
       const Axis& axis = axes[bitsOf(node) & 3];
       const uint32_t firstChild = bitsOf(node) >> 2;
       const uint64_t below = load(firstChild), above = load(firstChild + 1);
+      // Both children's own children, one step ahead of the choice (for a
+      // leaf, a harmless address near the start of the nodes). Prefetching
+      // a leaf's triangles there instead measured slower (the selects).
+      __builtin_prefetch(nodes + (bitsOf(below) >> 2));
+      __builtin_prefetch(nodes + (bitsOf(above) >> 2));
       const float split = std::bit_cast<float>(payloadOf(node));
       // Where the ray leaves the near child's (grown) box, and enters the far one's.
       const float tLeaveNear = (split + axis.planeNear) * axis.inverse;

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common/accel/kd_build.h"
+#include "common/accel/kd_layout.h"
 
 namespace portico {
 
@@ -52,7 +53,7 @@ KdTree::KdTree(const MeshView& mesh, const KdTreeOptions& options, std::string_v
       buildKdTreeSah(mesh, options, tree_);
       break;
   }
-  tree_.nodes.shrink_to_fit();
+  layOutInCacheLines(tree_);  // (a fresh vector of the exact size: nothing to shrink)
   tree_.primitives.shrink_to_fit();
 
   stats_.spec = std::string(spec);
