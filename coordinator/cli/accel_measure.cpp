@@ -5,12 +5,24 @@
 #include <stdexcept>
 #include <string>
 
+#include <time.h>
+
 #include "common/rng.h"
 
 namespace portico::cli {
 
 double secondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// CPU time of the calling thread: tracing is single-threaded (Embree's
+// rtcIntersect1 runs on the caller too), and on a shared machine wall-clock
+// passes swing by +-20 % with the load while the thread's own CPU time moves
+// a few percent (only what other processes do to the shared caches remains).
+double threadCpuSeconds() {
+  timespec now{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return double(now.tv_sec) + 1e-9 * double(now.tv_nsec);
 }
 
 double median(std::vector<double> values) {
@@ -79,9 +91,9 @@ TraceResult traceRays(const Accelerator& accelerator, const std::vector<Ray>& ra
   for (size_t i = 0; i < std::min<size_t>(rays.size(), 10000); ++i) result.hitList[i] = accelerator.intersect(rays[i]);
   std::vector<double> seconds;
   for (uint32_t run = 0; run < runs; ++run) {
-    const auto start = Clock::now();
+    const double start = threadCpuSeconds();
     for (size_t i = 0; i < rays.size(); ++i) result.hitList[i] = accelerator.intersect(rays[i]);
-    seconds.push_back(secondsSince(start));
+    seconds.push_back(threadCpuSeconds() - start);
   }
   const double time = median(seconds);
   result.mraysPerSecond = time > 0 ? double(rays.size()) / time * 1e-6 : 0.0;
