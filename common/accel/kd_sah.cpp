@@ -28,9 +28,10 @@
 // nearly, only the reference's box is cut.
 //
 // Memory: the references live in one arena used as a stack. A node's are
-// at its top; its children's replace them (below's through a scratch
-// copy), the above child's first, so that the below child, built first,
-// is again at the top. No allocation per node.
+// at its top; its split writes above's in place and below's just past the
+// node's range, so that the below child, built first, is the top of the
+// stack, and the above child's are still there when its turn comes. No
+// allocation and no copy per node.
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -323,14 +324,13 @@ class BinnedSplitter {
   };
   void countEvents(std::span<const Reference> references, const Binning& bin);
   std::optional<Window> chooseWindow(const NodeCost& cost) const;
-  uint32_t collectEvents(std::span<const Reference> references, const Window& window);
+  uint32_t collectEvents(std::span<const Reference> references, const Binning& bin, const Window& window);
   const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
 
   uint32_t binCount_;
   // Per event type and bin, the events there along each axis (in lanes);
   // the last entry takes the ends of flat boxes (which have none).
   std::vector<Int4> counts_;
-  std::vector<Int4> referenceBins_;  // per reference, its lo's bins | its hi's bins << 16
   std::vector<Event> events_;
 };
 
@@ -341,13 +341,10 @@ void BinnedSplitter::countEvents(std::span<const Reference> references, const Bi
   const Int4 starts = lane + int32_t(4 * kStart * binCount_), planars = lane + int32_t(4 * kPlanar * binCount_);
   const Int4 ends = lane + int32_t(4 * kEnd * binCount_), unused = lane + int32_t(4 * 3 * binCount_);
   uint32_t* const counters = reinterpret_cast<uint32_t*>(counts_.data());
-  if (referenceBins_.size() < references.size()) referenceBins_.resize(references.size());
-  Int4* referenceBins = referenceBins_.data();
   for (const Reference& reference : references) {
     const Float4 lo = reference.lo4(), hi = reference.hi4();
     const Int4 planar = lo == hi;
     const Int4 loBin = bin(lo), hiBin = bin(hi);
-    *referenceBins++ = loBin | hiBin << 16;
     const Int4 loIndex = (planar ? planars : starts) + loBin * 4;
     const Int4 hiIndex = planar ? unused : ends + hiBin * 4;
     ++counters[loIndex[0]], ++counters[loIndex[1]], ++counters[loIndex[2]];
@@ -392,19 +389,46 @@ std::optional<BinnedSplitter::Window> BinnedSplitter::chooseWindow(const NodeCos
 }
 
 // The events of the window's axis in its bins, sorted, into events_;
-// returns their count. Written whether in the window or not, kept when in
-// it: no branch to mispredict.
-uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Window& window) {
+// returns their count. A reference lying wholly before or after the window
+// (most of them) is passed over after two comparisons with positions just
+// outside it; the others' events are written whether in the window or not,
+// and kept when in it (no branch to mispredict). Their bins are computed
+// again, on one axis, by the same operations as Binning's lanes (cheaper
+// than storing and reloading them per reference).
+uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, const Binning& bin,
+                                       const Window& window) {
   if (events_.size() < 2 * references.size()) events_.resize(2 * references.size());
   Event* const events = events_.data();
   const int axis = window.axis;
   const uint32_t span = window.last - window.first;
-  const Int4* referenceBins = referenceBins_.data();
+  const float origin = bin.origin[axis], scale = bin.scale[axis], last = bin.last[axis];
+  const auto binOf = [&](float x) {
+    float t = (x - origin) * scale;
+    t = t > 0.0f ? t : 0.0f;
+    return uint32_t(int32_t(t < last ? t : last));
+  };
+  // Positions a hundredth of a bin outside the window: a float x below
+  // before has (x - origin) * scale <= first - 0.01 exactly, so under first
+  // however binOf rounds (its error is ~1e-7 of the bins); likewise a float
+  // at or after `after` is in a bin past last. NaN-free: scale > 0 here
+  // (chooseWindow never picks a flat axis).
+  float before = -kInfinity, after = kInfinity;
+  if (window.first > 0) {
+    const double x = double(origin) + (double(window.first) - 0.01) / double(scale);
+    before = float(x);
+    if (double(before) > x) before = std::nextafter(before, -kInfinity);
+  }
+  if (window.last + 1 < binCount_) {
+    const double x = double(origin) + (double(window.last + 1) + 0.01) / double(scale);
+    after = float(x);
+    if (double(after) < x) after = std::nextafter(after, kInfinity);
+  }
   uint32_t count = 0;
   for (const Reference& reference : references) {
     const float lo = reference.lo[axis], hi = reference.hi[axis];
+    if (hi < before || lo >= after) continue;
     const bool planar = lo == hi;
-    const uint32_t bins = uint32_t((*referenceBins++)[axis]), loBin = bins & 0xffff, hiBin = bins >> 16;
+    const uint32_t loBin = binOf(lo), hiBin = binOf(hi);
     events[count] = makeEvent(lo, planar ? kPlanar : kStart);
     count += loBin - window.first <= span;
     events[count] = makeEvent(hi, kEnd);
@@ -433,7 +457,7 @@ void BinnedSplitter::findSplit(std::span<const Reference> references, const Box&
     below += counts(kStart)[b] + counts(kPlanar)[b];
     above -= counts(kEnd)[b] + counts(kPlanar)[b];
   }
-  const uint32_t count = collectEvents(references, *window);
+  const uint32_t count = collectEvents(references, bin, *window);
   const int axis = window->axis;
   sweep({events_.data(), count}, uint32_t(below[axis]), uint32_t(above[axis]), cost.plane(axis), axis, best);
 }
@@ -458,6 +482,7 @@ class SahBuilder {
  private:
   std::optional<KdSplit> findSplit(std::span<const Reference> references, const Box& box);
   void buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth);
+  template <bool PlanarBelow>
   std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
   void makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth);
 
@@ -466,10 +491,9 @@ class SahBuilder {
   double splitFactor_, emptyBonus_;  // traversal / intersection cost; the empty-space factor
   KdTreeWriter writer_;
   // The references of the nodes still to build, used as a stack: a node's
-  // are at the top; its children's replace them.
+  // are at the top; its children's go on top of it (splitReferences).
   std::vector<Reference> arena_;
   // Scratch, reused from node to node (only before recursing).
-  std::vector<Reference> belowScratch_;
   std::vector<uint32_t> leafTriangles_;
   SmallNodeSplitter smallNodeSplitter_;
   BinnedSplitter binnedSplitter_;
@@ -477,17 +501,20 @@ class SahBuilder {
 
 std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> references, const Box& box) {
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  const float extent[3] = {box.hi[0] - box.lo[0], box.hi[1] - box.lo[1], box.hi[2] - box.lo[2]};
-  NodeCost cost{Float4{} + kNaN, Float4{} + kNaN, {}, {}, 0, 0, emptyBonus_, uint32_t(references.size())};
-  for (int axis = 0; axis < 3; ++axis) {
-    const float side1 = extent[axis == 2 ? 0 : axis + 1], side2 = extent[axis == 0 ? 2 : axis - 1];
-    cost.perimeter[axis] = side1 + side2;
-    cost.cross[axis] = side1 * side2;
-    cost.halfArea += double(side1) * side2;  // each pair of faces once
-    if (!(extent[axis] > 0)) continue;  // flat: every plane is a face
-    cost.lo[axis] = box.lo[axis];
-    cost.hi[axis] = box.hi[axis];
-  }
+  // The three axes in lanes (most nodes are tiny: this setup counts). Per
+  // axis, the two other sides: side1 the next axis, side2 the one after.
+  const Float4 lo = {box.lo[0], box.lo[1], box.lo[2], kNaN}, hi = {box.hi[0], box.hi[1], box.hi[2], kNaN};
+  const Float4 extent = hi - lo;
+  const Float4 side1 = __builtin_shufflevector(extent, extent, 1, 2, 0, 3);
+  const Float4 side2 = __builtin_shufflevector(extent, extent, 2, 0, 1, 3);
+  const Int4 axes = {-1, -1, -1, 0};
+  const Int4 thick = extent > 0.0f;  // flat axes (every plane a face) and lane 3 get NaN bounds
+  NodeCost cost{thick ? lo : kNaN, thick ? hi : kNaN, axes ? side1 + side2 : 0.0f, axes ? side1 * side2 : 0.0f,
+                0, 0, emptyBonus_, uint32_t(references.size())};
+  // Each pair of faces once, in double (exact products).
+  cost.halfArea = double(extent[1]) * extent[2];
+  cost.halfArea += double(extent[2]) * extent[0];
+  cost.halfArea += double(extent[0]) * extent[1];
   if (!(cost.halfArea > 0)) return std::nullopt;
   cost.splitBase = cost.halfArea * splitFactor_;
   BestSplit best{cost.halfArea * cost.count, std::nullopt};  // a split must beat the leaf
@@ -505,33 +532,45 @@ void SahBuilder::makeLeaf(uint32_t node, std::span<const Reference> references, 
   writer_.leaf(node, leafTriangles_, depth);
 }
 
-// Replaces the node's references at begin by its children's: above's
-// first, so that below's, built first, are at the top. Straddling triangles
-// are clipped to each child (perfect splits). Returns the counts of below
-// and above.
+// Writes the node's children's references: above's in place at begin,
+// below's just past the node's range (at begin + count), where the below
+// child, built first, is then the top of the stack; the gap between them is
+// left unused until the node's subtree is done. No copy of either side.
+// Straddling triangles are clipped to each child (perfect splits). Returns
+// the counts of below and above.
+template <bool PlanarBelow>
 std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t count, const KdSplit& split) {
-  if (belowScratch_.size() < count) belowScratch_.resize(count);
+  // Each reference gives at most one to each side.
+  if (arena_.size() < begin + 2 * size_t(count)) arena_.resize(begin + 2 * size_t(count));
   Reference* const references = arena_.data() + begin;
-  Reference* const below = belowScratch_.data();
+  Reference* const below = references + count;
   // Each reference gives at most one to above, so above's, written in place,
   // never overtake the one being read.
   uint32_t aboveCount = 0, belowCount = 0;
   const int axis = split.axis;
   const float position = split.position;
-  const bool planarBelow = split.planarBelow;
   for (uint32_t i = 0; i < count; ++i) {
     // As kdSideOf, without branches (which side is a coin toss): lo <= hi,
     // so a box ending on the plane goes below unless it lies in it with the
-    // planar triangles above; and the other way round.
+    // planar triangles above; and the other way round. (PlanarBelow a
+    // template parameter: two comparisons and an and, not five operations.)
     const float lo = references[i].lo[axis], hi = references[i].hi[axis];
-    const bool toBelow = (hi <= position) & ((lo < position) | planarBelow);
-    const bool toAbove = (lo >= position) & ((hi > position) | !planarBelow);
-    const Reference reference = references[i];
-    std::memcpy(&references[aboveCount], &reference, sizeof(Reference));
-    std::memcpy(&below[belowCount], &reference, sizeof(Reference));
+    const bool toBelow = PlanarBelow ? hi <= position : (hi <= position) & (lo < position);
+    const bool toAbove = PlanarBelow ? (lo >= position) & (hi > position) : lo >= position;
+    // Copied as two vectors (a struct copy goes through the stack).
+    Float4 first, second;
+    std::memcpy(&first, reinterpret_cast<const char*>(references + i), 16);
+    std::memcpy(&second, reinterpret_cast<const char*>(references + i) + 16, 16);
+    std::memcpy(reinterpret_cast<char*>(references + aboveCount), &first, 16);
+    std::memcpy(reinterpret_cast<char*>(references + aboveCount) + 16, &second, 16);
+    std::memcpy(reinterpret_cast<char*>(below + belowCount), &first, 16);
+    std::memcpy(reinterpret_cast<char*>(below + belowCount) + 16, &second, 16);
     aboveCount += toAbove;
     belowCount += toBelow;
     if (toBelow | toAbove) continue;
+    // A straddler: references[i] is intact (above's writes there, if any,
+    // were of itself); copied before the parts overwrite it.
+    const Reference reference = references[i];
     if (count <= kClipAbove) {
       Reference part = reference;
       part.lo[axis] = position;
@@ -548,11 +587,6 @@ std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t
     if (!abovePart.empty()) references[aboveCount++] = Reference::of(abovePart, reference.primitive);
     if (!belowPart.empty()) below[belowCount++] = Reference::of(belowPart, reference.primitive);
   }
-  if (arena_.size() < begin + aboveCount + belowCount) arena_.resize(begin + aboveCount + belowCount);
-  // Copied inline: most nodes are small, and a call to memcpy costs them
-  // more than the copy.
-  Reference* const to = arena_.data() + begin + aboveCount;
-  for (uint32_t i = 0; i < belowCount; ++i) to[i] = below[i];
   return {belowCount, aboveCount};
 }
 
@@ -561,9 +595,19 @@ void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Bo
   if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
   const std::optional<KdSplit> split = findSplit(references, box);
   if (!split) return makeLeaf(node, references, depth);
-  const auto [belowCount, aboveCount] = splitReferences(begin, count, *split);
+  const auto [belowCount, aboveCount] = split->planarBelow ? splitReferences<true>(begin, count, *split)
+                                                           : splitReferences<false>(begin, count, *split);
+  // The gap left below the below child's references costs memory only
+  // while the subtree is built; a large node whose above child kept much
+  // less than its below child got (an empty-space cut) closes it, so that
+  // the stack stays within twice the references of a path (no copy else).
+  size_t belowBegin = begin + count;
+  if (count >= 1024 && count - aboveCount >= belowCount) {
+    std::memmove(arena_.data() + begin + aboveCount, arena_.data() + belowBegin, belowCount * sizeof(Reference));
+    belowBegin = begin + aboveCount;
+  }
   const uint32_t children = writer_.split(node, split->axis, split->position);
-  buildNode(children, begin + aboveCount, belowCount, box.below(split->axis, split->position), depth + 1);
+  buildNode(children, belowBegin, belowCount, box.below(split->axis, split->position), depth + 1);
   buildNode(children + 1, begin, aboveCount, box.above(split->axis, split->position), depth + 1);
 }
 
@@ -576,7 +620,7 @@ void buildKdTreeSah(const MeshView& mesh, const KdTreeOptions& options, KdTreeDa
   std::vector<Reference>& arena = builder.arena();
   // The root's references, and room for their children's (straddlers
   // add a few): no regrowth and copy while the top of the tree is built.
-  arena.reserve(2 * triangles.size());
+  arena.reserve(3 * triangles.size());
   for (uint32_t primitive : triangles) {
     const Bounds3 box = mesh.triangleBounds(primitive);
     arena.push_back(Reference::of(box, primitive));
