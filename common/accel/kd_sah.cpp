@@ -192,6 +192,10 @@ struct NodeCost {
 // their children being leaves or nearly.
 constexpr uint32_t kClipAbove = 4;
 
+// Nodes of at most this many triangles are first checked for a leaf that
+// no split can beat (SahBuilder::splitCannotWin), before any SAH.
+constexpr uint32_t kTinyNode = 2;
+
 // Nodes of at most this many triangles are split by counting, not binning.
 constexpr uint32_t kSmallNode = 16;
 
@@ -503,6 +507,7 @@ class SahBuilder {
   void buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth);
   template <bool PlanarBelow>
   std::pair<uint32_t, uint32_t> splitReferences(size_t begin, uint32_t count, const KdSplit& split);
+  bool splitCannotWin(std::span<const Reference> references, const Box& box) const;
   void makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth);
 
   const MeshView& mesh_;
@@ -542,6 +547,25 @@ std::optional<KdSplit> SahBuilder::findSplit(std::span<const Reference> referenc
   else
     smallNodeSplitter_.findSplit(references, cost, best);
   return best.split;
+}
+
+// Whether no split of the node can cost less than its leaf, by a lower
+// bound on every split's cost: a triangle is counted in each child its box
+// reaches, that child's area is at least that of the box's part in it, and
+// the parts of a box cut in two have at least its area together; the
+// empty-space factor is the most that scales a cost down. So every split
+// costs at least A traversal / intersection + empty * sum of the boxes'
+// areas. Nodes fitting tightly around one or two triangles (a quad's) end
+// here without the SAH, which would find the same. The margin (0.1 %)
+// leaves the close calls, and any rounding, to the SAH: the same trees.
+bool SahBuilder::splitCannotWin(std::span<const Reference> references, const Box& box) const {
+  const auto halfArea = [](Float4 extent) {
+    return double(extent[1]) * extent[2] + double(extent[2]) * extent[0] + double(extent[0]) * extent[1];
+  };
+  const double nodeArea = halfArea(Float4{box.hi[0], box.hi[1], box.hi[2], 0} - Float4{box.lo[0], box.lo[1], box.lo[2], 0});
+  double boxAreas = 0;
+  for (const Reference& reference : references) boxAreas += halfArea(reference.hi4() - reference.lo4());
+  return nodeArea * splitFactor_ + std::min(emptyBonus_, 1.0) * boxAreas > 1.001 * nodeArea * double(references.size());
 }
 
 void SahBuilder::makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth) {
@@ -612,6 +636,7 @@ std::pair<uint32_t, uint32_t> SahBuilder::splitReferences(size_t begin, uint32_t
 void SahBuilder::buildNode(uint32_t node, size_t begin, uint32_t count, const Box& box, uint32_t depth) {
   const std::span<const Reference> references(arena_.data() + begin, count);
   if (count <= limits_.leafSize || depth > limits_.maxDepth) return makeLeaf(node, references, depth);
+  if (count <= kTinyNode && splitCannotWin(references, box)) return makeLeaf(node, references, depth);
   const std::optional<KdSplit> split = findSplit(references, box);
   if (!split) return makeLeaf(node, references, depth);
   const auto [belowCount, aboveCount] = split->planarBelow ? splitReferences<true>(begin, count, *split)
