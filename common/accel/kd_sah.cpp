@@ -218,23 +218,39 @@ class SmallNodeSplitter {
   struct Counts {
     Int4 below, above, planar;
   };
-  // For the planes at the two faces of box (lo, hi) at once: each box is loaded once for both.
+  // For the planes at the two faces of box (lo, hi) at once: each box is
+  // loaded once for both. Weighted: each box counts as many times as the
+  // references it stands for (an and more per count; only when some box
+  // stands for several).
+  template <bool Weighted>
   void countAround(uint32_t box, uint32_t count, Counts& atLo, Counts& atHi) const {
     const Float4 lo = lo_[box], hi = hi_[box];
     atLo = atHi = Counts{{}, {}, {}};
-    for (uint32_t j = 0; j < count; ++j) {  // a true comparison is -1
-      atLo.below -= lo_[j] < lo;
-      atHi.below -= lo_[j] < hi;
-      atLo.above -= hi_[j] > lo;
-      atHi.above -= hi_[j] > hi;
-      atLo.planar -= planar_[j] == lo;
-      atHi.planar -= planar_[j] == hi;
+    for (uint32_t j = 0; j < count; ++j) {
+      if constexpr (Weighted) {  // a true comparison is all ones: and it with the weight
+        const Int4 weight = weight_[j];
+        atLo.below += (lo_[j] < lo) & weight;
+        atHi.below += (lo_[j] < hi) & weight;
+        atLo.above += (hi_[j] > lo) & weight;
+        atHi.above += (hi_[j] > hi) & weight;
+        atLo.planar += (planar_[j] == lo) & weight;
+        atHi.planar += (planar_[j] == hi) & weight;
+      } else {  // a true comparison is -1
+        atLo.below -= lo_[j] < lo;
+        atHi.below -= lo_[j] < hi;
+        atLo.above -= hi_[j] > lo;
+        atHi.above -= hi_[j] > hi;
+        atLo.planar -= planar_[j] == lo;
+        atHi.planar -= planar_[j] == hi;
+      }
     }
   }
 
-  // Per box: its lo and hi, and its position on the axes where it is flat
-  // (else NaN, equal to nothing).
+  // Per distinct box (see findSplit): its lo and hi, its position on the
+  // axes where it is flat (else NaN, equal to nothing), and how many
+  // references have it.
   Float4 lo_[kSmallNode], hi_[kSmallNode], planar_[kSmallNode];
+  Int4 weight_[kSmallNode];
   // Per candidate (lo then hi of each box), the costs (without the split's
   // own) with planar triangles below and above.
   Float4 planarBelowCost_[2 * kSmallNode], planarAboveCost_[2 * kSmallNode];
@@ -244,21 +260,30 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const N
   const uint32_t count = uint32_t(references.size());
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   Float4 lowest = Float4{} + kInfinity, highest = -lowest;
-  // Boxes equal to the one before (bit j): their faces are the same
-  // candidates with the same counts, costed once. Common: a quad's two
-  // triangles are neighbours (the partitions keep the order) and share
-  // their box, about a third of the boxes of small nodes in furnished
-  // halls. (Comparing with every earlier box finds few more, at O(n^2).)
-  uint32_t duplicates = 0;
+  // A box equal to the one before is not stored again but weighs more: its
+  // faces are the same candidates with the same counts, and it adds to the
+  // counts as its first copy does. Common: a quad's two triangles are
+  // neighbours (the partitions keep the order) and share their box, about
+  // a third of the boxes of small nodes in furnished halls. (Comparing with
+  // every earlier box finds few more, at O(n^2).) The candidates keep their
+  // order, so ties resolve as without merging.
+  uint32_t boxes = 0;
   for (uint32_t j = 0; j < count; ++j) {
-    lo_[j] = references[j].lo4() + 0.0f;  // + 0: no -0
-    hi_[j] = references[j].hi4() + 0.0f;
-    planar_[j] = lo_[j] == hi_[j] ? lo_[j] : kNaN;
-    lowest = lo_[j] < lowest ? lo_[j] : lowest;
-    highest = hi_[j] > highest ? hi_[j] : highest;
-    if (j == 0) continue;
-    const Int4 same = (lo_[j - 1] == lo_[j]) & (hi_[j - 1] == hi_[j]);
-    duplicates |= uint32_t(_mm_movemask_ps(reinterpret_cast<__m128>(same)) == 15) << j;  // lane 3 repeats lane 2
+    const Float4 lo = references[j].lo4() + 0.0f, hi = references[j].hi4() + 0.0f;  // + 0: no -0
+    lowest = lo < lowest ? lo : lowest;
+    highest = hi > highest ? hi : highest;
+    if (boxes > 0) {
+      const Int4 same = (lo_[boxes - 1] == lo) & (hi_[boxes - 1] == hi);
+      if (_mm_movemask_ps(reinterpret_cast<__m128>(same)) == 15) {  // lane 3 repeats lane 2
+        weight_[boxes - 1] += 1;
+        continue;
+      }
+    }
+    lo_[boxes] = lo;
+    hi_[boxes] = hi;
+    planar_[boxes] = lo == hi ? lo : kNaN;
+    weight_[boxes] = Int4{} + 1;
+    ++boxes;
   }
   const Float4 nodeLo = cost.lo, nodeHi = cost.hi, perimeter = cost.perimeter, cross = cost.cross;
   const Float4 wholeArea = (nodeHi - nodeLo) * perimeter + cross + cross;  // below + above, for any plane
@@ -278,14 +303,13 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const N
     cheapest = planarBelowCost < cheapest ? planarBelowCost : cheapest;
     cheapest = planarAboveCost < cheapest ? planarAboveCost : cheapest;
   };
-  for (uint32_t box = 0; box < count; ++box) {
-    if (duplicates >> box & 1) {  // never the first of the cheapest (see below)
-      planarBelowCost_[2 * box] = planarAboveCost_[2 * box] = Float4{} + kInfinity;
-      planarBelowCost_[2 * box + 1] = planarAboveCost_[2 * box + 1] = Float4{} + kInfinity;
-      continue;
-    }
+  const bool weighted = boxes < count;
+  for (uint32_t box = 0; box < boxes; ++box) {
     Counts atLo, atHi;
-    countAround(box, count, atLo, atHi);
+    if (weighted)
+      countAround<true>(box, boxes, atLo, atHi);
+    else
+      countAround<false>(box, boxes, atLo, atHi);
     record(2 * box, lo_[box], atLo);
     record(2 * box + 1, hi_[box], atHi);
   }
@@ -569,6 +593,15 @@ bool SahBuilder::splitCannotWin(std::span<const Reference> references, const Box
 }
 
 void SahBuilder::makeLeaf(uint32_t node, std::span<const Reference> references, uint32_t depth) {
+  if (references.size() <= 2) {  // most leaves: no vector, no sort call
+    uint32_t triangles[2] = {};
+    if (references.size() > 0) triangles[0] = references[0].primitive;
+    if (references.size() > 1) {
+      triangles[1] = references[1].primitive;
+      if (triangles[1] < triangles[0]) std::swap(triangles[0], triangles[1]);
+    }
+    return writer_.leaf(node, {triangles, references.size()}, depth);
+  }
   leafTriangles_.clear();
   for (const Reference& reference : references) leafTriangles_.push_back(reference.primitive);
   std::sort(leafTriangles_.begin(), leafTriangles_.end());
