@@ -370,6 +370,7 @@ class BinnedSplitter {
   void countEvents(std::span<const Reference> references, const Binning& bin);
   std::optional<Window> chooseWindow(const NodeCost& cost) const;
   uint32_t collectEvents(std::span<const Reference> references, const Binning& bin, const Window& window);
+  void sortEvents(Event* events, uint32_t count);
   const Int4* counts(uint32_t type) const { return counts_.data() + type * binCount_; }
 
   uint32_t binCount_;
@@ -380,6 +381,7 @@ class BinnedSplitter {
   // unused.
   std::vector<Int4> counts_;
   std::vector<Event> events_;
+  std::vector<Event> scratch_;  // sortEvents'
 };
 
 void BinnedSplitter::countEvents(std::span<const Reference> references, const Binning& bin) {
@@ -481,8 +483,40 @@ uint32_t BinnedSplitter::collectEvents(std::span<const Reference> references, co
     events[count] = makeEvent(hi, kEnd);
     count += !planar & (hiBin - window.first <= span);
   }
-  std::sort(events, events + count);
+  sortEvents(events, count);
   return count;
+}
+
+// Sorts events: up to 256 by std::sort; more by an LSD radix sort (8-bit
+// digits) of their offsets from the lowest, which within a window span far
+// fewer than 64 bits, so it takes a few passes without the comparison
+// sort's mispredicted branches. perf, 500 K hall: sorting ~6.3 % of the
+// build with std::sort alone, ~4.4 % so (~4.3 % with radix from 64).
+void BinnedSplitter::sortEvents(Event* events, uint32_t count) {
+  if (count <= 256) return std::sort(events, events + count);
+  Event lowest = events[0], highest = events[0];
+  for (uint32_t i = 1; i < count; ++i) {
+    lowest = std::min(lowest, events[i]);
+    highest = std::max(highest, events[i]);
+  }
+  if (lowest == highest) return;
+  const int bits = 64 - std::countl_zero(highest - lowest);
+  if (scratch_.size() < count) scratch_.resize(count);
+  Event* from = events;
+  Event* to = scratch_.data();
+  for (int shift = 0; shift < bits; shift += 8) {
+    uint32_t offsets[256] = {};
+    for (uint32_t i = 0; i < count; ++i) ++offsets[((from[i] - lowest) >> shift) & 255];
+    uint32_t sum = 0;
+    for (uint32_t& offset : offsets) {
+      const uint32_t digits = offset;
+      offset = sum;
+      sum += digits;
+    }
+    for (uint32_t i = 0; i < count; ++i) to[offsets[((from[i] - lowest) >> shift) & 255]++] = from[i];
+    std::swap(from, to);
+  }
+  if (from != events) std::memcpy(events, from, count * sizeof(Event));
 }
 
 void BinnedSplitter::findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost,
