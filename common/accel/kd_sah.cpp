@@ -13,10 +13,16 @@
 //    face of a triangle's box (a wall, a table top), where the exact SAH
 //    puts it, and each node costs O(n) plus the sort of a few events.
 //  - small nodes: the exact SAH, every box face a candidate, its counts
-//    by comparing it with every box (O(n^2) for n <= 16, no sorting).
+//    by comparing it with every box (O(n^2) for n <= 16, no sorting; a
+//    box equal to the one before, a quad's second triangle, is merged
+//    into it with a weight).
 // Triangles lying in the plane go to the side where they cost less, so the
 // axis-aligned walls, floors and furniture faces of a building end up in
-// thin leaves of their own. A node stays a leaf when no split is cheaper.
+// thin leaves of their own. A node stays a leaf when no split is cheaper;
+// nodes of 1-2 triangles are first checked against a lower bound on every
+// split's cost (splitCannotWin), which makes most of them leaves without
+// the SAH. None of these shortcuts changes the tree: the same nodes,
+// planes and leaves as the plain binned-plus-exact builder.
 //
 // Cost model: a leaf costs intersection * n; a split costs
 //   traversal + intersection * (A_below * n_below + A_above * n_above) / A,
