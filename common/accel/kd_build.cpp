@@ -214,7 +214,10 @@ uint32_t KdTreeWriter::split(uint32_t node, int axis, float position) {
   const size_t first = tree_.nodes.size();
   if (first + 1 > KdNode::kMaxIndex)
     throw std::length_error("kd-tree: more than 2^30 nodes; lower depth or split the cell");
-  tree_.nodes.resize(first + 2);
+  // Two push_backs rather than resize: their in-capacity path is inline
+  // (resize calls out every time), and this runs once per interior node.
+  tree_.nodes.push_back(KdNode::leaf(0, 0));
+  tree_.nodes.push_back(KdNode::leaf(0, 0));
   tree_.nodes[node] = KdNode::interior(axis, position, uint32_t(first));
   return uint32_t(first);
 }
