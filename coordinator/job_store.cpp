@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <sqlite3.h>
+
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
+#include <tuple>
 
 namespace portico {
 
@@ -40,6 +43,19 @@ JobStore::JobStore(const std::string& path)
   db_.exec("PRAGMA synchronous = NORMAL");
   db_.exec("PRAGMA foreign_keys = ON");
   migrate();
+  sqlite3_rollback_hook(
+      db_.handle(), [](void* store) { static_cast<JobStore*>(store)->unleasedValid_ = false; }, this);
+}
+
+void JobStore::loadUnleasedWork() {
+  unleased_.clear();
+  auto& s = db_.prepare(
+      "SELECT job, phase, cell, SUM(work), COUNT(*) FROM batches WHERE lease IS NULL GROUP BY job, phase, cell");
+  while (s.step())
+    unleased_[{uint64_t(s.columnInt(0)), int(s.columnInt(1)), uint32_t(s.columnInt(2))}] = {s.columnInt(3),
+                                                                                             s.columnInt(4)};
+  s.reset();
+  unleasedValid_ = true;
 }
 
 void JobStore::migrate() {
@@ -184,6 +200,11 @@ void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, 
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, int64_t(phase)).bind(4, int64_t(kind)).bind(5, work);
   s.bindBlob(6, payload.data(), payload.size());
   s.run();
+  if (unleasedValid_) {
+    Unleased& entry = unleased_[{job, phase, cell}];
+    entry.work += work;
+    entry.batches += 1;
+  }
 }
 
 int64_t JobStore::queuedRays(uint64_t job, int phase) {
@@ -196,19 +217,22 @@ int64_t JobStore::queuedRays(uint64_t job, int phase) {
 }
 
 std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
-  auto& s = db_.prepare(R"sql(
-    SELECT b.job, b.cell, b.phase, SUM(b.work) AS work
-    FROM batches b JOIN jobs j ON j.id = b.job
-    WHERE b.lease IS NULL
-      AND ((j.state = 'photons' AND b.phase = 0) OR (j.state = 'render' AND b.phase = 1))
-    GROUP BY b.job, b.cell, b.phase
-    ORDER BY b.job ASC, work DESC, b.cell ASC
-    LIMIT ?)sql");
-  s.bind(1, int64_t(limit));
-  std::vector<PendingCell> result;
-  while (s.step())
-    result.push_back({uint64_t(s.columnInt(0)), uint32_t(s.columnInt(1)), int(s.columnInt(2)), s.columnInt(3)});
+  if (!unleasedValid_) loadUnleasedWork();
+  std::map<uint64_t, int> activePhase;
+  auto& s = db_.prepare("SELECT id, state FROM jobs WHERE state IN ('photons', 'render')");
+  while (s.step()) activePhase[uint64_t(s.columnInt(0))] = phaseOf(jobStateFromString(s.columnText(1)));
   s.reset();
+  std::vector<PendingCell> result;
+  for (const auto& [key, entry] : unleased_) {
+    const auto& [job, phase, cell] = key;
+    const auto active = activePhase.find(job);
+    if (active != activePhase.end() && active->second == phase) result.push_back({job, cell, phase, entry.work});
+  }
+  // Oldest job first; in it, most work first (ties: lower cell).
+  std::sort(result.begin(), result.end(), [](const PendingCell& a, const PendingCell& b) {
+    return std::tie(a.job, b.work, a.cell) < std::tie(b.job, a.work, b.cell);
+  });
+  if (result.size() > limit) result.resize(limit);
   return result;
 }
 
@@ -243,6 +267,13 @@ LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& work
   for (const QueuedBatch& b : batches) {
     mark.bind(1, int64_t(lease)).bind(2, b.id);
     mark.run();
+  }
+  if (unleasedValid_) {
+    const auto key = std::make_tuple(cell.job, cell.phase, cell.cell);
+    Unleased& entry = unleased_[key];
+    entry.work -= total;
+    entry.batches -= int64_t(batches.size());
+    if (entry.batches <= 0) unleased_.erase(key);
   }
   return {lease, cell.job, cell.cell, cell.phase, worker, attempt, "open"};
 }
@@ -283,6 +314,7 @@ void JobStore::completeLease(uint64_t lease) {
 }
 
 void JobStore::requeueLease(uint64_t lease, bool lost) {
+  unleasedValid_ = false;   // rare: recount at the next pendingCells()
   auto& release = db_.prepare("UPDATE batches SET lease = NULL, attempts = attempts + ? WHERE lease = ?");
   release.bind(1, int64_t(lost ? 1 : 0)).bind(2, int64_t(lease));
   release.run();
@@ -292,6 +324,7 @@ void JobStore::requeueLease(uint64_t lease, bool lost) {
 }
 
 int JobStore::requeueAllOpenLeases() {
+  unleasedValid_ = false;
   sql::Transaction tx(db_);
   db_.exec("UPDATE batches SET lease = NULL WHERE lease IN (SELECT id FROM leases WHERE state = 'open')");
   db_.exec("UPDATE leases SET state = 'requeued' WHERE state = 'open'");
@@ -329,6 +362,7 @@ std::map<uint32_t, int64_t> JobStore::pendingWorkByCell(uint64_t job, int phase,
 }
 
 void JobStore::dropJobWork(uint64_t job) {
+  unleasedValid_ = false;
   auto& del = db_.prepare("DELETE FROM batches WHERE job = ?");
   del.bind(1, int64_t(job));
   del.run();

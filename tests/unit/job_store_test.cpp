@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <random>
 
 namespace portico {
 namespace {
@@ -129,6 +130,57 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
   EXPECT_EQ(batches[0].payload, "queued");
   EXPECT_EQ(lease.attempt, 1u);
   EXPECT_EQ(migrated.photonBatches(1, 7), std::vector<std::string>{std::string("\x01\x02")});
+}
+
+TEST_F(JobStoreTest, PendingCellsStayTrueToTheBatchesTableThroughLeasesRequeuesAndRollbacks) {
+  // pendingCells() ranks work it keeps in memory beside the table; a store
+  // reopened on the same file ranks it from the table alone. After every
+  // step of a random run of queueing, leasing, completing, requeueing and
+  // rolled-back transactions, both must agree.
+  JobStore store(path_.string());
+  const uint64_t first = store.createJob("a", 1), second = store.createJob("b", 2);
+  std::mt19937 random(11);
+  std::vector<uint64_t> open;
+  const auto expectSameAsFromTheTable = [&](int step) {
+    JobStore fresh(path_.string());
+    const auto a = store.pendingCells(1000), b = fresh.pendingCells(1000);
+    ASSERT_EQ(a.size(), b.size()) << "step " << step;
+    for (size_t i = 0; i < a.size(); ++i) {
+      EXPECT_EQ(a[i].job, b[i].job) << "step " << step;
+      EXPECT_EQ(a[i].cell, b[i].cell) << "step " << step;
+      EXPECT_EQ(a[i].phase, b[i].phase) << "step " << step;
+      EXPECT_EQ(a[i].work, b[i].work) << "step " << step;
+    }
+  };
+  for (int step = 0; step < 300; ++step) {
+    const int action = int(random() % 6);
+    const uint64_t job = random() % 2 ? first : second;
+    if (action <= 1) {
+      store.addBatch(job, uint32_t(random() % 7), 0, BatchKind::Rays, int64_t(1 + random() % 50), "rays");
+    } else if (action == 2) {
+      const auto cells = store.pendingCells(8);
+      if (cells.empty()) continue;
+      std::vector<QueuedBatch> batches;
+      const LeaseRecord lease =
+          store.openLease(cells[random() % cells.size()], "w", int64_t(1 + random() % 80), step, batches);
+      if (lease.id) open.push_back(lease.id);
+    } else if (action == 3 && !open.empty()) {
+      store.completeLease(open.back());
+      open.pop_back();
+    } else if (action == 4 && !open.empty()) {
+      store.requeueLease(open.front(), random() % 2 == 0);
+      open.erase(open.begin());
+    } else if (action == 5) {
+      // A Result that is rejected halfway: nothing of it stays.
+      sql::Transaction tx(store.database());
+      store.addBatch(job, uint32_t(random() % 7), 0, BatchKind::Rays, 1000, "rolled back");
+      const auto cells = store.pendingCells(8);
+      std::vector<QueuedBatch> batches;
+      if (!cells.empty()) store.openLease(cells.front(), "w", 30, step, batches);
+    }
+    if (step % 10 == 0) expectSameAsFromTheTable(step);
+  }
+  expectSameAsFromTheTable(300);
 }
 
 TEST_F(JobStoreTest, FilmChunksAccumulate) {
