@@ -385,11 +385,31 @@ void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string&
 }
 
 void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request) {
-  const auto blobs = store_.photonBatches(request.getJob(), request.getCell());
   capnp::MallocMessageBuilder message;
   auto reply = message.initRoot<wire::Envelope>().initPhotons();
   reply.setJob(request.getJob());
   reply.setCell(request.getCell());
+  std::vector<std::string> blobs;
+  // Only a rendering job's photon tables are complete. A fetch for a lease
+  // assigned before its job went back to the photon pass (or ended) must not
+  // leave the worker caching a partial table.
+  if (auto job = store_.job(request.getJob()); !job || job->state != JobState::Render) {
+    reply.setError(fmt::format("job {} is not rendering: its photon tables are not final", request.getJob()));
+    send(identity, message);
+    return;
+  }
+  try {
+    blobs = store_.photonBatches(request.getJob(), request.getCell());
+  } catch (const std::exception& e) {
+    // A photon file damaged under a committed row (an operating-system crash
+    // lost its pages, or someone wrote to it): the photons are gone, but the
+    // pass that made them is deterministic. Run it again rather than fail
+    // the job; the worker fails its lease and caches nothing.
+    reply.setError(e.what());
+    send(identity, message);
+    restartPhotonPass(request.getJob(), e.what());
+    return;
+  }
   auto list = reply.initBatches(static_cast<unsigned>(blobs.size()));
   for (size_t i = 0; i < blobs.size(); ++i)
     list.set(static_cast<unsigned>(i),
@@ -558,6 +578,22 @@ void Coordinator::finishJob(uint64_t jobId) {
   store_.setJobState(jobId, JobState::Done, job->finishedMs);
   tx.commit();
   spdlog::info("job {} done: {}", jobId, ctx.reader().getOutput().cStr());
+}
+
+void Coordinator::restartPhotonPass(uint64_t jobId, const std::string& reason) {
+  auto job = store_.job(jobId);
+  if (!job || !isActive(job->state)) return;
+  try {
+    JobContext& context = this->context(jobId);
+    sql::Transaction tx(store_.database());
+    store_.restartJob(jobId, wallMs());
+    queuePhotonEmission(store_, jobId, context.reader(), *context.scene);
+    tx.commit();
+  } catch (const std::exception& e) {
+    failJob(jobId, fmt::format("{}; running its photon pass again failed: {}", reason, e.what()));
+    return;
+  }
+  spdlog::error("job {}: {}; running its photon pass again", jobId, reason);
 }
 
 void Coordinator::failJob(uint64_t jobId, const std::string& error) {

@@ -50,6 +50,8 @@ class Coordinator {
   void onResult(const std::string& identity, wire::Result::Reader result);
   void onFailure(const std::string& identity, wire::Failure::Reader failure);
   void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
+  // The job back to the start of its photon pass (its photons unreadable).
+  void restartPhotonPass(uint64_t job, const std::string& reason);
   void onFetchFile(const std::string& identity, wire::FetchFile::Reader request);
   void onSubmit(const std::string& identity, wire::Submit::Reader submit);
   void onStatus(const std::string& identity, wire::StatusRequest::Reader request);

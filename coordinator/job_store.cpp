@@ -371,6 +371,17 @@ void JobStore::dropJobWork(uint64_t job) {
   close.run();
 }
 
+void JobStore::restartJob(uint64_t job, int64_t nowMs) {
+  dropJobWork(job);
+  for (const char* table : {"photons", "film", "counters"}) {
+    auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
+    s.bind(1, int64_t(job));
+    s.run();
+  }
+  setJobState(job, JobState::Photons, nowMs);
+  photons_.forget(job);
+}
+
 void JobStore::addCounter(uint64_t job, std::string_view name, int64_t delta) {
   auto& s = db_.prepare(
       "INSERT INTO counters(job, name, value) VALUES (?, ?, ?) "

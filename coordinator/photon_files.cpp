@@ -59,6 +59,13 @@ PhotonFiles::OpenFile& PhotonFiles::open(uint64_t job) {
   return files_[job] = OpenFile{descriptor, end};
 }
 
+void PhotonFiles::forget(uint64_t job) {
+  if (auto it = files_.find(job); it != files_.end()) {
+    ::close(it->second.descriptor);
+    files_.erase(it);
+  }
+}
+
 PhotonExtent PhotonFiles::append(uint64_t job, std::string_view bytes) {
   OpenFile& file = open(job);
   PhotonExtent extent{file.end, int64_t(bytes.size()), crcOf(bytes.data(), bytes.size())};

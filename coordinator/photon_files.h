@@ -18,7 +18,8 @@
 // crash can lose file pages that a committed row points to (SQLite's WAL
 // and these files reach the disk independently): the CRC catches it on
 // reading, and the read fails naming the file, so a damaged batch is never
-// used silently.
+// used; the coordinator then runs the job's photon pass again
+// (Coordinator::onFetchPhotons), which gives the same photons, bit for bit.
 #pragma once
 
 #include <cstdint>
@@ -53,6 +54,9 @@ class PhotonFiles {
   std::string read(uint64_t job, const PhotonExtent& extent);
 
   std::filesystem::path pathOf(uint64_t job) const;
+  // Closes the job's file: the next use starts from its committed end again
+  // (after the job's rows were deleted: from nothing).
+  void forget(uint64_t job);
 
  private:
   struct OpenFile {

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 2;   # 2: fetchFile / fileChunk (cells over the wire)
+const protocolVersion :UInt32 = 3;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error
 
 enum Phase {
   photons @0;
@@ -161,6 +161,7 @@ struct PhotonsReply {
   job @0 :UInt64;
   cell @1 :UInt32;
   batches @2 :List(Data);   # the cell's photon table: 24-byte records, batch by batch
+  error @3 :Text;           # non-empty: the table could not be read (no batches); the lease is failed, nothing cached
 }
 
 # Cells over the wire: a worker without the scene store's file system asks

@@ -247,6 +247,11 @@ int WorkerSession::run() {
                 auto assign = lease->assign->envelope().getAssign();
                 auto reply = envelope.getPhotons();
                 if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) break;
+                if (reply.hasError() && reply.getError().size() > 0) {
+                  lease->waitingForPhotons = false;
+                  failLease(reply.getError().cStr());
+                  break;
+                }
                 // Room for the decoded photons before decoding them (24-byte records).
                 uint64_t records = 0;
                 for (auto batch : reply.getBatches()) records += batch.size() / 24;

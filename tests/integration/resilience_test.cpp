@@ -88,6 +88,49 @@ TEST_F(Resilience, ACoordinatorKilledMidRenderResumesWithTheSameBits) {
   expectSameAsReference(dir / "image.exr");
 }
 
+// An operating-system crash can lose pages of a photon file that a
+// committed row of jobs.db points to. Here: coordinator and workers killed
+// mid-render, the job's photon file overwritten, everything restarted. The
+// damaged batches fail their CRC when the new workers fetch them; the
+// coordinator runs the job's photon pass again and the image comes out the
+// same, bit for bit.
+TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
+  const fs::path dir = dir_ / "damaged-photons";
+  LocalCluster cluster(dir, 2);
+  const std::string endpoint = cluster.endpoint();
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  bool inRender = false;
+  for (int i = 0; i < 2000 && !inRender; ++i) {
+    const auto status = cluster.status(job);
+    inRender = status.value("state", "") == "render";
+    if (status.value("state", "") == "done") break;
+    if (!inRender) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  ASSERT_TRUE(inRender) << "the job never showed a render pass under way";
+  cluster.killCoordinator();
+  for (size_t i = 0; i < 2; ++i) {
+    cluster.worker(i).kill(SIGKILL);
+    cluster.worker(i).wait();
+  }
+  const fs::path photons = dir / ("jobs.db-photons/job-" + std::to_string(job) + ".bin");
+  ASSERT_TRUE(fs::exists(photons));
+  const auto size = fs::file_size(photons);
+  ASSERT_GT(size, 0u);
+  {
+    std::ofstream out(photons, std::ios::binary | std::ios::in | std::ios::out);
+    const std::string garbage(size_t(size), '\x5a');
+    out.write(garbage.data(), std::streamsize(garbage.size()));
+  }
+  cluster.startCoordinator(endpoint);
+  cluster.addWorker({});
+  cluster.addWorker({});
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  EXPECT_NE(readFile(dir / "coordinator.log").find("running its photon pass again"), std::string::npos)
+      << readFile(dir / "coordinator.log");
+  expectSameAsReference(dir / "image.exr");
+}
+
 // A cell whose work dies with every worker that takes it (here: workers
 // that take a lease and vanish, as one that crashes on the cell's geometry
 // would) is retried with rising attempt numbers, then fails its job with a
