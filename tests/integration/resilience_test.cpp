@@ -40,6 +40,18 @@ class Resilience : public ::testing::Test {
     EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
     EXPECT_EQ(differingFloats(image, dir_ / "reference.exr"), 0u);
   }
+  // Polls until the job is in its render pass (with camera rays traced when
+  // asked); false if it finished first.
+  static bool waitForRender(LocalCluster& cluster, uint64_t job, bool withCameraRays) {
+    for (int i = 0; i < 2000; ++i) {
+      const auto status = cluster.status(job);
+      const std::string state = status.value("state", "");
+      if (state == "render" && (!withCameraRays || status["rays"]["camera"].get<int64_t>() > 0)) return true;
+      if (state == "done") return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return false;
+  }
   static constexpr uint64_t kPhotons = 60000;
   static fs::path dir_, store_;
   static double referenceSeconds_;
@@ -73,14 +85,7 @@ TEST_F(Resilience, ACoordinatorKilledMidRenderResumesWithTheSameBits) {
   LocalCluster cluster(dir, 2);
   const std::string endpoint = cluster.endpoint();
   const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  bool inRender = false;
-  for (int i = 0; i < 2000 && !inRender; ++i) {
-    const auto status = cluster.status(job);
-    inRender = status.value("state", "") == "render" && status["rays"]["camera"].get<int64_t>() > 0;
-    if (status.value("state", "") == "done") break;
-    if (!inRender) std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  ASSERT_TRUE(inRender) << "the job never showed a render pass under way";
+  ASSERT_TRUE(waitForRender(cluster, job, true)) << "the job never showed a render pass under way";
   cluster.killCoordinator();
   cluster.startCoordinator(endpoint);
   const auto status = cluster.wait(job);
@@ -99,14 +104,7 @@ TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
   LocalCluster cluster(dir, 2);
   const std::string endpoint = cluster.endpoint();
   const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  bool inRender = false;
-  for (int i = 0; i < 2000 && !inRender; ++i) {
-    const auto status = cluster.status(job);
-    inRender = status.value("state", "") == "render";
-    if (status.value("state", "") == "done") break;
-    if (!inRender) std::this_thread::sleep_for(std::chrono::milliseconds(2));
-  }
-  ASSERT_TRUE(inRender) << "the job never showed a render pass under way";
+  ASSERT_TRUE(waitForRender(cluster, job, false)) << "the job never showed a render pass under way";
   cluster.killCoordinator();
   for (size_t i = 0; i < 2; ++i) {
     cluster.worker(i).kill(SIGKILL);
