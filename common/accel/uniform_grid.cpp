@@ -553,7 +553,9 @@ template <bool AnyHit>
   int32_t index = 0;
   for (int axis = 0; axis < 3; ++axis) {
     const double entry = origin[axis] + tEnter * direction[axis];
-    const double cell = std::floor((entry - low_[axis]) * inverseVoxelSize_[axis]);
+    // floor, clamped to the grid, as truncation of the clamped value (the
+    // same for values >= 0; std::floor is a library call on baseline x86-64).
+    const double cell = (entry - low_[axis]) * inverseVoxelSize_[axis];
     const int voxel = static_cast<int>(std::clamp(cell, 0.0, double(resolution_[axis] - 1)));
     index += voxel * strides[axis];
     if (direction[axis] > 0.0) {
