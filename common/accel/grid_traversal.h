@@ -266,7 +266,11 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
     if (end - base < 64) crossed &= (uint64_t(1) << (end - base)) - 1;
     for (uint64_t bits = crossed; bits != 0; bits &= bits - 1) {
       const char* const start = reinterpret_cast<const char*>(packets + base + std::countr_zero(bits));
-      for (int offset : {0, 64, 128, int(sizeof(TrianglePacket)) - 1}) __builtin_prefetch(start + offset);
+      // Spelled out: GCC keeps a loop over an initializer list.
+      __builtin_prefetch(start);
+      __builtin_prefetch(start + 64);
+      __builtin_prefetch(start + 128);
+      __builtin_prefetch(start + sizeof(TrianglePacket) - 1);
     }
     for (; crossed != 0; crossed &= crossed - 1) {
       if constexpr (!AnyHit) {

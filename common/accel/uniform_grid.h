@@ -96,14 +96,14 @@ class UniformGrid final : public Accelerator {
   std::array<double, 3> latticeStep_{0, 0, 0};
   // One bit per voxel (x fastest, then y, then z), set when it holds
   // references: small enough to stay in cache, so traversal crosses empty
-  // voxels touching nothing else. occupiedBefore_[w]: the occupied voxels
-  // before word w, so a voxel's row is found by counting bits.
+  // voxels touching nothing else.
   std::vector<uint64_t> occupied_;
-  std::vector<uint32_t> occupiedBefore_;
-  // One row per occupied voxel, in voxel order: the voxel's triangles are
-  // the packets packets_[firstPacket .. endPacket), by increasing primitive
+  // One row per voxel, indexed by the voxel (only the occupied voxels' rows
+  // are written, and read): 16 bytes a voxel, ~2 bytes a triangle at the
+  // default density, and no rank to count on the way to a row. The voxel's
+  // triangles are the packets packets_[firstPacket .. endPacket), by increasing primitive
   // id, four to a packet, with their vertices (one copy per reference; a
-  // voxel holding the one packet of the voxel before it shares it).
+  // voxel holding the one packet of the occupied voxel before it shares it).
   // low/high: the box its triangles' bounding boxes cover within the voxel,
   // on a lattice of 255 steps across the voxel grown by two reference
   // margins (rounded outwards), so a ray that misses it skips the voxel
@@ -112,7 +112,7 @@ class UniformGrid final : public Accelerator {
     uint32_t firstPacket, endPacket;
     uint8_t low[4], high[4];  // x, y, z, and 0
   };
-  std::vector<VoxelRow> rows_;
+  std::vector<VoxelRow, grid_traversal::LargeArrayAllocator<VoxelRow>> rows_;
   std::vector<grid_traversal::TrianglePacket, grid_traversal::LargeArrayAllocator<grid_traversal::TrianglePacket>>
       packets_;
   // packetBoxes_[b]: the boxes of packets_[4b .. 4b + 3], each on its voxel's lattice.
