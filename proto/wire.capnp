@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 3;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error
+const protocolVersion :UInt32 = 3;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames
 
 enum Phase {
   photons @0;

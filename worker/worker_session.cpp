@@ -287,7 +287,7 @@ int WorkerSession::run() {
             spdlog::warn("fault injection: exiting with lease {} unreported", leaseId);
             std::_Exit(3);
           }
-          zmq::message_t frame = net::encode(*message);
+          zmq::message_t frame = net::encode(*message, net::Encoding::Flat);
           // libzmq would drop a longer frame and the connection with it, and
           // the lease would come back forever: report it as a failure instead.
           if (coordinatorMaxFrame && frame.size() > coordinatorMaxFrame)

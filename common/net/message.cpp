@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstring>
 
 namespace portico::net {
 
@@ -12,7 +13,23 @@ constexpr uint64_t kCoordinatorFrameFloorBytes = uint64_t(16) << 20;
 constexpr uint64_t kCoordinatorFrameBytesPerLeaseRay = 2048;
 }  // namespace
 
-zmq::message_t encode(capnp::MessageBuilder& message) {
+namespace {
+// A flat frame's first word. A packed message never starts with 0xff: its
+// first word is the segment table, whose bytes 1-3 (the high bytes of the
+// segment count) are zero, so its packing tag has those bits clear.
+constexpr unsigned char kFlatMarker[8] = {0xff, 'F', 'L', 'A', 'T', 0, 0, 1};
+}  // namespace
+
+zmq::message_t encode(capnp::MessageBuilder& message, Encoding encoding) {
+  if (encoding == Encoding::Flat) {
+    const size_t words = capnp::computeSerializedSizeInWords(message);
+    zmq::message_t frame(sizeof(kFlatMarker) + words * sizeof(capnp::word));
+    auto* bytes = static_cast<kj::byte*>(frame.data());
+    std::memcpy(bytes, kFlatMarker, sizeof(kFlatMarker));
+    kj::ArrayOutputStream out(kj::arrayPtr(bytes + sizeof(kFlatMarker), words * sizeof(capnp::word)));
+    capnp::writeMessage(out, message);
+    return frame;
+  }
   kj::VectorOutputStream stream;
   capnp::writePackedMessage(stream, message);
   auto bytes = stream.getArray();
@@ -70,8 +87,28 @@ Decoded::Decoded(const zmq::message_t& frame) {
   if (frame.size() > kMaxFrameBytes)
     throw std::runtime_error(
         fmt::format("malformed message: {} bytes is over the {} byte limit", frame.size(), kMaxFrameBytes));
-  reader_ = std::make_unique<PackedReader>(frame.data(), frame.size());
-  envelope_ = reader_->root<wire::Envelope>();
+  const auto* bytes = static_cast<const kj::byte*>(frame.data());
+  if (bytes[0] == kFlatMarker[0]) {
+    if (frame.size() < sizeof(kFlatMarker) || std::memcmp(bytes, kFlatMarker, sizeof(kFlatMarker)) != 0)
+      throw std::runtime_error("malformed message: unknown encoding");
+    const size_t payload = frame.size() - sizeof(kFlatMarker);
+    if (payload % sizeof(capnp::word) != 0 || payload == 0)
+      throw std::runtime_error(fmt::format("malformed message: a flat frame of {} bytes is not whole words", payload));
+    // The frame's bytes need not be 8-byte aligned: one copy to words.
+    words_ = kj::heapArray<capnp::word>(payload / sizeof(capnp::word));
+    std::memcpy(words_.begin(), bytes + sizeof(kFlatMarker), payload);
+    try {
+      flat_ = std::make_unique<capnp::FlatArrayMessageReader>(words_.asPtr(), optionsFor(frame.size()));
+      if (flat_->getEnd() != words_.end())
+        throw std::runtime_error("malformed message: a flat frame longer than its message");
+      envelope_ = flat_->getRoot<wire::Envelope>();
+    } catch (const kj::Exception& e) {
+      throw std::runtime_error(fmt::format("malformed message: {}", e.getDescription().cStr()));
+    }
+  } else {
+    reader_ = std::make_unique<PackedReader>(frame.data(), frame.size());
+    envelope_ = reader_->root<wire::Envelope>();
+  }
   try {
     (void)envelope_.which();   // a malformed root fails here, not deep in a handler
   } catch (const kj::Exception& e) {

@@ -20,6 +20,53 @@ TEST(Message, RoundTripsAnEnvelope) {
   EXPECT_EQ(decoded.envelope().getHello().getCores(), 4u);
 }
 
+TEST(Message, RoundTripsAFlatResultWithItsPhotonTables) {
+  capnp::MallocMessageBuilder message;
+  auto result = message.initRoot<wire::Envelope>().initResult();
+  result.setLease(77);
+  const std::string records(24 * 1000, '\x5a');
+  auto deposits = result.initDeposits(1);
+  deposits[0].setCell(3);
+  deposits[0].setRecords(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()), records.size()));
+  const zmq::message_t flat = net::encode(message, net::Encoding::Flat);
+  const zmq::message_t packed = net::encode(message);
+  EXPECT_EQ(static_cast<const unsigned char*>(flat.data())[0], 0xff);
+  EXPECT_NE(static_cast<const unsigned char*>(packed.data())[0], 0xff);
+  for (const zmq::message_t* frame : {&flat, &packed}) {
+    net::Decoded decoded(*frame);
+    ASSERT_EQ(decoded.envelope().which(), wire::Envelope::RESULT);
+    auto got = decoded.envelope().getResult();
+    EXPECT_EQ(got.getLease(), 77u);
+    ASSERT_EQ(got.getDeposits().size(), 1u);
+    EXPECT_EQ(got.getDeposits()[0].getCell(), 3u);
+    auto bytes = got.getDeposits()[0].getRecords();
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(bytes.begin()), bytes.size()), records);
+  }
+}
+
+TEST(Message, RejectsFlatFramesThatAreNotWholeOrNotOurs) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initResult().setLease(5);
+  const zmq::message_t whole = net::encode(message, net::Encoding::Flat);
+  int refused = 0;
+  for (size_t length = 1; length < whole.size(); ++length) {
+    const zmq::message_t cut(whole.data(), length);
+    try {
+      net::Decoded decoded(cut);
+      (void)decoded.envelope().getResult().getLease();
+    } catch (const std::runtime_error&) {
+      ++refused;
+    }
+  }
+  EXPECT_EQ(refused, int(whole.size()) - 1);
+  std::string longer(static_cast<const char*>(whole.data()), whole.size());
+  longer.append(8, '\0');   // a word beyond the message
+  EXPECT_THROW(net::Decoded{zmq::message_t(longer.data(), longer.size())}, std::runtime_error);
+  std::string marker = longer.substr(0, whole.size());
+  marker[1] = 'X';            // 0xff, then not our marker
+  EXPECT_THROW(net::Decoded{zmq::message_t(marker.data(), marker.size())}, std::runtime_error);
+}
+
 TEST(Message, RejectsAnEmptyFrame) {
   zmq::message_t frame;
   EXPECT_THROW(net::Decoded{frame}, std::runtime_error);
@@ -63,6 +110,12 @@ TEST(Message, TraversalLimitStopsAmplification) {
         for (auto p : film) sum += p.getR();
         (void)sum;
       });
+  // Flat, the same list takes its full 24 MiB on the wire: the frame holds
+  // every word it asks the reader to walk, and it decodes.
+  const zmq::message_t flat = net::encode(message, net::Encoding::Flat);
+  ASSERT_GT(flat.size(), size_t(1) << 24);
+  net::Decoded decoded(flat);
+  EXPECT_EQ(decoded.envelope().getResult().getFilm().size(), 1u << 20);
 }
 
 TEST(Message, ATruncatedMultiSegmentMessageIsAnErrorNotACrash) {
