@@ -150,16 +150,17 @@ std::vector<double> fitNonNegativeRelative(const std::vector<std::vector<double>
 
 CostModel CostModel::builtIn() {
   // `portico bench calibrate` on the 2-core development machine (Debian
-  // bookworm VM, AVX-512), 2026-11-23, with that day's grid (content and
-  // packet boxes) and binned kd:sah builder: 25 cells (24 of l-shape, 3
-  // halls), 20 000 photon-like rays each.
+  // bookworm VM, AVX-512), 2026-11-23 (session 6), with that day's grid
+  // (rows by voxel, packed walk) and kd:sah builder, trace passes timed by
+  // thread CPU time: 25 cells (22 of l-shape, 3 halls), 20 000 photon-like
+  // rays each.
   CostModel model;
   model.origin = "built-in (development machine)";
-  model.families["grid"] = {{0.00362, 3.586e-05, 1.662e-05}, {317.5, 7.19, 1.182}};
-  model.families["hgrid"] = {{0, 0.0003053, 2.602e-05}, {94.36, 47.84}};
-  model.families["kd:median"] = {{0, 0.0007099, 0}, {0, 94.39}};
-  model.families["kd:sah"] = {{0, 6.481e-05, 8.671e-05}, {33.21, 30.25}};
-  model.families["kd:bbox"] = {{0, 0, 0.00017}, {0, 70.65}};
+  model.families["grid"] = {{0.001955, 2.644e-05, 1.85e-05}, {232.5, 4.343, 0.7417}};
+  model.families["hgrid"] = {{0, 0.0001609, 2.485e-05}, {84.98, 39.91}};
+  model.families["kd:median"] = {{0, 0.0005673, 0}, {0, 81.87}};
+  model.families["kd:sah"] = {{0, 0.0001917, 4.85e-05}, {33.76, 23.71}};
+  model.families["kd:bbox"] = {{0, 0, 0.0001467}, {0, 58.29}};
   return model;
 }
 
