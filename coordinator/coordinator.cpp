@@ -583,6 +583,13 @@ void Coordinator::finishJob(uint64_t jobId) {
 void Coordinator::restartPhotonPass(uint64_t jobId, const std::string& reason) {
   auto job = store_.job(jobId);
   if (!job || !isActive(job->state)) return;
+  // A disk that keeps damaging the file would otherwise loop for ever.
+  const auto counters = store_.counters(jobId);
+  const auto restarts = counters.find(JobStore::kPhotonPassRestarts);
+  if (restarts != counters.end() && restarts->second >= options_.maxCellFailures) {
+    failJob(jobId, fmt::format("{} (its photon pass was run again {} times)", reason, restarts->second));
+    return;
+  }
   try {
     JobContext& context = this->context(jobId);
     sql::Transaction tx(store_.database());

@@ -78,6 +78,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                     {"bytes_read", get(counters, "cells.bytes_read")},
                     {"photon_maps_built", get(counters, "photon_maps.built")}};
   stats["leases"] = get(counters, "leases.completed");
+  // Photon passes run again because a photon file was found damaged.
+  stats["photon_pass_restarts"] = get(counters, JobStore::kPhotonPassRestarts);
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
                       {"render", get(counters, "time.render_ms")},
                       {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},

@@ -373,11 +373,15 @@ void JobStore::dropJobWork(uint64_t job) {
 
 void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   dropJobWork(job);
-  for (const char* table : {"photons", "film", "counters"}) {
+  for (const char* table : {"photons", "film"}) {
     auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
     s.bind(1, int64_t(job));
     s.run();
   }
+  auto& counters = db_.prepare("DELETE FROM counters WHERE job = ? AND name != ?");
+  counters.bind(1, int64_t(job)).bind(2, kPhotonPassRestarts);
+  counters.run();
+  addCounter(job, kPhotonPassRestarts, 1);
   setJobState(job, JobState::Photons, nowMs);
   photons_.forget(job);
 }

@@ -100,8 +100,10 @@ class JobStore {
   std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
   void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
   // Back to the start of the photon pass: the job's work, photons, film and
-  // counters dropped (its photon file cut to nothing), state photons. The
-  // caller queues the emission again, in the same transaction.
+  // counters dropped (its photon file cut to nothing), state photons; the
+  // counter kPhotonPassRestarts alone is kept, and incremented. The caller
+  // queues the emission again, in the same transaction.
+  static constexpr const char* kPhotonPassRestarts = "restarts.photon_pass";
   void restartJob(uint64_t job, int64_t nowMs);
 
   void addCounter(uint64_t job, std::string_view name, int64_t delta);

@@ -126,6 +126,7 @@ TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
   EXPECT_NE(readFile(dir / "coordinator.log").find("running its photon pass again"), std::string::npos)
       << readFile(dir / "coordinator.log");
+  EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
   expectSameAsReference(dir / "image.exr");
 }
 

@@ -183,6 +183,35 @@ TEST_F(JobStoreTest, PendingCellsStayTrueToTheBatchesTableThroughLeasesRequeuesA
   expectSameAsFromTheTable(300);
 }
 
+TEST_F(JobStoreTest, RestartingAJobDropsItsWorkPhotonsFilmAndCountersButCountsTheRestarts) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1), other = store.createJob("other", 1);
+  for (uint64_t j : {job, other}) {
+    store.addBatch(j, 1, 0, BatchKind::Rays, 10, "rays");
+    store.addPhotons(j, 1, 1, std::string(24, 'p'));
+    store.addFilm(j, {{0, {1, 2, 3}}}, 4);
+    store.addCounter(j, "photons.emitted", 5);
+  }
+  store.setJobState(job, JobState::Render, 2);
+  for (int restart = 1; restart <= 2; ++restart) {
+    store.restartJob(job, 3);
+    EXPECT_EQ(store.job(job)->state, JobState::Photons);
+    EXPECT_EQ(store.remainingWork(job, 0), 0);
+    EXPECT_TRUE(store.photonBatches(job, 1).empty());
+    EXPECT_EQ(store.film(job, 4)[0].r, 0);
+    const auto counters = store.counters(job);
+    EXPECT_EQ(counters.count("photons.emitted"), 0u);
+    EXPECT_EQ(counters.at(JobStore::kPhotonPassRestarts), restart);
+  }
+  // New photons start the file afresh; the other job is untouched.
+  store.addPhotons(job, 1, 1, std::string(24, 'n'));
+  EXPECT_EQ(store.photonBatches(job, 1), std::vector<std::string>{std::string(24, 'n')});
+  EXPECT_EQ(std::filesystem::file_size(store.photonFile(job)), 24u);
+  EXPECT_EQ(store.photonBatches(other, 1).size(), 1u);
+  EXPECT_EQ(store.remainingWork(other, 0), 1);
+  EXPECT_EQ(store.counters(other).at("photons.emitted"), 5);
+}
+
 TEST_F(JobStoreTest, FilmChunksAccumulate) {
   JobStore store(path_.string());
   const uint64_t job = store.createJob("spec", 1);
