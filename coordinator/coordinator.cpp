@@ -389,24 +389,27 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
   auto reply = message.initRoot<wire::Envelope>().initPhotons();
   reply.setJob(request.getJob());
   reply.setCell(request.getCell());
-  std::vector<std::string> blobs;
+  // A reply with an error fails the worker's lease; it caches nothing.
+  const auto refuse = [&](const std::string& error) {
+    reply.setError(error);
+    send(identity, message);
+  };
   // Only a rendering job's photon tables are complete. A fetch for a lease
   // assigned before its job went back to the photon pass (or ended) must not
   // leave the worker caching a partial table.
   if (auto job = store_.job(request.getJob()); !job || job->state != JobState::Render) {
-    reply.setError(fmt::format("job {} is not rendering: its photon tables are not final", request.getJob()));
-    send(identity, message);
+    refuse(fmt::format("job {} is not rendering: its photon tables are not final", request.getJob()));
     return;
   }
+  std::vector<std::string> blobs;
   try {
     blobs = store_.photonBatches(request.getJob(), request.getCell());
   } catch (const std::exception& e) {
     // A photon file damaged under a committed row (an operating-system crash
     // lost its pages, or someone wrote to it): the photons are gone, but the
     // pass that made them is deterministic. Run it again rather than fail
-    // the job; the worker fails its lease and caches nothing.
-    reply.setError(e.what());
-    send(identity, message);
+    // the job.
+    refuse(e.what());
     restartPhotonPass(request.getJob(), e.what());
     return;
   }

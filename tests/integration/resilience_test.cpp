@@ -40,17 +40,19 @@ class Resilience : public ::testing::Test {
     EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
     EXPECT_EQ(differingFloats(image, dir_ / "reference.exr"), 0u);
   }
-  // Polls until the job is in its render pass (with camera rays traced when
-  // asked); false if it finished first.
-  static bool waitForRender(LocalCluster& cluster, uint64_t job, bool withCameraRays) {
+  // Submits the test job (image at dir/image.exr) and polls until it is in
+  // its render pass, with camera rays traced when asked; 0 if it finished
+  // first or never got there.
+  static uint64_t submitAndWaitForRender(LocalCluster& cluster, const fs::path& dir, bool withCameraRays) {
+    const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
     for (int i = 0; i < 2000; ++i) {
       const auto status = cluster.status(job);
       const std::string state = status.value("state", "");
-      if (state == "render" && (!withCameraRays || status["rays"]["camera"].get<int64_t>() > 0)) return true;
-      if (state == "done") return false;
+      if (state == "render" && (!withCameraRays || status["rays"]["camera"].get<int64_t>() > 0)) return job;
+      if (state == "done") return 0;
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
-    return false;
+    return 0;
   }
   static constexpr uint64_t kPhotons = 60000;
   static fs::path dir_, store_;
@@ -84,8 +86,8 @@ TEST_F(Resilience, ACoordinatorKilledMidRenderResumesWithTheSameBits) {
   const fs::path dir = dir_ / "restart-render";
   LocalCluster cluster(dir, 2);
   const std::string endpoint = cluster.endpoint();
-  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  ASSERT_TRUE(waitForRender(cluster, job, true)) << "the job never showed a render pass under way";
+  const uint64_t job = submitAndWaitForRender(cluster, dir, true);
+  ASSERT_NE(job, 0u) << "the job never showed a render pass under way";
   cluster.killCoordinator();
   cluster.startCoordinator(endpoint);
   const auto status = cluster.wait(job);
@@ -103,8 +105,8 @@ TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
   const fs::path dir = dir_ / "damaged-photons";
   LocalCluster cluster(dir, 2);
   const std::string endpoint = cluster.endpoint();
-  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  ASSERT_TRUE(waitForRender(cluster, job, false)) << "the job never showed a render pass under way";
+  const uint64_t job = submitAndWaitForRender(cluster, dir, false);
+  ASSERT_NE(job, 0u) << "the job never showed a render pass under way";
   cluster.killCoordinator();
   for (size_t i = 0; i < 2; ++i) {
     cluster.worker(i).kill(SIGKILL);
