@@ -9,6 +9,7 @@
 
 #include "common/transport/photon_record.h"
 #include "common/util/atomic_file.h"
+#include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
@@ -21,6 +22,12 @@ int64_t nowMs() {
 }
 
 namespace {
+// Cells ranked by pending work that a lease may be chosen from.
+constexpr size_t kLeaseCandidates = 1024;
+// What a worker's cache holds per byte of a cell's file: the geometry and
+// an accelerator about twice its size (a grid; worker/cell_cache.h).
+constexpr uint64_t kCachedBytesPerFileByte = 3;
+
 // Wall-clock for records that outlive the process (job creation, phases).
 int64_t wallMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
@@ -177,6 +184,7 @@ void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello
   worker.name = hello.getName();
   worker.cores = hello.getCores();
   worker.memoryBytes = hello.getMemoryBytes();
+  worker.cells.setBudget(worker.memoryBytes);
   worker.lastSeenMs = nowMs();
   spdlog::info("worker {} joined ({} cores, {} MiB budget)", worker.name, worker.cores, worker.memoryBytes >> 20);
   capnp::MallocMessageBuilder message;
@@ -216,37 +224,17 @@ void Coordinator::dispatch() {
   }
 }
 
-bool Coordinator::heldByAnotherWorker(const WorkerInfo& worker, uint64_t job, uint32_t cell) const {
-  for (const auto& [identity, other] : workers_)
-    if (&other != &worker && other.holds(job, cell)) return true;
-  return false;
-}
-
 bool Coordinator::assignWork(WorkerInfo& worker) {
-  const auto candidates = store_.pendingCells(64);
+  const auto candidates = store_.pendingCells(kLeaseCandidates);
   if (candidates.empty()) return false;
-  // Memory coherence: among the cells with most work, prefer one this worker
-  // already holds; then one no other worker holds (each cell loaded and its
-  // accelerator built once, not once per worker); only when every such cell
-  // is another's, split the one with the most work.
-  const PendingCell* chosen = nullptr;
-  const PendingCell* unheld = nullptr;
-  for (const PendingCell& c : candidates) {
-    if (c.job != candidates.front().job) break;
-    if (worker.holds(c.job, c.cell)) {
-      chosen = &c;
-      break;
-    }
-    if (!unheld && !heldByAnotherWorker(worker, c.job, c.cell)) unheld = &c;
-  }
-  if (!chosen) chosen = unheld ? unheld : &candidates.front();
   JobContext* job;
   try {
-    job = &context(chosen->job);
+    job = &context(candidates.front().job);
   } catch (const std::exception& e) {
-    failJob(chosen->job, e.what());
+    failJob(candidates.front().job, e.what());
     return true;
   }
+  const PendingCell* chosen = &chooseCell(candidates, job->scene->cells(), worker, workers_);
   std::vector<QueuedBatch> batches;
   LeaseRecord opened;
   {
@@ -275,7 +263,9 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   }
   send(worker.identity, message);
   worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork});
-  worker.remember(chosen->job, chosen->cell);
+  const auto& cells = job->scene->cells();
+  worker.cells.use(chosen->job, chosen->cell,
+                   chosen->cell < cells.size() ? kCachedBytesPerFileByte * cells[chosen->cell].byteCount : 0);
   if (opened.attempt > 1)
     spdlog::info("lease {} -> {}: job {} cell {} phase {}, attempt {} ({} batches)", lease, worker.name, chosen->job,
                  chosen->cell, chosen->phase, opened.attempt, batches.size());

@@ -61,7 +61,6 @@ class Coordinator {
 
   void dispatch();
   bool assignWork(WorkerInfo& worker);
-  bool heldByAnotherWorker(const WorkerInfo& worker, uint64_t job, uint32_t cell) const;
   // Requeues a failed lease; fails the job once its cell has failed too often.
   void recordCellFailure(const LeaseRecord& lease, const std::string& message);
   void advanceIfPhaseDone(uint64_t job);

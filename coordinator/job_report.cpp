@@ -11,6 +11,8 @@
 namespace portico {
 
 namespace {
+constexpr size_t kListedCells = 16;   // per worker, in status
+
 int64_t get(const std::map<std::string, int64_t>& counters, const std::string& name) {
   auto it = counters.find(name);
   return it == counters.end() ? 0 : it->second;
@@ -120,12 +122,15 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
   nlohmann::json list = nlohmann::json::array();
   for (const auto& [identity, w] : workers) {
+    // The most recently leased first, at most kListedCells of them.
     nlohmann::json cells = nlohmann::json::array();
-    for (const auto& [job, cell] : w.recentCells) cells.push_back({{"job", job}, {"cell", cell}});
+    for (auto it = w.cells.cells().rbegin(); it != w.cells.cells().rend() && cells.size() < kListedCells; ++it)
+      cells.push_back({{"job", it->job}, {"cell", it->cell}});
     list.push_back({{"name", w.name},
                     {"idle", w.idle()},
                     {"leases", w.leases.size()},
                     {"last_seen_ms_ago", nowMs - w.lastSeenMs},
+                    {"cells_held", w.cells.size()},
                     {"cells", cells}});
   }
   return list;

@@ -9,6 +9,8 @@
 #include <string>
 #include <utility>
 
+#include "coordinator/cell_cache_model.h"
+
 namespace portico {
 
 struct WorkerInfo {
@@ -32,8 +34,7 @@ struct WorkerInfo {
   static constexpr size_t kLeasesInFlight = 2;
   bool wantsLease() const { return ready && leases.size() < kLeasesInFlight; }
   bool idle() const { return ready && leases.empty(); }   // shown by status
-  // Cells it recently traced, newest at the back: it likely still caches them.
-  std::deque<std::pair<uint64_t, uint32_t>> recentCells;
+  CellCacheModel cells;        // what it likely holds
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.
   double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured
   int64_t lastResultMs = 0;   // when its last Result arrived
@@ -60,20 +61,7 @@ struct WorkerInfo {
     workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
   }
 
-  bool holds(uint64_t job, uint32_t cell) const {
-    for (const auto& c : recentCells)
-      if (c.first == job && c.second == cell) return true;
-    return false;
-  }
-  void remember(uint64_t job, uint32_t cell, size_t capacity = 32) {
-    for (auto it = recentCells.begin(); it != recentCells.end(); ++it)
-      if (it->first == job && it->second == cell) {
-        recentCells.erase(it);
-        break;
-      }
-    recentCells.emplace_back(job, cell);
-    while (recentCells.size() > capacity) recentCells.pop_front();
-  }
+  bool holds(uint64_t job, uint32_t cell) const { return cells.holds(job, cell); }
 };
 
 using WorkerRegistry = std::map<std::string, WorkerInfo>;

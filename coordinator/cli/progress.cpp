@@ -53,8 +53,8 @@ std::string describeStatus(const nlohmann::json& s) {
   if (s.contains("workers")) {
     text += fmt::format("workers: {}\n", s["workers"].size());
     for (const auto& w : s["workers"]) {
-      text += fmt::format("  {} {} ({} leases), holds", w.value("name", "?"), w.value("idle", false) ? "idle" : "busy",
-                          w.value("leases", 0));
+      text += fmt::format("  {} {} ({} leases), holds {} cells, recent:", w.value("name", "?"),
+                          w.value("idle", false) ? "idle" : "busy", w.value("leases", 0), w.value("cells_held", 0));
       for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", 0));
       text += "\n";
     }

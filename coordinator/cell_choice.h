@@ -1,0 +1,36 @@
+// Which cell an idle worker's next lease is about: the scheduling half of
+// memory coherence (DESIGN.md, "Scheduling").
+#pragma once
+
+#include <vector>
+
+#include "common/scene/scene_types.h"
+#include "coordinator/job_store.h"
+#include "coordinator/worker_registry.h"
+
+namespace portico {
+
+// Every cell with work is loaded by some worker sooner or later, so a cell
+// nobody holds costs nothing extra whichever worker takes it, and whenever:
+// ranking it below held cells deferred big cells (450 K triangles) to the
+// end of a photon pass, where they ran alone. What costs is a second copy:
+// a cell another worker holds is read and built again, about
+// kLoadSecondsPerTriangle per triangle, worth that many rays (or photons)
+// at this worker's speed, and its later work is then split between two
+// caches. Each candidate is valued at its pending work less that cost; the
+// best value wins (on a tie, one the worker holds). A large queue is thus
+// split only when it outweighs the second load, and small cells, cheap to
+// load twice, are shared when a worker would otherwise wait.
+//
+// `candidates`: non-empty, ranked by pending work (JobStore::pendingCells);
+// only those of the first candidate's job are considered. `cells`: that
+// job's scene's cells.
+const PendingCell& chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
+                              const WorkerInfo& worker, const WorkerRegistry& workers);
+
+// Load time per triangle: a grid build and the cell's read (bench pipeline, octagon).
+constexpr double kLoadSecondsPerTriangle = 1e-7;
+// A worker's speed before its first timed lease (work per second).
+constexpr double kUnmeasuredWorkPerSecond = 2e5;
+
+}  // namespace portico
