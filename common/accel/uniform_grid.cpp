@@ -675,7 +675,11 @@ template <bool AnyHit>
       aheadEnter[count] = fixedVoxelEnter;
       aheadExit[count] = fixedVoxelExit;
       aheadLeft[count] = left;
-      count += int((occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1);
+      const uint32_t isOccupied = uint32_t(occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1;
+      // The row of an occupied voxel, fetched now: it is read once the walk
+      // has gathered its voxels. (An empty voxel's points at the first row.)
+      __builtin_prefetch(rows + (uint32_t(index) & -isOccupied));
+      count += int(isOccupied);
       if (fixedVoxelExit >= fixedExit) {
         walking = false;
         break;
