@@ -7,6 +7,8 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
+#include <vector>
 #include <zmq.hpp>
 
 #include "common/net/message.h"
@@ -70,8 +72,15 @@ class Coordinator {
   void releaseWorker(const std::string& identity, const std::string& reason);
   JobContext& context(uint64_t job);
 
-  void send(const std::string& identity, capnp::MallocMessageBuilder& message);
+  // Within a round, messages wait in the outbox until the round commits.
+  void send(const std::string& identity, capnp::MallocMessageBuilder& message,
+            net::Encoding encoding = net::Encoding::Packed);
+  void transmit(const std::string& identity, zmq::message_t& frame);
   void sendError(const std::string& identity, const std::string& error);
+  // One round of the loop: what arrived, timers and scheduling, in one
+  // transaction, committed before anything is sent (runRound in coordinator.cpp).
+  void runRound();
+  void undoRound();
 
   CoordinatorOptions options_;
   JobStore store_;
@@ -84,6 +93,13 @@ class Coordinator {
   std::map<uint64_t, JobContext> jobs_;
   std::atomic<bool> stopping_{false};
   int64_t lastHeartbeatMs_ = 0;
+  // The round in progress: its replies, the leases it opened (worker
+  // identity, lease) and the leases whose Results it applied, for undoing
+  // the coordinator's memory if its commit fails.
+  bool inRound_ = false;
+  std::vector<std::pair<std::string, zmq::message_t>> outbox_;
+  std::vector<std::pair<std::string, uint64_t>> roundLeases_;
+  std::vector<uint64_t> roundResults_;
 };
 
 int64_t nowMs();

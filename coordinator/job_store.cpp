@@ -45,6 +45,8 @@ JobStore::JobStore(const std::string& path)
   migrate();
   sqlite3_rollback_hook(
       db_.handle(), [](void* store) { static_cast<JobStore*>(store)->unleasedValid_ = false; }, this);
+  // The hook misses a nested transaction's partial rollback (a savepoint).
+  db_.setRollbackListener([this] { unleasedValid_ = false; });
 }
 
 void JobStore::loadUnleasedWork() {

@@ -131,7 +131,8 @@ class JobStore {
   // lease was a sixth of the coordinator's time in a photon pass. One entry
   // per cell with work, not per batch, so the coordinator's memory stays
   // bounded by the building, not the queues. Rebuilt from the table at
-  // start, after any rollback (sqlite3_rollback_hook) and after the rare
+  // start, after any rollback (sqlite3_rollback_hook, and the
+  // database's listener for a nested transaction's) and after the rare
   // bulk changes (requeues, dropped jobs).
   struct Unleased {
     int64_t work = 0;

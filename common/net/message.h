@@ -4,7 +4,8 @@
 // they are), which costs neither side a pass over the bytes. Workers send
 // their Results flat: their bulk is photon records and rays, which packing
 // shrinks by a tenth at the price of a byte-by-byte pass on each side (5 %
-// of a photon pass's CPU). Everything else goes packed.
+// of a photon pass's CPU). The coordinator's leases (rays) and photon
+// replies (records) go flat for the same reason. Everything else goes packed.
 #pragma once
 
 #include <capnp/message.h>

@@ -7,6 +7,7 @@
 #include <sqlite3.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -64,22 +65,39 @@ class Database {
   void setUserVersion(int version);
   const std::string& path() const { return path_; }
   sqlite3* handle() const { return db_; }
+  bool inTransaction() const { return sqlite3_get_autocommit(db_) == 0; }
+
+  // Called after any Transaction rolls back, a nested one's partial
+  // rollback included (SQLite's own rollback hook sees only whole
+  // transactions): for caches of what the database holds.
+  void setRollbackListener(std::function<void()> listener) { rollbackListener_ = std::move(listener); }
+  void notifyRollback() const {
+    if (rollbackListener_) rollbackListener_();
+  }
 
  private:
+  std::function<void()> rollbackListener_;
   std::string path_;
   sqlite3* db_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;
 };
 
 // BEGIN IMMEDIATE ... COMMIT; rolls back when destroyed uncommitted.
+// Inside another transaction it is a savepoint instead: commit() releases
+// it into the enclosing transaction, which makes it durable (or not) with
+// the rest, and destruction uncommitted undoes only what was done since it
+// began.
 class Transaction {
  public:
   explicit Transaction(Database& db);
   ~Transaction();
+  Transaction(const Transaction&) = delete;
+  Transaction& operator=(const Transaction&) = delete;
   void commit();
 
  private:
   Database& db_;
+  bool nested_ = false;
   bool done_ = false;
 };
 

@@ -39,6 +39,49 @@ TEST_F(JobStoreTest, RefusesANewerSchema) {
   EXPECT_THROW(JobStore{path_.string()}, std::runtime_error);
 }
 
+// The coordinator's rounds (one commit for all it handled) nest each
+// handler's transaction as a savepoint: a rejected Result is undone alone,
+// and the unleased-work cache follows the partial rollback, which SQLite's
+// rollback hook does not report.
+TEST_F(JobStoreTest, ANestedTransactionRollsBackAloneAndTheCacheFollows) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  {
+    sql::Transaction round(store.database());
+    store.addBatch(job, 3, 0, BatchKind::Rays, 100, "kept");
+    {
+      sql::Transaction rejected(store.database());
+      store.addBatch(job, 3, 0, BatchKind::Rays, 40, "undone");
+      store.addBatch(job, 5, 0, BatchKind::Rays, 70, "undone too");
+      EXPECT_EQ(store.pendingCells(10).size(), 2u);
+    }   // destroyed uncommitted: a savepoint rolled back
+    auto pending = store.pendingCells(10);
+    ASSERT_EQ(pending.size(), 1u);
+    EXPECT_EQ(pending[0].work, 100);
+    {
+      sql::Transaction accepted(store.database());
+      store.addBatch(job, 4, 0, BatchKind::Rays, 10, "released");
+      accepted.commit();   // into the round, not yet durable
+    }
+    EXPECT_TRUE(store.database().inTransaction());
+    round.commit();
+  }
+  EXPECT_FALSE(store.database().inTransaction());
+  {
+    sql::Transaction round(store.database());
+    store.addBatch(job, 6, 0, BatchKind::Rays, 999, "lost with its round");
+    sql::Transaction inner(store.database());
+    inner.commit();
+  }   // the round rolls back, taking the committed savepoint with it
+  JobStore reopened(path_.string());
+  auto pending = reopened.pendingCells(10);
+  ASSERT_EQ(pending.size(), 2u);
+  EXPECT_EQ(pending[0].cell, 3u);
+  EXPECT_EQ(pending[0].work, 100);
+  EXPECT_EQ(pending[1].cell, 4u);
+  EXPECT_EQ(store.pendingCells(10).size(), 2u);   // the first store's cache agrees
+}
+
 TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
   JobStore store(path_.string());
   const uint64_t job = store.createJob("spec", 1);
