@@ -7,6 +7,7 @@
 #include <chrono>
 #include <deque>
 #include <fstream>
+#include <mutex>
 #include <future>
 #include <optional>
 #include <thread>
@@ -52,12 +53,12 @@ uint64_t residentBytes() {
   return resident * uint64_t(::sysconf(_SC_PAGESIZE));
 }
 
-// A lease in progress: the decoded Assign (owning its bytes) and the tracing thread.
-struct ActiveLease {
+// A lease the main thread readies before it is traced: it may wait for the
+// store's files (--cache-dir) or the cell's photons (render phase).
+struct PreparingLease {
   std::unique_ptr<net::Decoded> assign;
   bool waitingForPhotons = false;
   bool waitingForFile = false;
-  std::future<std::unique_ptr<capnp::MallocMessageBuilder>> result;
 };
 }  // namespace
 
@@ -88,23 +89,62 @@ WorkerSession::WorkerSession(WorkerOptions options)
 
 WorkerSession::~WorkerSession() { ::close(leaseDone_); }
 
-std::future<std::unique_ptr<capnp::MallocMessageBuilder>> WorkerSession::startLease(
-    wire::Assign::Reader assign, std::optional<std::vector<StoredPhoton>> photons) {
-  return std::async(std::launch::async, [this, assign, p = std::move(photons)]() mutable {
-    // Denormals cost ~100x per operation and never matter to a picture.
-    _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
-    _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
-    struct Notify {
-      int fd;
-      ~Notify() {
-        const uint64_t one = 1;
-        (void)!::write(fd, &one, sizeof one);
-      }
-    } notify{leaseDone_};
+FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::optional<std::vector<StoredPhoton>> photons) {
+  FinishedLease done;
+  try {
+    auto assign = decoded.envelope().getAssign();
+    done.lease = assign.getLease();
     const std::string store = assign.getSpec().getStore();
-    return runLease(cache_, chooser_, assign, std::move(p), mirror_ ? mirror_->localDirectory(store) : store,
-                    options_.forwardRays);
-  });
+    done.message = runLease(cache_, chooser_, assign, std::move(photons),
+                            mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays);
+  } catch (const std::exception& e) {
+    done.error = e.what();
+  } catch (const kj::Exception& e) {
+    done.error = fmt::format("malformed lease: {}", e.getDescription().cStr());
+  }
+  return done;
+}
+
+// Whether a queued lease can be traced with nothing from the main thread:
+// no store files to fetch, and in the render phase its cell's photon map
+// already cached. Called on the tracing thread, which alone touches the
+// cache while a chain runs.
+bool WorkerSession::readyToTrace(const net::Decoded& decoded) {
+  if (mirror_) return false;
+  auto assign = decoded.envelope().getAssign();
+  return assign.getPhase() != wire::Phase::RENDER || cache_.photonMap(assign.getJob(), assign.getCell()) != nullptr;
+}
+
+// The tracing thread: traces `first`, then, while the next queued lease is
+// ready to trace, that one, and so on. Handing each lease back to the main
+// thread to start the next (a wake-up of the main thread, then a new
+// thread) left the worker idle between leases, half a millisecond or more
+// when the cores were busy: a tenth of a two-worker photon pass, whose
+// leases last a few milliseconds. Each finished lease is handed over at
+// once (leaseDone_), so its Result leaves while the next one is traced.
+void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<std::vector<StoredPhoton>> photons) {
+  // Denormals cost ~100x per operation and never matter to a picture.
+  _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
+  _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+  std::unique_ptr<net::Decoded> assign = std::move(first);
+  while (assign) {
+    FinishedLease done = traceLease(*assign, std::move(photons));
+    photons.reset();
+    assign.reset();
+    {
+      std::lock_guard lock(chain_.mutex);
+      chain_.finished.push_back(std::move(done));
+      if (!chain_.queued.empty() && !chain_.abandon && readyToTrace(*chain_.queued.front())) {
+        assign = std::move(chain_.queued.front());
+        chain_.queued.pop_front();
+      } else {
+        chain_.running = false;
+      }
+    }
+    const uint64_t one = 1;
+    (void)!::write(leaseDone_, &one, sizeof one);
+    if (assign) cache_.beginLease();   // what the previous lease pinned may go now
+  }
 }
 
 int WorkerSession::run() {
@@ -129,12 +169,31 @@ int WorkerSession::run() {
     int64_t lastHeard = steadyMs(), lastSent = steadyMs();
     bool welcomed = false;
     uint64_t coordinatorMaxFrame = 0;   // 0: not announced (an older coordinator)
-    std::optional<ActiveLease> lease;
-    // Leases that came while one runs: the coordinator sends the next lease
-    // before this one ends (WorkerInfo::kLeasesInFlight), so that it is
-    // here the moment the tracing thread is free.
-    std::deque<std::unique_ptr<net::Decoded>> queued;
+    // The lease being readied on this thread (not yet traced), and the
+    // tracing thread's chain (chain_: queued leases, finished ones). The
+    // coordinator sends the next lease before this one ends
+    // (WorkerInfo::kLeasesInFlight), so that it is here the moment the
+    // tracing thread is free.
+    std::optional<PreparingLease> lease;
+    std::future<void> tracing;
+    {
+      std::lock_guard lock(chain_.mutex);
+      chain_.queued.clear();
+      chain_.finished.clear();
+      chain_.abandon = false;
+    }
     constexpr size_t kMostQueued = 4;   // more than the coordinator sends: refuse beyond it
+    const auto startTracing = [&](std::optional<std::vector<StoredPhoton>> photons) {
+      {
+        std::lock_guard lock(chain_.mutex);
+        chain_.running = true;
+      }
+      if (tracing.valid()) tracing.wait();   // the previous chain's thread, done but for its return
+      tracing = std::async(std::launch::async, [this, assign = std::move(lease->assign), p = std::move(photons)]() mutable {
+        runChain(std::move(assign), std::move(p));
+      });
+      lease.reset();
+    };
     bool reconnect = false;
     const auto sendFailure = [&](uint64_t leaseId, const std::string& why) {
       capnp::MallocMessageBuilder message;
@@ -182,7 +241,7 @@ int WorkerSession::run() {
         lease->waitingForPhotons = true;
         return;
       }
-      lease->result = startLease(assign, std::nullopt);
+      startTracing(std::nullopt);
     };
 
     while (!stopping_ && !reconnect) {
@@ -194,13 +253,9 @@ int WorkerSession::run() {
         if (e.num() == EINTR) continue;   // a signal: the loop condition decides
         throw;
       }
-      // The eventfd is written as the lease's function returns, a moment
-      // before its future is ready: then wait for the future, don't poll again.
-      bool leaseFinished = false;
-      if (items[1].revents & ZMQ_POLLIN) {
+      if (items[1].revents & ZMQ_POLLIN) {   // leases finished: collected below
         uint64_t count;
         (void)!::read(leaseDone_, &count, sizeof count);
-        leaseFinished = true;
       }
       const int64_t now = steadyMs();
       if (items[0].revents & ZMQ_POLLIN) {
@@ -221,13 +276,16 @@ int WorkerSession::run() {
                 break;
               case wire::Envelope::HEARTBEAT: break;
               case wire::Envelope::ASSIGN: {
-                if (queued.size() >= kMostQueued) {
+                std::unique_lock lock(chain_.mutex);
+                if (chain_.queued.size() >= kMostQueued) {
+                  const size_t queuedNow = chain_.queued.size();
+                  lock.unlock();
                   spdlog::warn("coordinator assigned lease {} with {} leases queued; refusing",
-                               envelope.getAssign().getLease(), queued.size());
+                               envelope.getAssign().getLease(), queuedNow);
                   sendFailure(envelope.getAssign().getLease(), "worker busy");
                   break;
                 }
-                queued.push_back(std::make_unique<net::Decoded>(frame));   // started below
+                chain_.queued.push_back(std::make_unique<net::Decoded>(frame));   // started below
                 break;
               }
               case wire::Envelope::FILE_CHUNK: {
@@ -258,7 +316,7 @@ int WorkerSession::run() {
                 cache_.makeRoom(records * sizeof(StoredPhoton));
                 auto photons = decodePhotons(reply, assign.getSpec().getGather() > 0);
                 lease->waitingForPhotons = false;
-                lease->result = startLease(assign, std::move(photons));
+                startTracing(std::move(photons));
                 break;
               }
               case wire::Envelope::ERROR:
@@ -276,18 +334,24 @@ int WorkerSession::run() {
         }
       }
 
-      if (lease && lease->result.valid() &&
-          (leaseFinished || lease->result.wait_for(std::chrono::seconds(0)) == std::future_status::ready)) {
-        const uint64_t leaseId = lease->assign->envelope().getAssign().getLease();
+      // Finished leases: their Results (or failures) go out.
+      std::deque<FinishedLease> finished;
+      bool tracingNow;
+      {
+        std::lock_guard lock(chain_.mutex);
+        finished.swap(chain_.finished);
+        tracingNow = chain_.running;
+      }
+      for (FinishedLease& done : finished) {
         try {
-          auto message = lease->result.get();
+          if (!done.error.empty()) throw std::runtime_error(done.error);
           if (options_.crashAfterLeases > 0 && leasesDone + 1 >= options_.crashAfterLeases) {
             // Fault injection: die holding a finished lease, as a crash
             // mid-lease would; the coordinator must requeue it.
-            spdlog::warn("fault injection: exiting with lease {} unreported", leaseId);
+            spdlog::warn("fault injection: exiting with lease {} unreported", done.lease);
             std::_Exit(3);
           }
-          zmq::message_t frame = net::encode(*message, net::Encoding::Flat);
+          zmq::message_t frame = net::encode(*done.message, net::Encoding::Flat);
           // libzmq would drop a longer frame and the connection with it, and
           // the lease would come back forever: report it as a failure instead.
           if (coordinatorMaxFrame && frame.size() > coordinatorMaxFrame)
@@ -297,23 +361,29 @@ int WorkerSession::run() {
           sendFrame(socket, frame);
           ++leasesDone;
         } catch (const std::exception& e) {
-          spdlog::error("lease {} failed: {}", leaseId, e.what());
-          sendFailure(leaseId, e.what());
+          spdlog::error("lease {} failed: {}", done.lease, e.what());
+          sendFailure(done.lease, e.what());
         } catch (const kj::Exception& e) {
-          sendFailure(leaseId, fmt::format("malformed lease: {}", e.getDescription().cStr()));
+          sendFailure(done.lease, fmt::format("malformed lease: {}", e.getDescription().cStr()));
         }
         lastSent = steadyMs();
-        lease.reset();
       }
 
-      // The next queued lease starts as soon as none runs (one that fails
-      // at once, e.g. on a missing file, makes way for the one after it).
-      while (!lease && !queued.empty()) {
-        lease.emplace();
-        lease->assign = std::move(queued.front());
-        queued.pop_front();
+      // With no chain tracing and none being readied, the next queued lease
+      // is readied here (one that fails at once, e.g. on a missing file,
+      // makes way for the one after it).
+      while (!lease && !tracingNow) {
+        {
+          std::lock_guard lock(chain_.mutex);
+          if (chain_.queued.empty()) break;
+          lease.emplace();
+          lease->assign = std::move(chain_.queued.front());
+          chain_.queued.pop_front();
+        }
         cache_.beginLease();   // what the previous lease pinned may go now
         advanceLease();
+        std::lock_guard lock(chain_.mutex);
+        tracingNow = chain_.running;
       }
       if (now - lastSent >= options_.heartbeatMs) {
         sendSimple(socket, [](wire::Envelope::Builder e) { e.setHeartbeat(); });
@@ -325,15 +395,25 @@ int WorkerSession::run() {
         else   // a refused CURVE handshake looks exactly like this
           spdlog::warn("no answer from {} within {:.0f} s: wrong --keys, or coordinator down; retrying in {} ms",
                        options_.connect, (now - lastHeard) / 1000.0, backoffMs);
-        // A lease in flight is abandoned: the coordinator requeues it.
-        if (lease && lease->result.valid()) lease->result.wait();
+        // Leases in flight are abandoned: the coordinator requeues them.
+        {
+          std::lock_guard lock(chain_.mutex);
+          chain_.queued.clear();
+          chain_.abandon = true;
+        }
+        if (tracing.valid()) tracing.wait();
         std::this_thread::sleep_for(std::chrono::milliseconds(backoffMs));
         backoffMs = std::min(backoffMs * 2, 30000);
         reconnect = true;
       }
     }
     if (!reconnect) {
-      if (lease && lease->result.valid()) lease->result.wait();
+      {
+        std::lock_guard lock(chain_.mutex);
+        chain_.queued.clear();
+        chain_.abandon = true;
+      }
+      if (tracing.valid()) tracing.wait();
       sendSimple(socket, [](wire::Envelope::Builder e) { e.setGoodbye(); });
     }
   }

@@ -8,6 +8,8 @@
 
 #include <atomic>
 #include <cstdint>
+#include <deque>
+#include <mutex>
 #include <future>
 #include <memory>
 #include <optional>
@@ -15,6 +17,7 @@
 #include <vector>
 
 #include "common/net/curve_keys.h"
+#include "common/net/message.h"
 #include "proto/wire.capnp.h"
 
 #include "worker/accelerator_choice.h"
@@ -45,6 +48,13 @@ struct WorkerOptions {
   int64_t forwardRays = 20000;
 };
 
+// A traced lease: its Result, or why it failed.
+struct FinishedLease {
+  uint64_t lease = 0;
+  std::unique_ptr<capnp::MallocMessageBuilder> message;
+  std::string error;
+};
+
 class WorkerSession {
  public:
   explicit WorkerSession(WorkerOptions options);
@@ -54,16 +64,25 @@ class WorkerSession {
   void stop() { stopping_ = true; }
 
  private:
-  // Traces the lease on its own thread and signals leaseDone_ when finished.
-  std::future<std::unique_ptr<capnp::MallocMessageBuilder>> startLease(
-      wire::Assign::Reader assign, std::optional<std::vector<StoredPhoton>> photons);
+  FinishedLease traceLease(const net::Decoded& assign, std::optional<std::vector<StoredPhoton>> photons);
+  bool readyToTrace(const net::Decoded& assign);
+  // The tracing thread: `first`, then each queued lease ready to trace.
+  void runChain(std::unique_ptr<net::Decoded> first, std::optional<std::vector<StoredPhoton>> photons);
 
   WorkerOptions options_;
   std::unique_ptr<StoreMirror> mirror_;
   std::optional<net::ClientKeys> keys_;
   CellCache cache_;
   AcceleratorChooser chooser_;
-  int leaseDone_;   // eventfd
+  int leaseDone_;   // eventfd: written for each finished lease
+  // Shared by the main thread and the tracing thread, under `mutex`.
+  struct Chain {
+    std::mutex mutex;
+    std::deque<std::unique_ptr<net::Decoded>> queued;   // Assigns not started, oldest first
+    std::deque<FinishedLease> finished;                 // traced, not yet reported
+    bool running = false;                               // a chain is tracing (it alone uses the cache)
+    bool abandon = false;                               // reconnecting or leaving: take no more
+  } chain_;
   std::atomic<bool> stopping_{false};
 };
 
