@@ -89,42 +89,70 @@ void Coordinator::run() {
 // lease, then the Result), each writing its pages to the WAL: a third of
 // the coordinator's CPU in a photon pass, and at the end of a pass, where
 // Results of a few photons each arrive faster than they were committed,
-// the coordinator was what the workers waited for. A round handles all that
-// has arrived, the timers and the scheduling in one transaction (each
+// the coordinator was what the workers waited for. A round takes all that
+// has arrived and makes two transactions of it, whatever the number of
+// messages: the leases refilling the slots that the Results freed, then
+// the messages themselves with the timers and the scheduling (each
 // handler's own transaction nests in it as a savepoint, so a rejected
-// Result still leaves nothing), commits once, and only then sends: no
-// lease, reply or job id leaves before what it refers to is durable.
+// Result still leaves nothing). Each commits before what it sends leaves:
+// no lease, reply or job id goes out before what it refers to is durable.
 void Coordinator::runRound() {
-  inRound_ = true;
-  outbox_.clear();
-  roundLeases_.clear();
-  roundResults_.clear();
-  bool committed = false;
-  try {
-    sql::Transaction round(store_.database());
-    // Drain what arrived, then schedule once.
-    for (int drained = 0; drained < 256; ++drained) {
-      zmq::message_t identity, frame;
-      if (!router_.recv(identity, zmq::recv_flags::dontwait)) break;
-      std::string id(static_cast<const char*>(identity.data()), identity.size());
-      bool garbage = false;
-      if (!identity.more()) garbage = true;
-      else {
-        (void)router_.recv(frame);
-        // A peer that sends more than one frame is not speaking our protocol.
-        while (frame.more()) {
-          zmq::message_t extra;
-          (void)router_.recv(extra);
-          garbage = true;
-          frame.move(extra);
-        }
+  // Drain what arrived.
+  struct Incoming {
+    std::string identity;
+    size_t bytes = 0;
+    std::unique_ptr<net::Decoded> message;
+  };
+  std::vector<Incoming> arrived;
+  for (int drained = 0; drained < 256; ++drained) {
+    zmq::message_t identity, frame;
+    if (!router_.recv(identity, zmq::recv_flags::dontwait)) break;
+    std::string id(static_cast<const char*>(identity.data()), identity.size());
+    bool garbage = false;
+    if (!identity.more()) garbage = true;
+    else {
+      (void)router_.recv(frame);
+      // A peer that sends more than one frame is not speaking our protocol.
+      while (frame.more()) {
+        zmq::message_t extra;
+        (void)router_.recv(extra);
+        garbage = true;
+        frame.move(extra);
       }
-      if (garbage) {
-        spdlog::warn("dropped a message from {}: unexpected frame layout", shortId(id));
-        continue;
-      }
-      handle(id, frame);
     }
+    if (garbage) {
+      spdlog::warn("dropped a message from {}: unexpected frame layout", shortId(id));
+      continue;
+    }
+    try {
+      arrived.push_back({id, frame.size(), std::make_unique<net::Decoded>(frame)});
+    } catch (const kj::Exception& e) {
+      spdlog::warn("dropped a malformed message from {}: {}", shortId(id), e.getDescription().cStr());
+    } catch (const std::exception& e) {
+      spdlog::warn("dropped a message from {}: {}", shortId(id), e.what());
+    }
+  }
+
+  // First the leases of the workers whose Results just came: they go out
+  // before the Results are applied (photon files, queues, counters: the
+  // coordinator's longest step), so that the workers trace meanwhile
+  // instead of waiting for it. A new lease cannot hold these Results'
+  // crossings, not queued yet; any order of leases gives the same bits.
+  bool resultsArrived = false;
+  for (const Incoming& in : arrived) {
+    auto envelope = in.message->envelope();
+    if (envelope.which() != wire::Envelope::RESULT) continue;
+    if (auto worker = workers_.find(in.identity); worker != workers_.end()) {
+      const uint64_t lease = envelope.getResult().getLease();
+      worker->second.recordLease(lease, wallMs());
+      worker->second.leases.erase(lease);
+      resultsArrived = true;
+    }
+  }
+  if (resultsArrived) inRound([&] { dispatch(); });
+
+  inRound([&] {
+    for (const Incoming& in : arrived) handle(in.identity, *in.message, in.bytes);
     security_->logConnectionEvents();
     const int64_t now = nowMs();
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
@@ -137,6 +165,18 @@ void Coordinator::runRound() {
       }
     }
     dispatch();
+  });
+}
+
+void Coordinator::inRound(const std::function<void()>& work) {
+  inRound_ = true;
+  outbox_.clear();
+  roundLeases_.clear();
+  roundResults_.clear();
+  bool committed = false;
+  try {
+    sql::Transaction round(store_.database());
+    work();
     round.commit();
     committed = true;
   } catch (const std::exception& e) {
@@ -174,7 +214,7 @@ void Coordinator::undoRound() {
   }
 }
 
-void Coordinator::handle(const std::string& identity, const zmq::message_t& frame) {
+void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes) {
   const int64_t started = nowMs();
   struct SlowLog {
     int64_t started;
@@ -182,9 +222,8 @@ void Coordinator::handle(const std::string& identity, const zmq::message_t& fram
     ~SlowLog() {
       if (nowMs() - started > 20) spdlog::debug("handling a {} byte message took {} ms", bytes, nowMs() - started);
     }
-  } slowLog{started, frame.size()};
+  } slowLog{started, bytes};
   try {
-    net::Decoded decoded(frame);
     auto envelope = decoded.envelope();
     if (auto it = workers_.find(identity); it != workers_.end()) it->second.lastSeenMs = nowMs();
     switch (envelope.which()) {
@@ -343,22 +382,13 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
 void Coordinator::onResult(const std::string& identity, wire::Result::Reader result) {
   const uint64_t leaseId = result.getLease();
   auto lease = store_.lease(leaseId);
-  auto worker = workers_.find(identity);
-  if (worker != workers_.end()) {
-    worker->second.recordLease(leaseId, wallMs());
-    worker->second.leases.erase(leaseId);
-  }
+  // The worker's lease slot was freed, and refilled, as the Result arrived (runRound).
   // Results are idempotent: one for an unknown, closed or foreign lease is dropped.
   if (!lease || lease->state != "open" || lease->worker != identity) {
     spdlog::info("dropped a result for lease {} (unknown, closed or not this worker's)", leaseId);
     return;
   }
   if (inRound_) roundResults_.push_back(leaseId);
-  // The worker's next lease goes out before this Result is committed: the
-  // commit (the coordinator's longest step) then overlaps the worker's
-  // tracing instead of idling it. The new lease cannot hold this Result's
-  // crossings, which are not queued yet; any order of leases gives the same bits.
-  if (worker != workers_.end() && worker->second.wantsLease()) assignWork(worker->second);
   auto job = store_.job(lease->job);
   const bool active = job && isActive(job->state) && phaseOf(job->state) == lease->phase;
   JobContext* context = nullptr;

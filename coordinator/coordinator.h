@@ -4,6 +4,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -46,7 +47,7 @@ class Coordinator {
     wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
   };
 
-  void handle(const std::string& identity, const zmq::message_t& frame);
+  void handle(const std::string& identity, const net::Decoded& message, size_t bytes);
   void onHello(const std::string& identity, wire::Hello::Reader hello);
   void onReady(const std::string& identity);
   void onResult(const std::string& identity, wire::Result::Reader result);
@@ -80,6 +81,8 @@ class Coordinator {
   // One round of the loop: what arrived, timers and scheduling, in one
   // transaction, committed before anything is sent (runRound in coordinator.cpp).
   void runRound();
+  // Runs `work` in one transaction; sends what it sent once that commits.
+  void inRound(const std::function<void()>& work);
   void undoRound();
 
   CoordinatorOptions options_;
