@@ -322,7 +322,7 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
 
 void Coordinator::dispatch() {
   for (auto& [identity, worker] : workers_) {
-    for (size_t k = 0; k < WorkerInfo::kLeasesInFlight && worker.wantsLease(); ++k)
+    for (size_t k = 0; k < WorkerInfo::kMostLeasesInFlight && worker.wantsLease(); ++k)
       if (!assignWork(worker)) return;   // nothing left to hand out
   }
 }

@@ -32,7 +32,20 @@ struct WorkerInfo {
   // work, often well under the second they may hold, and that round trip
   // was about a fifth of a worker's time in a photon pass.
   static constexpr size_t kLeasesInFlight = 2;
-  bool wantsLease() const { return ready && leases.size() < kLeasesInFlight; }
+  // Tiny leases (the end of a photon pass: a few photons per cell) are
+  // over before the next one can arrive: a worker is kept up to
+  // kMostLeasesInFlight of them while what it holds is under
+  // kQueuedSeconds of its work.
+  static constexpr size_t kMostLeasesInFlight = 8;
+  static constexpr double kQueuedSeconds = 0.005;
+  bool wantsLease() const {
+    if (!ready) return false;
+    if (leases.size() < kLeasesInFlight) return true;
+    if (leases.size() >= kMostLeasesInFlight || workPerSecond <= 0) return false;
+    int64_t held = 0;
+    for (const auto& [id, lease] : leases) held += lease.work;
+    return double(held) < workPerSecond * kQueuedSeconds;
+  }
   bool idle() const { return ready && leases.empty(); }   // shown by status
   CellCacheModel cells;        // what it likely holds
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.

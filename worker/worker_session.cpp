@@ -182,7 +182,7 @@ int WorkerSession::run() {
       chain_.finished.clear();
       chain_.abandon = false;
     }
-    constexpr size_t kMostQueued = 4;   // more than the coordinator sends: refuse beyond it
+    constexpr size_t kMostQueued = 12;   // more than the coordinator sends (kMostLeasesInFlight): refuse beyond it
     const auto startTracing = [&](std::optional<std::vector<StoredPhoton>> photons) {
       {
         std::lock_guard lock(chain_.mutex);

@@ -44,5 +44,22 @@ TEST(WorkerInfo, TimesAQueuedLeaseFromThePreviousResult) {
   EXPECT_EQ(worker.lastResultMs, 300);
 }
 
+// At the end of a photon pass leases hold a few photons and are over before
+// the next could arrive: a worker is kept up to kMostLeasesInFlight of them
+// while they add up to under kQueuedSeconds of its work.
+TEST(WorkerInfo, TakesMoreTinyLeasesWhileTheyAddUpToLittleWork) {
+  WorkerInfo worker;
+  worker.ready = true;
+  worker.workPerSecond = 100000;   // kQueuedSeconds of work: 500 rays
+  worker.leases.emplace(1, WorkerInfo::LeaseInFlight{0, 300});
+  worker.leases.emplace(2, WorkerInfo::LeaseInFlight{0, 150});
+  EXPECT_TRUE(worker.wantsLease());    // 450 rays held
+  worker.leases.emplace(3, WorkerInfo::LeaseInFlight{0, 60});
+  EXPECT_FALSE(worker.wantsLease());   // 510
+  worker.leases.erase(3);
+  for (uint64_t lease = 10; worker.wantsLease(); ++lease) worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{0, 1});
+  EXPECT_EQ(worker.leases.size(), WorkerInfo::kMostLeasesInFlight);
+}
+
 }  // namespace
 }  // namespace portico
