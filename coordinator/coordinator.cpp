@@ -177,6 +177,8 @@ void Coordinator::inRound(const std::function<void()>& work) {
   try {
     sql::Transaction round(store_.database());
     work();
+    if (options_.failCommitsEvery > 0 && !roundResults_.empty() && ++roundTransactions_ % options_.failCommitsEvery == 0)
+      throw std::runtime_error("fault injection: this commit fails");
     round.commit();
     committed = true;
   } catch (const std::exception& e) {
@@ -189,29 +191,39 @@ void Coordinator::inRound(const std::function<void()>& work) {
     undoRound();
     return;
   }
-  for (auto& [identity, frame] : outbox_) transmit(identity, frame);
+  for (Outgoing& out : outbox_) transmit(out.identity, out.frame);
   outbox_.clear();
 }
 
-// The round's transaction rolled back: nothing it sent is sent, the leases
-// it opened never were, and the Results it applied are lost, so their
-// leases (still open in jobs.db) go back to the queue to be traced again.
+// The round's transaction rolled back (a full disk): jobs.db is as it was
+// before the round, and the coordinator's memory is brought back in line
+// with it. The leases the round opened never were: they are not sent, and
+// their workers' slots are free again; a job it created never was: its id
+// is not sent (the client's request times out). Then every lease jobs.db
+// holds open that no worker is known to trace (those whose Results the
+// round applied, those of workers it released) goes back to the queue, to
+// be traced again: the same bits. Replies that read what was committed
+// before the round (photons, files, status, welcomes) still go out: a
+// worker waiting for its photons would otherwise wait forever.
 void Coordinator::undoRound() {
-  outbox_.clear();
+  jobs_.clear();   // a cache: reloaded from jobs.db on demand
   for (const auto& [identity, lease] : roundLeases_)
     if (auto worker = workers_.find(identity); worker != workers_.end()) worker->second.leases.erase(lease);
   try {
     sql::Transaction tx(store_.database());
-    for (uint64_t lease : roundResults_) {
-      auto record = store_.lease(lease);
-      if (record && record->state == "open") store_.requeueLease(lease);
+    for (const LeaseRecord& lease : store_.openLeases()) {
+      auto worker = workers_.find(lease.worker);
+      if (worker == workers_.end() || !worker->second.leases.count(lease.id)) store_.requeueLease(lease.id);
     }
     tx.commit();
   } catch (const std::exception& e) {
-    spdlog::error("could not requeue the results lost with it either ({}); they are requeued when this "
+    spdlog::error("could not requeue the leases lost with it either ({}); they are requeued when this "
                   "coordinator restarts",
                   e.what());
   }
+  for (Outgoing& out : outbox_)
+    if (!out.refersToRound) transmit(out.identity, out.frame);
+  outbox_.clear();
 }
 
 void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes) {
@@ -255,7 +267,9 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
 void Coordinator::send(const std::string& identity, capnp::MallocMessageBuilder& message, net::Encoding encoding) {
   zmq::message_t frame = net::encode(message, encoding);
   if (inRound_) {
-    outbox_.emplace_back(identity, std::move(frame));
+    const auto type = message.getRoot<wire::Envelope>().which();
+    outbox_.push_back({identity, std::move(frame),
+                       type == wire::Envelope::ASSIGN || type == wire::Envelope::SUBMIT_REPLY});
     return;
   }
   transmit(identity, frame);

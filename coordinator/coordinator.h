@@ -29,6 +29,9 @@ struct CoordinatorOptions {
   int64_t maxLeaseWork = 50000;    // most rays per lease; each worker's leases are sized to ~1 s of its measured speed
   int64_t maxCellFailures = 3;     // failed leases of one cell before its job fails
   std::string keysDirectory;       // CURVE keys (`portico keys generate`); required beyond loopback
+  // Fault injection for recovery tests: every Nth transaction of the main
+  // loop (Coordinator::inRound) that applies Results fails to commit (0: never).
+  int64_t failCommitsEvery = 0;
 };
 
 class Coordinator {
@@ -100,7 +103,13 @@ class Coordinator {
   // identity, lease) and the leases whose Results it applied, for undoing
   // the coordinator's memory if its commit fails.
   bool inRound_ = false;
-  std::vector<std::pair<std::string, zmq::message_t>> outbox_;
+  int64_t roundTransactions_ = 0;
+  struct Outgoing {
+    std::string identity;
+    zmq::message_t frame;
+    bool refersToRound;   // a lease or a new job's id: void if the round is undone
+  };
+  std::vector<Outgoing> outbox_;
   std::vector<std::pair<std::string, uint64_t>> roundLeases_;
   std::vector<uint64_t> roundResults_;
 };

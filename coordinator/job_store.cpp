@@ -306,6 +306,14 @@ std::vector<LeaseRecord> JobStore::openLeasesOf(const std::string& worker) {
   return result;
 }
 
+std::vector<LeaseRecord> JobStore::openLeases() {
+  auto& s = db_.prepare("SELECT id, job, cell, phase, worker, attempt, state FROM leases WHERE state = 'open'");
+  std::vector<LeaseRecord> result;
+  while (s.step()) result.push_back(readLease(s));
+  s.reset();
+  return result;
+}
+
 void JobStore::completeLease(uint64_t lease) {
   auto& del = db_.prepare("DELETE FROM batches WHERE lease = ?");
   del.bind(1, int64_t(lease));

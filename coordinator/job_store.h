@@ -86,6 +86,7 @@ class JobStore {
                         std::vector<QueuedBatch>& batches);
   std::optional<LeaseRecord> lease(uint64_t id);
   std::vector<LeaseRecord> openLeasesOf(const std::string& worker);
+  std::vector<LeaseRecord> openLeases();
   // The lease's batches are consumed (deleted) and the lease closed.
   void completeLease(uint64_t lease);
   // The lease's batches go back to the queue. `lost`: its worker died or

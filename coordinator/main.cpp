@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
                  "CURVE keys directory (`portico keys generate`): encrypt, and accept only the keys in "
                  "client.public; required to listen beyond loopback")
       ->check(CLI::ExistingDirectory);
+  app.add_option("--fail-commits-every", options.failCommitsEvery,
+                 "fault injection: every Nth transaction applying Results fails to commit, as on a full disk");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

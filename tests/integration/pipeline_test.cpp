@@ -125,6 +125,32 @@ TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
   EXPECT_EQ(differingFloats(dir_ / "crash.exr", dir_ / "reference.exr"), 0u);
 }
 
+// A commit that fails (a full disk) loses nothing: the coordinator sends
+// nothing of that round, forgets the leases it opened and requeues those
+// whose Results it applied, which are traced again with the same bits.
+TEST_F(Pipeline, FailedCommitsLoseNothingAndChangeNoBit) {
+  const uint64_t photons = 60000;
+  nlohmann::json reference, failing;
+  {
+    LocalCluster cluster(dir_ / "commit-reference", 1);
+    reference = cluster.render(store_, dir_ / "commit-reference.exr", photons, 1);
+  }
+  {
+    ClusterOptions options;
+    options.coordinatorExtra = {"--fail-commits-every", "4"};
+    LocalCluster cluster(dir_ / "commit-failing", 2, {}, options);
+    failing = cluster.render(store_, dir_ / "commit-failing.exr", photons, 1);
+  }
+  ASSERT_EQ(reference.value("state", ""), "done") << reference.dump(2);
+  ASSERT_EQ(failing.value("state", ""), "done") << failing.dump(2);
+  const std::string log = readFile(dir_ / "commit-failing" / "coordinator.log");
+  EXPECT_NE(log.find("fault injection: this commit fails"), std::string::npos);
+  const auto stats = nlohmann::json::parse(readFile(dir_ / "commit-failing.exr.json"));
+  expectConservation(stats);
+  EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "commit-reference.exr.json"))["photons"]);
+  EXPECT_EQ(differingFloats(dir_ / "commit-failing.exr", dir_ / "commit-reference.exr"), 0u);
+}
+
 TEST_F(Pipeline, ACoordinatorKilledMidJobResumesFromJobsDbWithTheSameBits) {
   const uint64_t photons = 60000;
   {
