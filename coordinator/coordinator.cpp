@@ -27,6 +27,11 @@ constexpr size_t kLeaseCandidates = 1024;
 // What a worker's cache holds per byte of a cell's file: the geometry and
 // an accelerator about twice its size (a grid; worker/cell_cache.h).
 constexpr uint64_t kCachedBytesPerFileByte = 3;
+// Photon pass: a lease under this much of its worker's time takes on more of
+// the cells the worker holds, at most kMostCellsPerLease in all.
+constexpr double kSmallLeaseSeconds = 0.01;
+constexpr size_t kMostCellsPerLease = 16;
+constexpr uint32_t kLeaseOwnCell = 0xffffffff;   // Failure.failedCell's default
 
 // Wall-clock for records that outlive the process (job creation, phases).
 int64_t wallMs() {
@@ -352,17 +357,44 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
     return true;
   }
   const PendingCell* chosen = &chooseCell(candidates, job->scene->cells(), worker, workers_);
+  const auto& cells = job->scene->cells();
+  const auto cachedBytes = [&](uint32_t cell) {
+    return cell < cells.size() ? kCachedBytesPerFileByte * cells[cell].byteCount : 0;
+  };
   std::vector<QueuedBatch> batches;
+  std::vector<std::pair<uint32_t, std::vector<QueuedBatch>>> moreCells;
   LeaseRecord opened;
+  int64_t leaseWork = 0;
   {
     sql::Transaction tx(store_.database());
     opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
+    for (const QueuedBatch& batch : batches) leaseWork += batch.work;
+    // Photon pass: a lease of a few photons (the end of the pass) takes on
+    // more of the cells this worker holds, up to kSmallLeaseSeconds of its
+    // work: one round trip and one Result for all of them. Their cache
+    // footprint is capped, so a worker whose cache forgot them (the model
+    // errs) does not pin more than a quarter of its budget reloading them.
+    const int64_t smallLease = int64_t(worker.workPerSecond * kSmallLeaseSeconds);
+    uint64_t extraBytes = 0;
+    if (opened.id && chosen->phase == 0 && leaseWork < smallLease) {
+      for (const PendingCell& c : candidates) {
+        if (leaseWork >= smallLease || moreCells.size() + 1 >= kMostCellsPerLease) break;
+        if (&c == chosen || c.job != chosen->job || c.phase != chosen->phase || !worker.holds(c.job, c.cell) ||
+            failedCells_.count({c.job, c.cell}))
+          continue;
+        if (worker.memoryBytes > 0 && extraBytes + cachedBytes(c.cell) > worker.memoryBytes / 4) continue;
+        std::vector<QueuedBatch> extra;
+        const int64_t added = store_.addToLease(opened.id, c, smallLease - leaseWork, extra);
+        if (extra.empty()) continue;
+        leaseWork += added;
+        extraBytes += cachedBytes(c.cell);
+        moreCells.emplace_back(c.cell, std::move(extra));
+      }
+    }
     tx.commit();
   }
   const uint64_t lease = opened.id;
   if (!lease) return true;
-  int64_t leaseWork = 0;
-  for (const QueuedBatch& batch : batches) leaseWork += batch.work;
   capnp::MallocMessageBuilder message;
   auto assign = message.initRoot<wire::Envelope>().initAssign();
   assign.setLease(lease);
@@ -373,23 +405,32 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   assign.setSpec(job->reader());
   assign.setLeaseWork(leaseWork);
   assign.setCellWork(std::max(chosen->work, leaseWork));
-  auto list = assign.initBatches(static_cast<unsigned>(batches.size()));
-  for (size_t i = 0; i < batches.size(); ++i) {
-    net::PackedReader reader(batches[i].payload.data(), batches[i].payload.size());
-    list.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
+  const auto copyBatches = [](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
+    for (size_t i = 0; i < from.size(); ++i) {
+      net::PackedReader reader(from[i].payload.data(), from[i].payload.size());
+      to.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
+    }
+  };
+  copyBatches(batches, assign.initBatches(static_cast<unsigned>(batches.size())));
+  if (!moreCells.empty()) {
+    auto more = assign.initMoreCells(static_cast<unsigned>(moreCells.size()));
+    for (size_t i = 0; i < moreCells.size(); ++i) {
+      more[unsigned(i)].setCell(moreCells[i].first);
+      copyBatches(moreCells[i].second, more[unsigned(i)].initBatches(static_cast<unsigned>(moreCells[i].second.size())));
+    }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
   worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork});
   if (inRound_) roundLeases_.emplace_back(worker.identity, lease);
-  const auto& cells = job->scene->cells();
-  worker.cells.use(chosen->job, chosen->cell,
-                   chosen->cell < cells.size() ? kCachedBytesPerFileByte * cells[chosen->cell].byteCount : 0);
+  for (const auto& [cell, unused] : moreCells) worker.cells.use(chosen->job, cell, cachedBytes(cell));
+  worker.cells.use(chosen->job, chosen->cell, cachedBytes(chosen->cell));
   if (opened.attempt > 1)
-    spdlog::info("lease {} -> {}: job {} cell {} phase {}, attempt {} ({} batches)", lease, worker.name, chosen->job,
-                 chosen->cell, chosen->phase, opened.attempt, batches.size());
+    spdlog::info("lease {} -> {}: job {} cell {} phase {}, attempt {} ({} batches, {} more cells)", lease,
+                 worker.name, chosen->job, chosen->cell, chosen->phase, opened.attempt, batches.size(),
+                 moreCells.size());
   else
-    spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches)", lease, worker.name, chosen->job,
-                  chosen->cell, chosen->phase, batches.size());
+    spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches, {} more cells)", lease, worker.name,
+                  chosen->job, chosen->cell, chosen->phase, batches.size(), moreCells.size());
   return true;
 }
 
@@ -463,13 +504,20 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
     worker->second.leases.erase(leaseId);
   }
   if (!lease || lease->state != "open" || lease->worker != identity) return;
-  const std::string message = fmt::format("cell {}: {}", lease->cell, failure.getMessage().cStr());
+  // The cell to blame: one of the lease's more cells, when the worker says so.
+  const uint32_t cell = failure.getFailedCell() != kLeaseOwnCell ? failure.getFailedCell() : lease->cell;
+  const std::string message = fmt::format("cell {}: {}", cell, failure.getMessage().cStr());
   spdlog::error("lease {} failed: {}", leaseId, message);
-  recordCellFailure(*lease, message);
+  recordCellFailure(*lease, message, cell);
 }
 
-void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string& message) {
-  const std::string counter = fmt::format("failures.cell.{}", lease.cell);
+void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string& message,
+                                    std::optional<uint32_t> failedCell) {
+  const uint32_t cell = failedCell.value_or(lease.cell);
+  // A cell that failed is not carried in other cells' leases again: its
+  // retries are its own, and its failures do not fail innocent leases.
+  failedCells_.insert({lease.job, cell});
+  const std::string counter = fmt::format("failures.cell.{}", cell);
   int64_t failures;
   {
     sql::Transaction tx(store_.database());

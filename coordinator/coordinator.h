@@ -8,6 +8,8 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <set>
+#include <optional>
 #include <utility>
 #include <vector>
 #include <zmq.hpp>
@@ -68,7 +70,9 @@ class Coordinator {
   void dispatch();
   bool assignWork(WorkerInfo& worker);
   // Requeues a failed lease; fails the job once its cell has failed too often.
-  void recordCellFailure(const LeaseRecord& lease, const std::string& message);
+  // `failedCell`: which of the lease's cells failed (default: its own).
+  void recordCellFailure(const LeaseRecord& lease, const std::string& message,
+                         std::optional<uint32_t> failedCell = std::nullopt);
   void advanceIfPhaseDone(uint64_t job);
   void finishJob(uint64_t job);
   void failJob(uint64_t job, const std::string& error);
@@ -102,6 +106,7 @@ class Coordinator {
   // The round in progress: its replies, the leases it opened (worker
   // identity, lease) and the leases whose Results it applied, for undoing
   // the coordinator's memory if its commit fails.
+  std::set<std::pair<uint64_t, uint32_t>> failedCells_;   // (job, cell) that failed a lease
   bool inRound_ = false;
   int64_t roundTransactions_ = 0;
   struct Outgoing {

@@ -80,6 +80,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                     {"bytes_read", get(counters, "cells.bytes_read")},
                     {"photon_maps_built", get(counters, "photon_maps.built")}};
   stats["leases"] = get(counters, "leases.completed");
+  // Photon-pass leases that carried more cells than their own, and how many.
+  stats["lease_extra_cells"] = get(counters, "leases.extra_cells");
   // Photon passes run again because a photon file was found damaged.
   stats["photon_pass_restarts"] = get(counters, JobStore::kPhotonPassRestarts);
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},

@@ -238,15 +238,15 @@ std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
   return result;
 }
 
-LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
-                                std::vector<QueuedBatch>& batches) {
-  batches.clear();
+// The cell's unleased batches, oldest first, up to maxWork (at least one).
+// Returns their work; `attempt` is one more than the most attempts any had.
+int64_t JobStore::takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches,
+                               uint32_t& attempt) {
   auto& select = db_.prepare(
       "SELECT id, work, payload, attempts FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL "
       "ORDER BY id");
   select.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.phase)).bind(3, int64_t(cell.cell));
   int64_t total = 0;
-  uint32_t attempt = 1;
   while (select.step()) {
     const int64_t work = select.columnInt(1);
     if (!batches.empty() && total + work > maxWork) break;
@@ -258,6 +258,31 @@ LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& work
     total += work;
   }
   select.reset();
+  return total;
+}
+
+// Marks the batches as the lease's, and takes them out of the cell's unleased work.
+void JobStore::markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches,
+                          int64_t work) {
+  auto& mark = db_.prepare("UPDATE batches SET lease = ? WHERE id = ?");
+  for (const QueuedBatch& batch : batches) {
+    mark.bind(1, int64_t(lease)).bind(2, batch.id);
+    mark.run();
+  }
+  if (unleasedValid_) {
+    const auto key = std::make_tuple(cell.job, cell.phase, cell.cell);
+    Unleased& entry = unleased_[key];
+    entry.work -= work;
+    entry.batches -= int64_t(batches.size());
+    if (entry.batches <= 0) unleased_.erase(key);
+  }
+}
+
+LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
+                                std::vector<QueuedBatch>& batches) {
+  batches.clear();
+  uint32_t attempt = 1;
+  const int64_t total = takeUnleased(cell, maxWork, batches, attempt);
   if (batches.empty()) return {};
   auto& insert = db_.prepare(
       "INSERT INTO leases(job, cell, phase, worker, attempt, started_ms, state) VALUES (?, ?, ?, ?, ?, ?, 'open')");
@@ -265,19 +290,17 @@ LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& work
   insert.bind(5, int64_t(attempt)).bind(6, nowMs);
   insert.run();
   const uint64_t lease = db_.lastInsertRowId();
-  auto& mark = db_.prepare("UPDATE batches SET lease = ? WHERE id = ?");
-  for (const QueuedBatch& b : batches) {
-    mark.bind(1, int64_t(lease)).bind(2, b.id);
-    mark.run();
-  }
-  if (unleasedValid_) {
-    const auto key = std::make_tuple(cell.job, cell.phase, cell.cell);
-    Unleased& entry = unleased_[key];
-    entry.work -= total;
-    entry.batches -= int64_t(batches.size());
-    if (entry.batches <= 0) unleased_.erase(key);
-  }
+  markLeased(lease, cell, batches, total);
   return {lease, cell.job, cell.cell, cell.phase, worker, attempt, "open"};
+}
+
+int64_t JobStore::addToLease(uint64_t lease, const PendingCell& cell, int64_t maxWork,
+                             std::vector<QueuedBatch>& batches) {
+  batches.clear();
+  uint32_t attempt = 1;
+  const int64_t total = takeUnleased(cell, maxWork, batches, attempt);
+  if (!batches.empty()) markLeased(lease, cell, batches, total);
+  return total;
 }
 
 namespace {

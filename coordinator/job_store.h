@@ -85,6 +85,10 @@ class JobStore {
   LeaseRecord openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
                         std::vector<QueuedBatch>& batches);
   std::optional<LeaseRecord> lease(uint64_t id);
+  // Photon pass: another cell's unleased batches (up to maxWork, at least
+  // one) join an open lease, which completes or is requeued as one. Returns
+  // their work (0: none pending).
+  int64_t addToLease(uint64_t lease, const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches);
   std::vector<LeaseRecord> openLeasesOf(const std::string& worker);
   std::vector<LeaseRecord> openLeases();
   // The lease's batches are consumed (deleted) and the lease closed.
@@ -125,6 +129,8 @@ class JobStore {
  private:
   void migrate();
   void loadUnleasedWork();
+  int64_t takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches, uint32_t& attempt);
+  void markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches, int64_t work);
   sql::Database db_;
   PhotonFiles photons_;
   // The unleased work per (job, phase, cell), what pendingCells() ranks: kept

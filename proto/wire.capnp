@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 3;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames
+const protocolVersion :UInt32 = 4;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells
 
 enum Phase {
   photons @0;
@@ -137,6 +137,16 @@ struct Assign {
   # leased (this lease included). `--accel auto` predicts a cell's rays from them.
   leaseWork @7 :Int64;
   cellWork @8 :Int64;
+  # Photon pass only: more cells' batches in the same lease, cells the worker
+  # likely holds, traced after `cell`'s (leaseWork counts them). At the end
+  # of a pass each cell holds a few photons; one lease for several of them
+  # is one round trip and one Result instead of one each.
+  moreCells @9 :List(CellBatches);
+}
+
+struct CellBatches {
+  cell @0 :UInt32;
+  batches @1 :List(RayBatch);
 }
 
 struct Result {
@@ -150,6 +160,9 @@ struct Result {
 struct Failure {
   lease @0 :UInt64;
   message @1 :Text;
+  # The cell whose work failed, when it is one of the lease's moreCells
+  # (the default: the lease's own cell).
+  failedCell @2 :UInt32 = 0xffffffff;
 }
 
 struct FetchPhotons {

@@ -36,12 +36,11 @@ std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool i
 
 // `--accel auto`: the cell with the structure the cost model picks for the
 // rays it is expected to trace, rebuilt when a busy cell makes another pay.
-LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneStore& scene,
-                     wire::Assign::Reader assign, bool renderPhase) {
-  const uint32_t cellId = assign.getCell();
+LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneStore& scene, uint32_t cellId,
+                     int64_t cellWork, bool renderPhase) {
   const CellInfo& info = scene.cells()[cellId];
   const CellShape shape = cellShape(double(info.triangleCount), info.bounds);
-  const double expected = chooser.expectedRays(renderPhase, assign.getCellWork());
+  const double expected = chooser.expectedRays(renderPhase, cellWork);
   bool loadedNow = false;
   LoadedCell& cell = cache.cell(scene.directory(), cellId, "auto", [&] {
     loadedNow = true;
@@ -117,7 +116,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   }
   const bool renderPhase = assign.getPhase() == wire::Phase::RENDER;
   const std::string accel = spec.getAccel().size() ? spec.getAccel().cStr() : "grid";
-  LoadedCell& cell = accel == "auto" ? autoCell(cache, chooser, scene, assign, renderPhase)
+  LoadedCell& cell = accel == "auto" ? autoCell(cache, chooser, scene, cellId, assign.getCellWork(), renderPhase)
                                      : cache.cell(store, cellId, accel);
 
   const PhotonMap* indirect = nullptr;
@@ -130,28 +129,54 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
     }
   }
 
-  CellKernel kernel(scene, *cell.tracer, parameters, indirect);
   KernelOutputs out;
-  for (auto batch : assign.getBatches()) {
-    switch (batch.which()) {
-      case wire::RayBatch::EMIT: {
-        auto emit = batch.getEmit();
-        if (emit.getLight() >= scene.lights().size() || scene.lights()[emit.getLight()].cell != cellId)
-          throw std::runtime_error(fmt::format("emission batch names light {}, which is not in cell {}",
-                                               emit.getLight(), cellId));
-        kernel.emitPhotons(emit.getLight(), emit.getFirstPath(), emit.getCount(), emit.getPhotonsOfLight(), out);
-        break;
+  const auto traceBatches = [&](CellKernel& kernel, uint32_t cellId, capnp::List<wire::RayBatch>::Reader batches) {
+    for (auto batch : batches) {
+      switch (batch.which()) {
+        case wire::RayBatch::EMIT: {
+          auto emit = batch.getEmit();
+          if (emit.getLight() >= scene.lights().size() || scene.lights()[emit.getLight()].cell != cellId)
+            throw std::runtime_error(fmt::format("emission batch names light {}, which is not in cell {}",
+                                                 emit.getLight(), cellId));
+          kernel.emitPhotons(emit.getLight(), emit.getFirstPath(), emit.getCount(), emit.getPhotonsOfLight(), out);
+          break;
+        }
+        case wire::RayBatch::CAMERA: {
+          auto camera = batch.getCamera();
+          if (uint64_t(camera.getFirstPixel()) + camera.getPixelCount() > uint64_t(parameters.width) * parameters.height)
+            throw std::runtime_error("camera batch lies outside the image");
+          kernel.generateCameraRays(camera.getFirstPixel(), camera.getPixelCount(), out);
+          break;
+        }
+        case wire::RayBatch::RAYS:
+          for (auto ray : batch.getRays()) kernel.trace(fromWire(ray), out);
+          break;
       }
-      case wire::RayBatch::CAMERA: {
-        auto camera = batch.getCamera();
-        if (uint64_t(camera.getFirstPixel()) + camera.getPixelCount() > uint64_t(parameters.width) * parameters.height)
-          throw std::runtime_error("camera batch lies outside the image");
-        kernel.generateCameraRays(camera.getFirstPixel(), camera.getPixelCount(), out);
-        break;
-      }
-      case wire::RayBatch::RAYS:
-        for (auto ray : batch.getRays()) kernel.trace(fromWire(ray), out);
-        break;
+    }
+  };
+  {
+    CellKernel kernel(scene, *cell.tracer, parameters, indirect);
+    traceBatches(kernel, cellId, assign.getBatches());
+  }
+  // More cells of the photon pass, in the same lease (no photon map needed).
+  if (assign.getMoreCells().size() > 0 && renderPhase)
+    throw std::runtime_error("a render lease with more cells");
+  for (auto more : assign.getMoreCells()) {
+    const uint32_t moreId = more.getCell();
+    if (moreId >= scene.cells().size())
+      throw std::runtime_error(fmt::format("lease names cell {}, which does not exist", moreId));
+    try {
+      int64_t work = 0;
+      for (auto batch : more.getBatches())
+        work += batch.isRays() ? int64_t(batch.getRays().size()) : batch.isEmit() ? int64_t(batch.getEmit().getCount()) : 0;
+      LoadedCell& moreCell = accel == "auto" ? autoCell(cache, chooser, scene, moreId, work, false)
+                                             : cache.cell(store, moreId, accel);
+      CellKernel kernel(scene, *moreCell.tracer, parameters, nullptr);
+      traceBatches(kernel, moreId, more.getBatches());
+    } catch (const std::exception& e) {
+      throw MoreCellError(moreId, e.what());
+    } catch (const kj::Exception& e) {
+      throw MoreCellError(moreId, fmt::format("malformed lease: {}", e.getDescription().cStr()));
     }
   }
 
@@ -198,6 +223,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   named.push_back({"cells.bytes_read", cacheStats.bytesRead});
   named.push_back({"photon_maps.built", cacheStats.photonMapsBuilt});
   named.push_back({"rays.forwarded", forwarded});
+  named.push_back({"leases.extra_cells", int64_t(assign.getMoreCells().size())});
   // Microseconds: most builds take well under a millisecond.
   named.push_back({"time.accel_build_us", std::llround(cacheStats.acceleratorBuildMs * 1e3)});
   // Which structure each cell got (auto's choices): the job's statistics

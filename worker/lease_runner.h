@@ -6,6 +6,8 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "common/transport/cell_kernel.h"
@@ -21,6 +23,13 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
 // of them; the estimate at a camera hit only those that bounced at least
 // once (direct light is sampled with shadow rays instead).
 std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect);
+
+// A failure in one of the lease's more cells (Assign.moreCells): the
+// coordinator blames that cell, not the lease's own.
+struct MoreCellError : std::runtime_error {
+  MoreCellError(uint32_t cell, const std::string& what) : std::runtime_error(what), cell(cell) {}
+  uint32_t cell;
+};
 
 // Throws on failure (bad cell file, bad spec); the caller reports it as a Failure.
 // The scene is read from `storeDirectory` (the job's store, or the worker's

@@ -97,6 +97,9 @@ FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::option
     const std::string store = assign.getSpec().getStore();
     done.message = runLease(cache_, chooser_, assign, std::move(photons),
                             mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays);
+  } catch (const MoreCellError& e) {
+    done.error = e.what();
+    done.failedCell = e.cell;
   } catch (const std::exception& e) {
     done.error = e.what();
   } catch (const kj::Exception& e) {
@@ -195,11 +198,13 @@ int WorkerSession::run() {
       lease.reset();
     };
     bool reconnect = false;
-    const auto sendFailure = [&](uint64_t leaseId, const std::string& why) {
+    const auto sendFailure = [&](uint64_t leaseId, const std::string& why,
+                                 std::optional<uint32_t> failedCell = std::nullopt) {
       capnp::MallocMessageBuilder message;
       auto failure = message.initRoot<wire::Envelope>().initFailure();
       failure.setLease(leaseId);
       failure.setMessage(why);
+      if (failedCell) failure.setFailedCell(*failedCell);
       send(socket, message);
     };
     const auto failLease = [&](const std::string& why) {
@@ -362,7 +367,7 @@ int WorkerSession::run() {
           ++leasesDone;
         } catch (const std::exception& e) {
           spdlog::error("lease {} failed: {}", done.lease, e.what());
-          sendFailure(done.lease, e.what());
+          sendFailure(done.lease, e.what(), done.failedCell);
         } catch (const kj::Exception& e) {
           sendFailure(done.lease, fmt::format("malformed lease: {}", e.getDescription().cStr()));
         }

@@ -53,6 +53,7 @@ struct FinishedLease {
   uint64_t lease = 0;
   std::unique_ptr<capnp::MallocMessageBuilder> message;
   std::string error;
+  std::optional<uint32_t> failedCell;   // one of the lease's more cells, if that is what failed
 };
 
 class WorkerSession {

@@ -82,6 +82,35 @@ TEST_F(JobStoreTest, ANestedTransactionRollsBackAloneAndTheCacheFollows) {
   EXPECT_EQ(store.pendingCells(10).size(), 2u);   // the first store's cache agrees
 }
 
+// The end of a photon pass: one lease carries several cells' batches, and
+// completes or goes back to the queue as one.
+TEST_F(JobStoreTest, ALeaseOfSeveralCellsCompletesAndRequeuesAsOne) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  store.addBatch(job, 3, 0, BatchKind::Rays, 10, "three");
+  store.addBatch(job, 4, 0, BatchKind::Rays, 20, "four a");
+  store.addBatch(job, 4, 0, BatchKind::Rays, 30, "four b");
+  std::vector<QueuedBatch> batches, more;
+  const uint64_t lease = store.openLease({job, 3, 0, 10}, "worker-a", 100, 1, batches).id;
+  EXPECT_EQ(store.addToLease(lease, {job, 4, 0, 50}, 25, more), 20);   // up to the work asked for
+  ASSERT_EQ(more.size(), 1u);
+  EXPECT_EQ(more[0].payload, "four a");
+  auto pending = store.pendingCells(10);
+  ASSERT_EQ(pending.size(), 1u);
+  EXPECT_EQ(pending[0].cell, 4u);
+  EXPECT_EQ(pending[0].work, 30);
+  store.requeueLease(lease);
+  EXPECT_EQ(store.pendingCells(10).size(), 2u);
+  EXPECT_EQ(store.remainingWork(job, 0), 3);
+
+  const uint64_t second = store.openLease({job, 4, 0, 50}, "worker-b", 100, 2, batches).id;
+  EXPECT_EQ(store.addToLease(second, {job, 3, 0, 10}, 100, more), 10);
+  EXPECT_EQ(store.addToLease(second, {job, 5, 0, 0}, 100, more), 0);   // nothing there
+  EXPECT_TRUE(store.pendingCells(10).empty());
+  store.completeLease(second);
+  EXPECT_EQ(store.remainingWork(job, 0), 0);
+}
+
 TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
   JobStore store(path_.string());
   const uint64_t job = store.createJob("spec", 1);
