@@ -22,6 +22,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case wire::Envelope::ASSIGN:
         for (const auto batch : envelope.getAssign().getBatches())
           if (batch.isRays()) (void)fuzz::readRays(batch.getRays());
+        for (const auto more : envelope.getAssign().getMoreCells())
+          for (const auto batch : more.getBatches())
+            if (batch.isRays()) (void)fuzz::readRays(batch.getRays());
         break;
       case wire::Envelope::RESULT:
         for (const auto crossing : envelope.getResult().getCrossings()) (void)fuzz::readRays(crossing.getRays());

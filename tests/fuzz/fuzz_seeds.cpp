@@ -131,6 +131,25 @@ void envelopeSeeds(const fs::path& dir, const std::string& store) {
     put("assign", m);
   }
   {
+    // A photon-pass lease of several cells (protocol 4).
+    capnp::MallocMessageBuilder m;
+    auto assign = m.initRoot<wire::Envelope>().initAssign();
+    assign.setLease(8);
+    assign.setAttempt(1);
+    assign.setJob(1);
+    assign.setPhase(wire::Phase::PHOTONS);
+    assign.setCell(0);
+    fillSpec(assign.initSpec(), store);
+    const auto rays = sampleRays(RayKind::Photon, 3);
+    fillRays(assign.initBatches(1)[0].initRays(static_cast<unsigned>(rays.size())), rays);
+    auto more = assign.initMoreCells(2);
+    for (unsigned c = 0; c < 2; ++c) {
+      more[c].setCell(c + 1);
+      fillRays(more[c].initBatches(1)[0].initRays(static_cast<unsigned>(rays.size())), rays);
+    }
+    put("assign_more_cells", m);
+  }
+  {
     capnp::MallocMessageBuilder m;
     auto result = m.initRoot<wire::Envelope>().initResult();
     result.setLease(7);
