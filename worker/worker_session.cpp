@@ -134,6 +134,11 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
     FinishedLease done = traceLease(*assign, std::move(photons));
     photons.reset();
     assign.reset();
+    // What the finished lease pinned may go now; and before the readiness
+    // check below, whose photon map lookup pins the map for the next lease
+    // (pinned under the old lease, it could be evicted by the next lease's
+    // own cell load, and the lease would fail for want of its photons).
+    cache_.beginLease();
     {
       std::lock_guard lock(chain_.mutex);
       chain_.finished.push_back(std::move(done));
@@ -146,7 +151,6 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
     }
     const uint64_t one = 1;
     (void)!::write(leaseDone_, &one, sizeof one);
-    if (assign) cache_.beginLease();   // what the previous lease pinned may go now
   }
 }
 
