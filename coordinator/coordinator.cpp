@@ -356,8 +356,8 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
     failJob(candidates.front().job, e.what());
     return true;
   }
-  const PendingCell* chosen = &chooseCell(candidates, job->scene->cells(), worker, workers_);
   const auto& cells = job->scene->cells();
+  const PendingCell* chosen = &chooseCell(candidates, cells, worker, workers_);
   const auto cachedBytes = [&](uint32_t cell) {
     return cell < cells.size() ? kCachedBytesPerFileByte * cells[cell].byteCount : 0;
   };

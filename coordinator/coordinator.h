@@ -103,12 +103,13 @@ class Coordinator {
   std::map<uint64_t, JobContext> jobs_;
   std::atomic<bool> stopping_{false};
   int64_t lastHeartbeatMs_ = 0;
-  // The round in progress: its replies, the leases it opened (worker
-  // identity, lease) and the leases whose Results it applied, for undoing
-  // the coordinator's memory if its commit fails.
   std::set<std::pair<uint64_t, uint32_t>> failedCells_;   // (job, cell) that failed a lease
+  // The round in progress (inRound): its replies, and the leases it opened
+  // (worker identity, lease), for undoing the coordinator's memory if its
+  // commit fails; the leases whose Results it applied, which decide where
+  // --fail-commits-every strikes.
   bool inRound_ = false;
-  int64_t roundTransactions_ = 0;
+  int64_t roundTransactions_ = 0;   // rounds that applied Results (fault injection)
   struct Outgoing {
     std::string identity;
     zmq::message_t frame;

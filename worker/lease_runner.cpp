@@ -154,13 +154,13 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
       }
     }
   };
+  // More cells come only in the photon pass (they need no photon map).
+  if (assign.getMoreCells().size() > 0 && renderPhase)
+    throw std::runtime_error("a render lease with more cells");
   {
     CellKernel kernel(scene, *cell.tracer, parameters, indirect);
     traceBatches(kernel, cellId, assign.getBatches());
   }
-  // More cells of the photon pass, in the same lease (no photon map needed).
-  if (assign.getMoreCells().size() > 0 && renderPhase)
-    throw std::runtime_error("a render lease with more cells");
   for (auto more : assign.getMoreCells()) {
     const uint32_t moreId = more.getCell();
     if (moreId >= scene.cells().size())
