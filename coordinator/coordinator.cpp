@@ -198,6 +198,11 @@ void Coordinator::inRound(const std::function<void()>& work) {
   }
   for (Outgoing& out : outbox_) transmit(out.identity, out.frame);
   outbox_.clear();
+  try {
+    store_.reclaimBatchFiles();
+  } catch (const std::exception& e) {
+    spdlog::warn("could not delete consumed batch files ({}); trying again after the next commit", e.what());
+  }
 }
 
 // The round's transaction rolled back (a full disk): jobs.db is as it was
@@ -365,7 +370,7 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   std::vector<std::pair<uint32_t, std::vector<QueuedBatch>>> moreCells;
   LeaseRecord opened;
   int64_t leaseWork = 0;
-  {
+  try {
     sql::Transaction tx(store_.database());
     opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
     for (const QueuedBatch& batch : batches) leaseWork += batch.work;
@@ -392,6 +397,12 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
       }
     }
     tx.commit();
+  } catch (const DamagedFileError& e) {
+    // Queued rays lost under a committed row (an operating-system crash, or
+    // someone wrote to the file): nothing was leased. The passes are
+    // deterministic, so the job starts over rather than fail.
+    restartPhotonPass(chosen->job, e.what());
+    return true;
   }
   const uint64_t lease = opened.id;
   if (!lease) return true;
@@ -688,7 +699,7 @@ void Coordinator::advanceIfPhaseDone(uint64_t jobId) {
   auto job = store_.job(jobId);
   if (!job || !isActive(job->state)) return;
   const int phase = phaseOf(job->state);
-  if (store_.remainingWork(jobId, phase) > 0 || store_.openLeaseCount(jobId) > 0) return;
+  if (store_.hasRemainingWork(jobId, phase) || store_.openLeaseCount(jobId) > 0) return;
   const int64_t now = wallMs();
   JobContext* ctx;
   try {

@@ -1,8 +1,11 @@
 #include "coordinator/job_store.h"
 
+#include "common/util/crc32c.h"
+
 #include <fmt/format.h>
 
 #include <sqlite3.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cstring>
@@ -28,15 +31,25 @@ JobState jobStateFromString(std::string_view text) {
   throw std::runtime_error(fmt::format("jobs.db: unknown job state '{}'", text));
 }
 
-JobStore::JobStore(const std::string& path)
+JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
     : db_(path, sql::Database::Mode::ReadWriteCreate),
-      photons_(path + "-photons", [this](uint64_t job) {
-        auto& s = db_.prepare("SELECT COALESCE(MAX(file_offset + file_size), 0) FROM photons WHERE job = ?");
-        s.bind(1, int64_t(job));
+      photons_(path + "-photons", AppendFiles::Naming::PerJob, "photon batch",
+               [this](AppendFiles::Key file) {
+                 auto& s = db_.prepare("SELECT COALESCE(MAX(file_offset + file_size), 0) FROM photons WHERE job = ?");
+                 s.bind(1, int64_t(file.first));
+                 const int64_t end = s.step() ? s.columnInt(0) : 0;
+                 s.reset();
+                 return end;
+               }),
+      batches_(path + "-batches", AppendFiles::Naming::PerSegment, "ray batch", [this](AppendFiles::Key file) {
+        auto& s = db_.prepare(
+            "SELECT COALESCE(MAX(file_offset + file_size), 0) FROM batches WHERE job = ? AND file_segment = ?");
+        s.bind(1, int64_t(file.first)).bind(2, int64_t(file.second));
         const int64_t end = s.step() ? s.columnInt(0) : 0;
         s.reset();
         return end;
-      }) {
+      }),
+      batchSegmentBytes_(batchSegmentBytes) {
   db_.exec("PRAGMA journal_mode = WAL");
   // NORMAL is durable across process crashes in WAL mode (only an OS crash
   // can lose the last commits), which is the failure portico guards against.
@@ -47,6 +60,9 @@ JobStore::JobStore(const std::string& path)
       db_.handle(), [](void* store) { static_cast<JobStore*>(store)->unleasedValid_ = false; }, this);
   // The hook misses a nested transaction's partial rollback (a savepoint).
   db_.setRollbackListener([this] { unleasedValid_ = false; });
+  // Files left by an earlier run: those no row refers to go.
+  for (const AppendFiles::Key& file : batches_.filesOnDisk()) reclaimCandidates_.insert(file);
+  reclaimBatchFiles();
 }
 
 void JobStore::loadUnleasedWork() {
@@ -145,6 +161,77 @@ void JobStore::migrate() {
     db_.setUserVersion(3);
     tx.commit();
   }
+  if (version < 4) {
+    // Ray batch payloads move to append-only files too (rows written before
+    // keep their blob: file_segment NULL), and the files' checksum becomes
+    // CRC-32C (hardware on x86-64): the photon rows' CRCs are recomputed.
+    sql::Transaction tx(db_);
+    db_.exec(R"sql(
+      ALTER TABLE batches ADD COLUMN file_segment INTEGER;
+      ALTER TABLE batches ADD COLUMN file_offset INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE batches ADD COLUMN file_size INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE batches ADD COLUMN file_crc INTEGER NOT NULL DEFAULT 0;
+    )sql");
+    rechecksumPhotonFiles();
+    // Closed leases leave no row any more: the table holds the open ones,
+    // a handful, and needs no index (two fewer index updates per lease).
+    // Ids must still never repeat (a late Result names its lease by id):
+    // AUTOINCREMENT, from the highest id ever given.
+    db_.exec(R"sql(
+      CREATE TABLE leases_v4 (
+        id INTEGER PRIMARY KEY AUTOINCREMENT,
+        job INTEGER NOT NULL REFERENCES jobs(id),
+        cell INTEGER NOT NULL,
+        phase INTEGER NOT NULL,
+        worker TEXT NOT NULL,
+        attempt INTEGER NOT NULL,
+        started_ms INTEGER NOT NULL,
+        state TEXT NOT NULL
+      );
+      INSERT INTO leases_v4 SELECT id, job, cell, phase, worker, attempt, started_ms, state FROM leases
+        WHERE state = 'open';
+      DELETE FROM sqlite_sequence WHERE name = 'leases_v4';
+      INSERT INTO sqlite_sequence(name, seq) SELECT 'leases_v4', COALESCE(MAX(id), 0) FROM leases;
+      DROP TABLE leases;
+      ALTER TABLE leases_v4 RENAME TO leases;
+    )sql");
+    db_.setUserVersion(4);
+    tx.commit();
+  }
+}
+
+// Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
+// its CRC-32C. A batch that is already damaged (or unreadable) gets a CRC no
+// read will match, so that it is still reported as damaged, never blessed.
+void JobStore::rechecksumPhotonFiles() {
+  struct Row {
+    int64_t id;
+    uint64_t job;
+    FileExtent extent;
+  };
+  std::vector<Row> rows;
+  auto& select = db_.prepare(
+      "SELECT id, job, file_offset, file_size, file_crc FROM photons WHERE file_offset IS NOT NULL ORDER BY id");
+  while (select.step())
+    rows.push_back({select.columnInt(0), uint64_t(select.columnInt(1)),
+                    {select.columnInt(2), select.columnInt(3), uint32_t(select.columnInt(4))}});
+  select.reset();
+  auto& update = db_.prepare("UPDATE photons SET file_crc = ? WHERE id = ?");
+  for (const Row& row : rows) {
+    uint32_t crc;
+    try {
+      const std::string bytes = photons_.readUnchecked({row.job, 0}, row.extent);
+      const uint32_t zlibCrc =
+          uint32_t(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(bytes.data()), uInt(bytes.size())));
+      crc = crc32c(bytes.data(), bytes.size());
+      if (zlibCrc != row.extent.crc) crc = ~crc;
+    } catch (const DamagedFileError&) {
+      crc = ~row.extent.crc;   // past the end: the read fails anyway
+    }
+    update.bind(1, int64_t(crc)).bind(2, row.id);
+    update.run();
+  }
+  for (const Row& row : rows) photons_.forget({row.job, 0});
 }
 
 uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
@@ -190,18 +277,49 @@ std::vector<JobRecord> JobStore::jobs(bool activeOnly) {
 
 void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error) {
   const bool finished = !isActive(state);
+  if (finished) {
+    // Its batch files go once the end is committed (reclaimBatchFiles); a
+    // rollback that keeps the job alive reopens them where they stood.
+    const auto segment = batchSegments_.find(job);
+    if (segment != batchSegments_.end()) {
+      batches_.forget({job, segment->second});
+      reclaimCandidates_.insert({job, segment->second});
+      batchSegments_.erase(segment);
+    }
+  }
   auto& s = db_.prepare(
       "UPDATE jobs SET state = ?, error = ?, phase_started_ms = ?, finished_ms = ? WHERE id = ?");
   s.bind(1, toString(state)).bind(2, error).bind(3, nowMs).bind(4, finished ? nowMs : int64_t(0)).bind(5, int64_t(job));
   s.run();
 }
 
+uint32_t JobStore::batchSegment(uint64_t job) {
+  if (auto it = batchSegments_.find(job); it != batchSegments_.end()) return it->second;
+  // The last segment a committed row refers to; later ones (rolled to, then
+  // emptied, before a restart) were deleted at start.
+  auto& s = db_.prepare("SELECT COALESCE(MAX(file_segment), 0) FROM batches WHERE job = ?");
+  s.bind(1, int64_t(job));
+  const uint32_t segment = s.step() ? uint32_t(s.columnInt(0)) : 0;
+  s.reset();
+  return batchSegments_[job] = segment;
+}
+
 void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work,
                         std::string_view payload) {
-  auto& s = db_.prepare("INSERT INTO batches(job, cell, phase, kind, work, payload) VALUES (?, ?, ?, ?, ?, ?)");
+  const uint32_t segment = batchSegment(job);
+  const FileExtent extent = batches_.append({job, segment}, payload);
+  auto& s = db_.prepare(
+      "INSERT INTO batches(job, cell, phase, kind, work, payload, file_segment, file_offset, file_size, file_crc) "
+      "VALUES (?, ?, ?, ?, ?, x'', ?, ?, ?, ?)");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, int64_t(phase)).bind(4, int64_t(kind)).bind(5, work);
-  s.bindBlob(6, payload.data(), payload.size());
+  s.bind(6, int64_t(segment)).bind(7, extent.offset).bind(8, extent.size).bind(9, int64_t(extent.crc));
   s.run();
+  if (batches_.end({job, segment}) >= batchSegmentBytes_) {
+    // The next batch opens a new segment; this one goes once its rows are consumed.
+    batches_.forget({job, segment});
+    reclaimCandidates_.insert({job, segment});
+    batchSegments_[job] = segment + 1;
+  }
   if (unleasedValid_) {
     Unleased& entry = unleased_[{job, phase, cell}];
     entry.work += work;
@@ -242,22 +360,35 @@ std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
 // Returns their work; `attempt` is one more than the most attempts any had.
 int64_t JobStore::takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches,
                                uint32_t& attempt) {
+  // Where each batch lies first (rows of schema version 3 and older hold it
+  // as a blob), then the reads, so that a damaged file leaves no statement open.
   auto& select = db_.prepare(
-      "SELECT id, work, payload, attempts FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL "
-      "ORDER BY id");
+      "SELECT id, work, attempts, file_segment IS NULL, payload, file_segment, file_offset, file_size, file_crc "
+      "FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL ORDER BY id");
   select.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.phase)).bind(3, int64_t(cell.cell));
+  const size_t first = batches.size();
+  std::vector<std::pair<uint32_t, FileExtent>> places;   // (segment, extent) of each batch taken
   int64_t total = 0;
   while (select.step()) {
     const int64_t work = select.columnInt(1);
-    if (!batches.empty() && total + work > maxWork) break;
-    auto blob = select.columnBlob(2);
-    const uint32_t attempts = uint32_t(select.columnInt(3));
-    batches.push_back(
-        {select.columnInt(0), work, std::string(reinterpret_cast<const char*>(blob.data()), blob.size()), attempts});
+    if (batches.size() > first && total + work > maxWork) break;
+    const uint32_t attempts = uint32_t(select.columnInt(2));
+    QueuedBatch& batch = batches.emplace_back(QueuedBatch{select.columnInt(0), work, {}, attempts});
+    if (select.columnInt(3) != 0) {
+      auto blob = select.columnBlob(4);
+      batch.payload.assign(reinterpret_cast<const char*>(blob.data()), blob.size());
+      places.push_back({0, {-1, 0, 0}});
+    } else {
+      places.push_back({uint32_t(select.columnInt(5)),
+                        {select.columnInt(6), select.columnInt(7), uint32_t(select.columnInt(8))}});
+    }
     attempt = std::max(attempt, attempts + 1);
     total += work;
   }
   select.reset();
+  for (size_t i = 0; i < places.size(); ++i)
+    if (places[i].second.offset >= 0)
+      batches[first + i].payload = batches_.read({cell.job, places[i].first}, places[i].second);
   return total;
 }
 
@@ -341,7 +472,7 @@ void JobStore::completeLease(uint64_t lease) {
   auto& del = db_.prepare("DELETE FROM batches WHERE lease = ?");
   del.bind(1, int64_t(lease));
   del.run();
-  auto& close = db_.prepare("UPDATE leases SET state = 'done' WHERE id = ?");
+  auto& close = db_.prepare("DELETE FROM leases WHERE id = ?");
   close.bind(1, int64_t(lease));
   close.run();
 }
@@ -351,7 +482,7 @@ void JobStore::requeueLease(uint64_t lease, bool lost) {
   auto& release = db_.prepare("UPDATE batches SET lease = NULL, attempts = attempts + ? WHERE lease = ?");
   release.bind(1, int64_t(lost ? 1 : 0)).bind(2, int64_t(lease));
   release.run();
-  auto& close = db_.prepare("UPDATE leases SET state = 'requeued' WHERE id = ? AND state = 'open'");
+  auto& close = db_.prepare("DELETE FROM leases WHERE id = ?");
   close.bind(1, int64_t(lease));
   close.run();
 }
@@ -359,8 +490,8 @@ void JobStore::requeueLease(uint64_t lease, bool lost) {
 int JobStore::requeueAllOpenLeases() {
   unleasedValid_ = false;
   sql::Transaction tx(db_);
-  db_.exec("UPDATE batches SET lease = NULL WHERE lease IN (SELECT id FROM leases WHERE state = 'open')");
-  db_.exec("UPDATE leases SET state = 'requeued' WHERE state = 'open'");
+  db_.exec("UPDATE batches SET lease = NULL WHERE lease IS NOT NULL");
+  db_.exec("DELETE FROM leases");
   const int changed = static_cast<int>(db_.changes());
   tx.commit();
   return changed;
@@ -373,6 +504,14 @@ int64_t JobStore::remainingWork(uint64_t job, int phase) {
   const int64_t n = s.columnInt(0);
   s.reset();
   return n;
+}
+
+bool JobStore::hasRemainingWork(uint64_t job, int phase) {
+  auto& s = db_.prepare("SELECT EXISTS (SELECT 1 FROM batches WHERE job = ? AND phase = ?)");
+  s.bind(1, int64_t(job)).bind(2, int64_t(phase));
+  const bool any = s.step() && s.columnInt(0) != 0;
+  s.reset();
+  return any;
 }
 
 int64_t JobStore::openLeaseCount(uint64_t job) {
@@ -399,7 +538,7 @@ void JobStore::dropJobWork(uint64_t job) {
   auto& del = db_.prepare("DELETE FROM batches WHERE job = ?");
   del.bind(1, int64_t(job));
   del.run();
-  auto& close = db_.prepare("UPDATE leases SET state = 'requeued' WHERE job = ? AND state = 'open'");
+  auto& close = db_.prepare("DELETE FROM leases WHERE job = ?");
   close.bind(1, int64_t(job));
   close.run();
 }
@@ -416,7 +555,7 @@ void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   counters.run();
   addCounter(job, kPhotonPassRestarts, 1);
   setJobState(job, JobState::Photons, nowMs);
-  photons_.forget(job);
+  photons_.forget({job, 0});
 }
 
 void JobStore::addCounter(uint64_t job, std::string_view name, int64_t delta) {
@@ -437,7 +576,7 @@ std::map<std::string, int64_t> JobStore::counters(uint64_t job) {
 }
 
 void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload) {
-  const PhotonExtent extent = photons_.append(job, payload);
+  const FileExtent extent = photons_.append({job, 0}, payload);
   auto& s = db_.prepare(
       "INSERT INTO photons(job, cell, count, payload, file_offset, file_size, file_crc) VALUES (?, ?, ?, x'', ?, ?, ?)");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bind(4, extent.offset).bind(5, extent.size);
@@ -450,7 +589,7 @@ std::vector<std::string> JobStore::photonBatches(uint64_t job, uint32_t cell) {
   // as a blob), then the reads, so that a damaged file leaves no statement open.
   struct Stored {
     std::optional<std::string> blob;
-    PhotonExtent extent;
+    FileExtent extent;
   };
   std::vector<Stored> stored;
   auto& s = db_.prepare(
@@ -471,7 +610,7 @@ std::vector<std::string> JobStore::photonBatches(uint64_t job, uint32_t cell) {
   std::vector<std::string> result;
   result.reserve(stored.size());
   for (Stored& batch : stored)
-    result.push_back(batch.blob ? std::move(*batch.blob) : photons_.read(job, batch.extent));
+    result.push_back(batch.blob ? std::move(*batch.blob) : photons_.read({job, 0}, batch.extent));
   return result;
 }
 
@@ -511,6 +650,32 @@ std::vector<FixedRgb> JobStore::film(uint64_t job, uint64_t pixelCount) {
   }
   s.reset();
   return result;
+}
+
+}  // namespace portico
+
+namespace portico {
+
+void JobStore::reclaimBatchFiles() {
+  if (reclaimCandidates_.empty()) return;
+  auto& used = db_.prepare("SELECT EXISTS (SELECT 1 FROM batches WHERE job = ? AND file_segment = ?)");
+  for (auto it = reclaimCandidates_.begin(); it != reclaimCandidates_.end();) {
+    const auto& [job, segment] = *it;
+    const auto current = batchSegments_.find(job);
+    if (current != batchSegments_.end() && current->second == segment) {
+      it = reclaimCandidates_.erase(it);   // written to again (a rollback revived the job)
+      continue;
+    }
+    used.bind(1, int64_t(job)).bind(2, int64_t(segment));
+    const bool referenced = used.step() && used.columnInt(0) != 0;
+    used.reset();
+    if (referenced) {
+      ++it;
+    } else {
+      batches_.remove(*it);
+      it = reclaimCandidates_.erase(it);
+    }
+  }
 }
 
 }  // namespace portico

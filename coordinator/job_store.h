@@ -1,11 +1,13 @@
 // jobs.db: everything the coordinator knows, so that a coordinator killed at
 // any moment and restarted on the same file resumes every unfinished job.
 // SQLite in WAL mode, owned by the coordinator alone; the caller groups
-// calls into one transaction per Result (sql::Transaction).
+// calls into transactions (sql::Transaction). The payloads of photon and ray
+// batches live in append-only files beside it (append_files.h).
 #pragma once
 
 #include <cstdint>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -15,7 +17,7 @@
 
 #include "common/transport/film.h"
 #include "common/util/sqlite.h"
-#include "coordinator/photon_files.h"
+#include "coordinator/append_files.h"
 
 namespace portico {
 
@@ -62,8 +64,12 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 3;
-  explicit JobStore(const std::string& path);
+  static constexpr int kSchemaVersion = 4;
+  // A job's ray batch file starts a new segment past this size, so that
+  // consumed segments can be deleted while the job runs.
+  static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
+  // batchSegmentBytes: kBatchSegmentBytes but in tests.
+  explicit JobStore(const std::string& path, int64_t batchSegmentBytes = kBatchSegmentBytes);
 
   sql::Database& database() { return db_; }
 
@@ -73,6 +79,8 @@ class JobStore {
   void setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error = "");
 
   // work: rays the batch holds or will generate (the scheduler's measure).
+  // The payload goes to the job's batch file at once (a view into a Result
+  // will do), its place into jobs.db with the caller's transaction.
   void addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work, std::string_view payload);
   int64_t queuedRays(uint64_t job, int phase);   // rays in flight between cells
   // Cells with unleased work in their job's current phase, most work first.
@@ -81,9 +89,11 @@ class JobStore {
   // (always at least one batch), fills `batches` and returns the lease (id
   // 0: nothing queued for the cell). Its attempt is 1 + the most times any
   // of its batches was in a lost lease: a batch that keeps killing workers
-  // shows in the attempt.
+  // shows in the attempt. Throws DamagedFileError when a batch's bytes are
+  // lost (then nothing is leased, once the caller's transaction rolls back).
   LeaseRecord openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
                         std::vector<QueuedBatch>& batches);
+  // An open lease (a closed one, completed or requeued, leaves no row).
   std::optional<LeaseRecord> lease(uint64_t id);
   // Photon pass: another cell's unleased batches (up to maxWork, at least
   // one) join an open lease, which completes or is requeued as one. Returns
@@ -91,7 +101,7 @@ class JobStore {
   int64_t addToLease(uint64_t lease, const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches);
   std::vector<LeaseRecord> openLeasesOf(const std::string& worker);
   std::vector<LeaseRecord> openLeases();
-  // The lease's batches are consumed (deleted) and the lease closed.
+  // The lease's batches are consumed (deleted) and the lease closed (its row deleted).
   void completeLease(uint64_t lease);
   // The lease's batches go back to the queue. `lost`: its worker died or
   // left holding it, which counts against the batches' attempts (a failure
@@ -101,6 +111,7 @@ class JobStore {
   // (not an attempt of theirs: the coordinator, not the cell, was lost).
   int requeueAllOpenLeases();
   int64_t remainingWork(uint64_t job, int phase);   // queued or leased batches
+  bool hasRemainingWork(uint64_t job, int phase);   // remainingWork > 0, without counting
   int64_t openLeaseCount(uint64_t job);
   std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
   void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
@@ -120,7 +131,14 @@ class JobStore {
   void addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload);
   // In the order they were added; throws naming the file when one is damaged.
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
-  std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf(job); }
+  std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf({job, 0}); }
+  std::filesystem::path batchFile(uint64_t job, uint32_t segment) const { return batches_.pathOf({job, segment}); }
+
+  // Deletes the batch files no row refers to any more: segments a job has
+  // moved past, and the files of jobs that ended. Call it outside any
+  // transaction (what it reads must be committed), e.g. after each commit;
+  // it costs nothing when no file became a candidate.
+  void reclaimBatchFiles();
 
   static constexpr uint32_t kFilmChunkPixels = 4096;
   void addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb>& sums, uint64_t pixelCount);
@@ -131,8 +149,16 @@ class JobStore {
   void loadUnleasedWork();
   int64_t takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches, uint32_t& attempt);
   void markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches, int64_t work);
+  void rechecksumPhotonFiles();
+  uint32_t batchSegment(uint64_t job);
   sql::Database db_;
-  PhotonFiles photons_;
+  AppendFiles photons_;
+  AppendFiles batches_;
+  // The segment each job appends to (loaded from jobs.db on first use), and
+  // files to delete once no committed row refers to them.
+  int64_t batchSegmentBytes_;
+  std::map<uint64_t, uint32_t> batchSegments_;
+  std::set<AppendFiles::Key> reclaimCandidates_;
   // The unleased work per (job, phase, cell), what pendingCells() ranks: kept
   // beside the batches table because grouping every queued batch on each
   // lease was a sixth of the coordinator's time in a photon pass. One entry

@@ -130,8 +130,11 @@ int Database::userVersion() {
 
 void Database::setUserVersion(int version) { exec(fmt::format("PRAGMA user_version = {}", version)); }
 
+// Begin and commit run as prepared statements: the coordinator opens a few
+// (nested) transactions per Result, and parsing their SQL each time was ~3 %
+// of its CPU in a photon pass.
 Transaction::Transaction(Database& db) : db_(db), nested_(db.inTransaction()) {
-  db_.exec(nested_ ? "SAVEPOINT nested" : "BEGIN IMMEDIATE");
+  db_.prepare(nested_ ? "SAVEPOINT nested" : "BEGIN IMMEDIATE").run();
 }
 
 Transaction::~Transaction() {
@@ -147,7 +150,7 @@ Transaction::~Transaction() {
 }
 
 void Transaction::commit() {
-  db_.exec(nested_ ? "RELEASE nested" : "COMMIT");
+  db_.prepare(nested_ ? "RELEASE nested" : "COMMIT").run();
   done_ = true;
 }
 

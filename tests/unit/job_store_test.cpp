@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <random>
 
+#include <zlib.h>
+
 namespace portico {
 namespace {
 
@@ -21,6 +23,7 @@ class JobStoreTest : public ::testing::Test {
   void TearDown() override {
     for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path_.string() + suffix);
     std::filesystem::remove_all(path_.string() + "-photons");
+    std::filesystem::remove_all(path_.string() + "-batches");
   }
   std::filesystem::path path_;
 };
@@ -130,14 +133,22 @@ TEST_F(JobStoreTest, LeasesTakeBatchesUpToTheWorkLimitAndCompleteOrRequeue) {
   EXPECT_EQ(store.pendingCells(10)[0].work, 300);   // leased batches are not pending
 
   store.requeueLease(lease);
-  EXPECT_EQ(store.lease(lease)->state, "requeued");
+  EXPECT_FALSE(store.lease(lease));   // a closed lease leaves no row: its Result is dropped
+  EXPECT_EQ(store.openLeaseCount(job), 0);
   EXPECT_EQ(store.pendingCells(10)[0].work, 500);
 
   const uint64_t second = store.openLease(store.pendingCells(10)[0], "worker-b", 1000, 3, batches).id;
   EXPECT_EQ(batches.size(), 5u);
   store.completeLease(second);
-  EXPECT_EQ(store.lease(second)->state, "done");
+  EXPECT_FALSE(store.lease(second));
+  // Ids never repeat, though closed leases leave no row: a late Result must
+  // not pass for a new lease's.
+  const uint64_t third = store.openLease(store.pendingCells(10)[0], "worker-b", 1000, 4, batches).id;
+  EXPECT_GT(third, second);
+  store.requeueLease(third);
   EXPECT_EQ(store.remainingWork(job, 0), 1);   // cell 4's batch
+  EXPECT_TRUE(store.hasRemainingWork(job, 0));
+  EXPECT_FALSE(store.hasRemainingWork(job, 1));
   EXPECT_EQ(store.queuedRays(job, 0), 50);
 }
 
@@ -152,11 +163,13 @@ TEST_F(JobStoreTest, RestartRequeuesOpenLeases) {
   }
   JobStore reopened(path_.string());
   EXPECT_EQ(reopened.requeueAllOpenLeases(), 1);
-  EXPECT_EQ(reopened.lease(lease)->state, "requeued");
+  EXPECT_FALSE(reopened.lease(lease));
   EXPECT_EQ(reopened.pendingCells(1).size(), 1u);
   // The coordinator, not the cell, was lost: the next lease is still a first attempt.
   std::vector<QueuedBatch> batches;
-  EXPECT_EQ(reopened.openLease(reopened.pendingCells(1)[0], "next", 100, 2, batches).attempt, 1u);
+  const LeaseRecord next = reopened.openLease(reopened.pendingCells(1)[0], "next", 100, 2, batches);
+  EXPECT_EQ(next.attempt, 1u);
+  EXPECT_GT(next.id, lease);   // the requeued lease's id is not given again
 }
 
 TEST_F(JobStoreTest, LeasesLostWithTheirWorkerCountAsAttemptsOfTheirBatches) {
@@ -185,10 +198,11 @@ TEST_F(JobStoreTest, LeasesLostWithTheirWorkerCountAsAttemptsOfTheirBatches) {
 TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
   {
     JobStore store(path_.string());
-    const uint64_t job = store.createJob("spec", 1);
-    store.addBatch(job, 2, 0, BatchKind::Rays, 40, "queued");
-    // Back to version 1's shape: no attempts column, photons as blobs.
-    store.database().exec("ALTER TABLE batches DROP COLUMN attempts");
+    store.createJob("spec", 1);
+    // Back to version 1's shape: no attempts column, ray and photon batches as blobs.
+    for (const char* column : {"attempts", "file_segment", "file_offset", "file_size", "file_crc"})
+      store.database().exec(std::string("ALTER TABLE batches DROP COLUMN ") + column);
+    store.database().exec("INSERT INTO batches(job, cell, phase, kind, work, payload) VALUES (1, 2, 0, 0, 40, 'queued')");
     for (const char* column : {"file_offset", "file_size", "file_crc"})
       store.database().exec(std::string("ALTER TABLE photons DROP COLUMN ") + column);
     store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
@@ -412,6 +426,169 @@ TEST_F(JobStoreTest, PhotonBlobsOfAnEarlierSchemaAreStillRead) {
   s.run();
   store.addPhotons(job, 5, 1, std::string(24, 'n'));
   EXPECT_EQ(store.photonBatches(job, 5), (std::vector<std::string>{old, std::string(24, 'n')}));
+}
+
+namespace {
+void overwriteByte(const std::filesystem::path& file, long offset) {
+  std::FILE* f = std::fopen(file.c_str(), "r+b");
+  ASSERT_NE(f, nullptr) << file;
+  std::fseek(f, offset, SEEK_SET);
+  const int old = std::fgetc(f);
+  std::fseek(f, offset, SEEK_SET);
+  std::fputc(old ^ 0x5a, f);
+  std::fclose(f);
+}
+}  // namespace
+
+TEST_F(JobStoreTest, RayBatchesLiveInFilesBesideTheDatabaseAndOnlyCommittedOnesCount) {
+  const std::string first(300, 'a'), lost(500, 'b'), second(70, 'c');
+  std::filesystem::path file;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    file = store.batchFile(job, 0);
+    store.addBatch(job, 3, 0, BatchKind::Rays, 10, first);
+    {
+      // A Result whose transaction rolls back: its bytes are written, no row.
+      sql::Transaction tx(store.database());
+      store.addBatch(job, 3, 0, BatchKind::Rays, 20, lost);
+    }
+    EXPECT_EQ(std::filesystem::file_size(file), first.size() + lost.size());
+    auto& s = store.database().prepare("SELECT SUM(LENGTH(payload)), COUNT(*) FROM batches");
+    ASSERT_TRUE(s.step());
+    EXPECT_EQ(s.columnInt(0), 0);   // where the bytes lie, not the bytes
+    EXPECT_EQ(s.columnInt(1), 1);
+    s.reset();
+  }
+  JobStore reopened(path_.string());
+  // A new coordinator writes over the bytes of the uncommitted batch.
+  reopened.addBatch(1, 3, 0, BatchKind::Rays, 5, second);
+  EXPECT_EQ(std::filesystem::file_size(file), first.size() + second.size());
+  std::vector<QueuedBatch> batches;
+  const LeaseRecord lease = reopened.openLease(reopened.pendingCells(1)[0], "w", 1000, 2, batches);
+  ASSERT_EQ(batches.size(), 2u);
+  EXPECT_EQ(batches[0].payload, first);
+  EXPECT_EQ(batches[1].payload, second);
+  EXPECT_EQ(lease.cell, 3u);
+}
+
+TEST_F(JobStoreTest, ConsumedBatchSegmentsAndAnEndedJobsFilesAreDeleted) {
+  // Segments of 1000 bytes: the second batch fills the first segment.
+  JobStore store(path_.string(), 1000);
+  const uint64_t job = store.createJob("spec", 1);
+  store.addBatch(job, 1, 0, BatchKind::Rays, 10, std::string(600, '1'));
+  store.addBatch(job, 1, 0, BatchKind::Rays, 10, std::string(600, '2'));
+  store.addBatch(job, 2, 0, BatchKind::Rays, 10, std::string(600, '3'));
+  EXPECT_TRUE(std::filesystem::exists(store.batchFile(job, 0)));
+  EXPECT_EQ(std::filesystem::file_size(store.batchFile(job, 1)), 600u);
+  store.reclaimBatchFiles();
+  EXPECT_TRUE(std::filesystem::exists(store.batchFile(job, 0)));   // its rows are still queued
+
+  std::vector<QueuedBatch> batches;
+  const LeaseRecord first = store.openLease({job, 1, 0, 20}, "w", 1000, 2, batches);
+  ASSERT_EQ(batches.size(), 2u);
+  EXPECT_EQ(batches[1].payload, std::string(600, '2'));
+  store.reclaimBatchFiles();
+  EXPECT_TRUE(std::filesystem::exists(store.batchFile(job, 0)));   // leased is not consumed
+  store.completeLease(first.id);
+  store.reclaimBatchFiles();
+  EXPECT_FALSE(std::filesystem::exists(store.batchFile(job, 0)));
+  EXPECT_TRUE(std::filesystem::exists(store.batchFile(job, 1)));   // still written to
+
+  const LeaseRecord second = store.openLease({job, 2, 0, 10}, "w", 1000, 3, batches);
+  EXPECT_EQ(batches.at(0).payload, std::string(600, '3'));
+  store.completeLease(second.id);
+  {
+    // An end that rolls back: the job goes on, and what it queues next is kept.
+    sql::Transaction tx(store.database());
+    store.setJobState(job, JobState::Done, 4);
+  }
+  store.reclaimBatchFiles();
+  store.addBatch(job, 2, 0, BatchKind::Rays, 10, "after");
+  store.reclaimBatchFiles();
+  const LeaseRecord third = store.openLease({job, 2, 0, 10}, "w", 1000, 5, batches);
+  EXPECT_EQ(batches.at(0).payload, "after");
+  store.completeLease(third.id);
+  // The committed end deletes every file of the job.
+  store.setJobState(job, JobState::Done, 6);
+  store.reclaimBatchFiles();
+  EXPECT_TRUE(std::filesystem::is_empty(store.batchFile(job, 0).parent_path()));
+}
+
+TEST_F(JobStoreTest, BatchFilesNoRowRefersToAreDeletedAtStart) {
+  std::filesystem::path kept, orphan;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    store.addBatch(job, 1, 0, BatchKind::Rays, 10, "kept");
+    kept = store.batchFile(job, 0);
+    orphan = store.batchFile(job + 5, 2);
+  }
+  std::FILE* f = std::fopen(orphan.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fputs("left by a job whose rows are gone", f);
+  std::fclose(f);
+  const std::filesystem::path stranger = orphan.parent_path() / "notes.txt";
+  std::fclose(std::fopen(stranger.c_str(), "wb"));
+  JobStore reopened(path_.string());
+  EXPECT_TRUE(std::filesystem::exists(kept));
+  EXPECT_FALSE(std::filesystem::exists(orphan));
+  EXPECT_TRUE(std::filesystem::exists(stranger));   // not a name the store writes
+}
+
+TEST_F(JobStoreTest, ADamagedRayBatchIsReportedNamingTheFileAndNothingIsLeased) {
+  std::filesystem::path file;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    file = store.batchFile(job, 0);
+    store.addBatch(job, 4, 0, BatchKind::Rays, 10, std::string(200, 'x'));
+  }
+  overwriteByte(file, 50);
+  JobStore reopened(path_.string());
+  std::vector<QueuedBatch> batches;
+  try {
+    sql::Transaction tx(reopened.database());
+    reopened.openLease(reopened.pendingCells(1).at(0), "w", 100, 2, batches);
+    FAIL() << "a damaged batch was leased";
+  } catch (const DamagedFileError& e) {
+    EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(reopened.openLeases().empty());
+  ASSERT_EQ(reopened.pendingCells(1).size(), 1u);
+  EXPECT_EQ(reopened.pendingCells(1)[0].cell, 4u);
+}
+
+TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageVisible) {
+  const std::string good(240, 'g'), bad(240, 'b');
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    store.addPhotons(job, 1, 10, good);
+    store.addPhotons(job, 2, 10, bad);
+    // Back to version 3: zlib's CRC-32 in the rows, no file columns in batches.
+    for (const char* column : {"file_segment", "file_offset", "file_size", "file_crc"})
+      store.database().exec(std::string("ALTER TABLE batches DROP COLUMN ") + column);
+    store.database().exec(
+        "INSERT INTO batches(job, cell, phase, kind, work, payload) VALUES (1, 6, 0, 0, 40, 'version three')");
+    auto& update = store.database().prepare("UPDATE photons SET file_crc = ? WHERE cell = ?");
+    for (const auto& [cell, bytes] : {std::pair{1, good}, std::pair{2, bad}}) {
+      const uint32_t zlibCrc = uint32_t(crc32(0, reinterpret_cast<const Bytef*>(bytes.data()), uInt(bytes.size())));
+      update.bind(1, int64_t(zlibCrc)).bind(2, int64_t(cell));
+      update.run();
+    }
+    store.database().setUserVersion(3);
+  }
+  overwriteByte(path_.string() + "-photons/job-1.bin", 240 + 7);   // the second batch
+  JobStore migrated(path_.string());
+  EXPECT_EQ(migrated.database().userVersion(), 4);
+  EXPECT_EQ(migrated.photonBatches(1, 1), std::vector<std::string>{good});
+  EXPECT_THROW(migrated.photonBatches(1, 2), DamagedFileError);
+  std::vector<QueuedBatch> batches;
+  migrated.openLease(migrated.pendingCells(1).at(0), "w", 100, 2, batches);
+  ASSERT_EQ(batches.size(), 1u);
+  EXPECT_EQ(batches[0].payload, "version three");
 }
 
 }  // namespace

@@ -1,0 +1,100 @@
+// What the coordinator stores by the megabyte, as append-only files beside
+// jobs.db: the photons a job deposits (`jobs.db-photons/job-J.bin`) and the
+// rays queued between cells (`jobs.db-batches/job-J-S.bin`, in segments).
+// jobs.db keeps, in the same transaction as the rest of a Result, only where
+// each batch lies (segment, offset, size, CRC-32C).
+//
+// Why not blobs in jobs.db: these bytes are most of what a photon pass moves
+// (~70 MB of deposits and ~60 MB of crossing rays per million photons), and
+// SQLite wrote each of them twice (the WAL, then the checkpoint into the
+// database), freed their pages again when a lease consumed them, and read
+// them back, all on the coordinator's one thread, which with two workers on
+// two cores shares their cores (docs/pipeline-benchmark.md). Here each byte
+// is written once.
+//
+// Crash safety. A batch is written before the transaction that records it
+// commits. A coordinator killed in between leaves bytes no row refers to:
+// the next coordinator starts each file at the end of its last recorded
+// batch (truncating the rest) and writes over them. A Result whose
+// transaction rolls back leaves a gap nobody reads. An operating-system
+// crash can lose file pages that a committed row points to (SQLite's WAL
+// and these files reach the disk independently): the CRC catches it on
+// reading, and the read throws DamagedFileError naming the file, so a
+// damaged batch is never used; the coordinator then runs the job's photon
+// pass again (Coordinator::restartPhotonPass), which gives the same photons,
+// bit for bit.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace portico {
+
+struct FileExtent {
+  int64_t offset = 0;
+  int64_t size = 0;
+  uint32_t crc = 0;   // CRC-32C (common/util/crc32c.h)
+};
+
+// A file's bytes are not what its row says: lost, cut short, or changed.
+struct DamagedFileError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+class AppendFiles {
+ public:
+  // A file: the job's, and which of its segments (always 0 when unsegmented).
+  using Key = std::pair<uint64_t, uint32_t>;
+  enum class Naming { PerJob, PerSegment };   // job-J.bin, job-J-S.bin
+
+  // directory: created on first write. what: what a batch holds, for errors
+  // ("photon batch"). committedEnd(key): the end of the file's last recorded
+  // batch (0 when none), asked when the file is opened.
+  AppendFiles(std::filesystem::path directory, Naming naming, std::string what,
+              std::function<int64_t(Key)> committedEnd);
+  ~AppendFiles();
+  AppendFiles(const AppendFiles&) = delete;
+  AppendFiles& operator=(const AppendFiles&) = delete;
+
+  // Writes the batch at the end of the file; throws std::runtime_error
+  // naming the file when the write fails.
+  FileExtent append(Key key, std::string_view bytes);
+  // The batch at `extent`; throws DamagedFileError naming the file when it
+  // is missing, short, or fails its CRC.
+  std::string read(Key key, const FileExtent& extent);
+  // The bytes alone, unchecked (a migration checks them its own way).
+  std::string readUnchecked(Key key, const FileExtent& extent);
+  // The end of the file as this process writes it (0 when not open).
+  int64_t end(Key key) const;
+
+  std::filesystem::path pathOf(Key key) const;
+  // Closes the file: the next use starts from its committed end again
+  // (after its rows were deleted: from nothing).
+  void forget(Key key);
+  // Closes and deletes the file.
+  void remove(Key key);
+  // The files the directory holds (names this class did not write are ignored).
+  std::vector<Key> filesOnDisk() const;
+
+ private:
+  struct OpenFile {
+    int descriptor = -1;
+    int64_t end = 0;
+  };
+  OpenFile& open(Key key);
+
+  std::filesystem::path directory_;
+  Naming naming_;
+  std::string what_;
+  std::function<int64_t(Key)> committedEnd_;
+  std::map<Key, OpenFile> files_;
+};
+
+}  // namespace portico
