@@ -450,7 +450,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   auto lease = store_.lease(leaseId);
   // The worker's lease slot was freed, and refilled, as the Result arrived (runRound).
   // Results are idempotent: one for an unknown, closed or foreign lease is dropped.
-  if (!lease || lease->state != "open" || lease->worker != identity) {
+  if (!lease || lease->worker != identity) {
     spdlog::info("dropped a result for lease {} (unknown, closed or not this worker's)", leaseId);
     return;
   }
@@ -514,7 +514,7 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
   if (auto worker = workers_.find(identity); worker != workers_.end()) {
     worker->second.leases.erase(leaseId);
   }
-  if (!lease || lease->state != "open" || lease->worker != identity) return;
+  if (!lease || lease->worker != identity) return;
   // The cell to blame: one of the lease's more cells, when the worker says so.
   const uint32_t cell = failure.getFailedCell() != kLeaseOwnCell ? failure.getFailedCell() : lease->cell;
   const std::string message = fmt::format("cell {}: {}", cell, failure.getMessage().cStr());

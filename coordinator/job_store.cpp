@@ -174,7 +174,8 @@ void JobStore::migrate() {
     )sql");
     rechecksumPhotonFiles();
     // Closed leases leave no row any more: the table holds the open ones,
-    // a handful, and needs no index (two fewer index updates per lease).
+    // a handful, and needs no index (two fewer index updates per lease);
+    // its state column stays as schema 3 had it, 'open' in every row.
     // Ids must still never repeat (a late Result names its lease by id):
     // AUTOINCREMENT, from the highest id ever given.
     db_.exec(R"sql(
@@ -282,8 +283,7 @@ void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const st
     // rollback that keeps the job alive reopens them where they stood.
     const auto segment = batchSegments_.find(job);
     if (segment != batchSegments_.end()) {
-      batches_.forget({job, segment->second});
-      reclaimCandidates_.insert({job, segment->second});
+      retireBatchSegment(job, segment->second);
       batchSegments_.erase(segment);
     }
   }
@@ -304,6 +304,13 @@ uint32_t JobStore::batchSegment(uint64_t job) {
   return batchSegments_[job] = segment;
 }
 
+// No more writes to the segment: closed, and deleted by reclaimBatchFiles
+// once no committed row refers to it.
+void JobStore::retireBatchSegment(uint64_t job, uint32_t segment) {
+  batches_.forget({job, segment});
+  reclaimCandidates_.insert({job, segment});
+}
+
 void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work,
                         std::string_view payload) {
   const uint32_t segment = batchSegment(job);
@@ -316,8 +323,7 @@ void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, 
   s.run();
   if (batches_.end({job, segment}) >= batchSegmentBytes_) {
     // The next batch opens a new segment; this one goes once its rows are consumed.
-    batches_.forget({job, segment});
-    reclaimCandidates_.insert({job, segment});
+    retireBatchSegment(job, segment);
     batchSegments_[job] = segment + 1;
   }
   if (unleasedValid_) {
@@ -367,7 +373,11 @@ int64_t JobStore::takeUnleased(const PendingCell& cell, int64_t maxWork, std::ve
       "FROM batches WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL ORDER BY id");
   select.bind(1, int64_t(cell.job)).bind(2, int64_t(cell.phase)).bind(3, int64_t(cell.cell));
   const size_t first = batches.size();
-  std::vector<std::pair<uint32_t, FileExtent>> places;   // (segment, extent) of each batch taken
+  struct Place {
+    uint32_t segment;
+    FileExtent extent;
+  };
+  std::vector<std::optional<Place>> places;   // of each batch taken; none: its blob is in the row
   int64_t total = 0;
   while (select.step()) {
     const int64_t work = select.columnInt(1);
@@ -377,18 +387,17 @@ int64_t JobStore::takeUnleased(const PendingCell& cell, int64_t maxWork, std::ve
     if (select.columnInt(3) != 0) {
       auto blob = select.columnBlob(4);
       batch.payload.assign(reinterpret_cast<const char*>(blob.data()), blob.size());
-      places.push_back({0, {-1, 0, 0}});
+      places.emplace_back();
     } else {
-      places.push_back({uint32_t(select.columnInt(5)),
-                        {select.columnInt(6), select.columnInt(7), uint32_t(select.columnInt(8))}});
+      places.push_back(Place{uint32_t(select.columnInt(5)),
+                             {select.columnInt(6), select.columnInt(7), uint32_t(select.columnInt(8))}});
     }
     attempt = std::max(attempt, attempts + 1);
     total += work;
   }
   select.reset();
   for (size_t i = 0; i < places.size(); ++i)
-    if (places[i].second.offset >= 0)
-      batches[first + i].payload = batches_.read({cell.job, places[i].first}, places[i].second);
+    if (places[i]) batches[first + i].payload = batches_.read({cell.job, places[i]->segment}, places[i]->extent);
   return total;
 }
 
@@ -422,7 +431,7 @@ LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& work
   insert.run();
   const uint64_t lease = db_.lastInsertRowId();
   markLeased(lease, cell, batches, total);
-  return {lease, cell.job, cell.cell, cell.phase, worker, attempt, "open"};
+  return {lease, cell.job, cell.cell, cell.phase, worker, attempt};
 }
 
 int64_t JobStore::addToLease(uint64_t lease, const PendingCell& cell, int64_t maxWork,
@@ -437,12 +446,12 @@ int64_t JobStore::addToLease(uint64_t lease, const PendingCell& cell, int64_t ma
 namespace {
 LeaseRecord readLease(sql::Statement& s) {
   return {uint64_t(s.columnInt(0)), uint64_t(s.columnInt(1)), uint32_t(s.columnInt(2)), int(s.columnInt(3)),
-          s.columnText(4), uint32_t(s.columnInt(5)), s.columnText(6)};
+          s.columnText(4), uint32_t(s.columnInt(5))};
 }
 }  // namespace
 
 std::optional<LeaseRecord> JobStore::lease(uint64_t id) {
-  auto& s = db_.prepare("SELECT id, job, cell, phase, worker, attempt, state FROM leases WHERE id = ?");
+  auto& s = db_.prepare("SELECT id, job, cell, phase, worker, attempt FROM leases WHERE id = ?");
   s.bind(1, int64_t(id));
   std::optional<LeaseRecord> result;
   if (s.step()) result = readLease(s);
@@ -452,7 +461,7 @@ std::optional<LeaseRecord> JobStore::lease(uint64_t id) {
 
 std::vector<LeaseRecord> JobStore::openLeasesOf(const std::string& worker) {
   auto& s = db_.prepare(
-      "SELECT id, job, cell, phase, worker, attempt, state FROM leases WHERE state = 'open' AND worker = ?");
+      "SELECT id, job, cell, phase, worker, attempt FROM leases WHERE worker = ?");
   s.bind(1, worker);
   std::vector<LeaseRecord> result;
   while (s.step()) result.push_back(readLease(s));
@@ -461,7 +470,7 @@ std::vector<LeaseRecord> JobStore::openLeasesOf(const std::string& worker) {
 }
 
 std::vector<LeaseRecord> JobStore::openLeases() {
-  auto& s = db_.prepare("SELECT id, job, cell, phase, worker, attempt, state FROM leases WHERE state = 'open'");
+  auto& s = db_.prepare("SELECT id, job, cell, phase, worker, attempt FROM leases");
   std::vector<LeaseRecord> result;
   while (s.step()) result.push_back(readLease(s));
   s.reset();
@@ -515,7 +524,7 @@ bool JobStore::hasRemainingWork(uint64_t job, int phase) {
 }
 
 int64_t JobStore::openLeaseCount(uint64_t job) {
-  auto& s = db_.prepare("SELECT COUNT(*) FROM leases WHERE job = ? AND state = 'open'");
+  auto& s = db_.prepare("SELECT COUNT(*) FROM leases WHERE job = ?");
   s.bind(1, int64_t(job));
   s.step();
   const int64_t n = s.columnInt(0);
@@ -651,10 +660,6 @@ std::vector<FixedRgb> JobStore::film(uint64_t job, uint64_t pixelCount) {
   s.reset();
   return result;
 }
-
-}  // namespace portico
-
-namespace portico {
 
 void JobStore::reclaimBatchFiles() {
   if (reclaimCandidates_.empty()) return;

@@ -59,7 +59,6 @@ struct LeaseRecord {
   int phase = 0;
   std::string worker;
   uint32_t attempt = 0;
-  std::string state;           // open, done, requeued
 };
 
 class JobStore {
@@ -93,7 +92,8 @@ class JobStore {
   // lost (then nothing is leased, once the caller's transaction rolls back).
   LeaseRecord openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
                         std::vector<QueuedBatch>& batches);
-  // An open lease (a closed one, completed or requeued, leaves no row).
+  // An open lease (a closed one, completed or requeued, leaves no row: the
+  // table holds open leases only).
   std::optional<LeaseRecord> lease(uint64_t id);
   // Photon pass: another cell's unleased batches (up to maxWork, at least
   // one) join an open lease, which completes or is requeued as one. Returns
@@ -151,6 +151,7 @@ class JobStore {
   void markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches, int64_t work);
   void rechecksumPhotonFiles();
   uint32_t batchSegment(uint64_t job);
+  void retireBatchSegment(uint64_t job, uint32_t segment);
   sql::Database db_;
   AppendFiles photons_;
   AppendFiles batches_;
