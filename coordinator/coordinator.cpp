@@ -130,7 +130,8 @@ void Coordinator::runRound() {
       continue;
     }
     try {
-      arrived.push_back({id, frame.size(), std::make_unique<net::Decoded>(frame)});
+      const size_t bytes = frame.size();
+      arrived.push_back({id, bytes, std::make_unique<net::Decoded>(std::move(frame))});
     } catch (const kj::Exception& e) {
       spdlog::warn("dropped a malformed message from {}: {}", shortId(id), e.getDescription().cStr());
     } catch (const std::exception& e) {
@@ -418,7 +419,7 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
   assign.setCellWork(std::max(chosen->work, leaseWork));
   const auto copyBatches = [](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
     for (size_t i = 0; i < from.size(); ++i) {
-      net::PackedReader reader(from[i].payload.data(), from[i].payload.size());
+      net::MessageReader reader(from[i].payload.data(), from[i].payload.size());   // packed or flat
       to.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
     }
   };
@@ -472,7 +473,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         capnp::MallocMessageBuilder batch(uint(crossing.getRays().totalSize().wordCount + 8));
         batch.initRoot<wire::RayBatch>().setRays(crossing.getRays());
         store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
-                        net::packToString(batch));
+                        net::flatToString(batch));   // rays: packing gains little, costs a pass each way
       }
       for (auto deposits : result.getDeposits()) {
         if (deposits.getCell() >= cellCount)

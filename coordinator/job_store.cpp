@@ -50,7 +50,23 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
         return end;
       }),
       batchSegmentBytes_(batchSegmentBytes) {
-  db_.exec("PRAGMA journal_mode = WAL");
+  // One coordinator per jobs.db, holding it for its whole life: no other
+  // process reads or writes it while it runs (status goes through the
+  // coordinator's socket). The exclusive locking mode spares every
+  // transaction the file locks, and the WAL index lives in the heap rather
+  // than in a shared -shm file. A second coordinator on the same jobs.db is
+  // refused here, by name, instead of waiting on locks.
+  sqlite3_busy_timeout(db_.handle(), 0);   // a lock held by a live process is not let go: fail at once
+  try {
+    db_.exec("PRAGMA locking_mode = EXCLUSIVE");
+    db_.exec("PRAGMA journal_mode = WAL");
+    db_.exec("BEGIN IMMEDIATE");
+    db_.exec("COMMIT");
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: in use by another process (is another coordinator running on it?): {}",
+                                         path, e.what()));
+  }
+  sqlite3_busy_timeout(db_.handle(), 5000);
   // NORMAL is durable across process crashes in WAL mode (only an OS crash
   // can lose the last commits), which is the failure portico guards against.
   db_.exec("PRAGMA synchronous = NORMAL");

@@ -272,8 +272,8 @@ int WorkerSession::run() {
         while (socket.recv(frame, zmq::recv_flags::dontwait)) {
           lastHeard = steadyMs();
           try {
-            net::Decoded decoded(frame);
-            auto envelope = decoded.envelope();
+            auto decoded = std::make_unique<net::Decoded>(std::move(frame));   // read in place
+            auto envelope = decoded->envelope();
             switch (envelope.which()) {
               case wire::Envelope::WELCOME:
                 welcomed = true;
@@ -294,7 +294,7 @@ int WorkerSession::run() {
                   sendFailure(envelope.getAssign().getLease(), "worker busy");
                   break;
                 }
-                chain_.queued.push_back(std::make_unique<net::Decoded>(frame));   // started below
+                chain_.queued.push_back(std::move(decoded));   // started below
                 break;
               }
               case wire::Envelope::FILE_CHUNK: {

@@ -36,6 +36,16 @@ zmq::message_t encode(capnp::MessageBuilder& message, Encoding encoding) {
   return zmq::message_t(bytes.begin(), bytes.size());
 }
 
+std::string flatToString(capnp::MessageBuilder& message) {
+  const size_t words = capnp::computeSerializedSizeInWords(message);
+  std::string bytes(sizeof(kFlatMarker) + words * sizeof(capnp::word), '\0');
+  std::memcpy(bytes.data(), kFlatMarker, sizeof(kFlatMarker));
+  kj::ArrayOutputStream out(
+      kj::arrayPtr(reinterpret_cast<kj::byte*>(bytes.data()) + sizeof(kFlatMarker), words * sizeof(capnp::word)));
+  capnp::writeMessage(out, message);
+  return bytes;
+}
+
 std::string packToString(capnp::MessageBuilder& message) {
   kj::VectorOutputStream stream;
   capnp::writePackedMessage(stream, message);
@@ -82,33 +92,46 @@ PackedReader::PackedReader(const void* data, size_t bytes)
   }
 }
 
-Decoded::Decoded(const zmq::message_t& frame) {
-  if (frame.size() == 0) throw std::runtime_error("malformed message: empty frame");
-  if (frame.size() > kMaxFrameBytes)
-    throw std::runtime_error(
-        fmt::format("malformed message: {} bytes is over the {} byte limit", frame.size(), kMaxFrameBytes));
-  const auto* bytes = static_cast<const kj::byte*>(frame.data());
-  if (bytes[0] == kFlatMarker[0]) {
-    if (frame.size() < sizeof(kFlatMarker) || std::memcmp(bytes, kFlatMarker, sizeof(kFlatMarker)) != 0)
-      throw std::runtime_error("malformed message: unknown encoding");
-    const size_t payload = frame.size() - sizeof(kFlatMarker);
-    if (payload % sizeof(capnp::word) != 0 || payload == 0)
-      throw std::runtime_error(fmt::format("malformed message: a flat frame of {} bytes is not whole words", payload));
-    // The frame's bytes need not be 8-byte aligned: one copy to words.
-    words_ = kj::heapArray<capnp::word>(payload / sizeof(capnp::word));
-    std::memcpy(words_.begin(), bytes + sizeof(kFlatMarker), payload);
-    try {
-      flat_ = std::make_unique<capnp::FlatArrayMessageReader>(words_.asPtr(), optionsFor(frame.size()));
-      if (flat_->getEnd() != words_.end())
-        throw std::runtime_error("malformed message: a flat frame longer than its message");
-      envelope_ = flat_->getRoot<wire::Envelope>();
-    } catch (const kj::Exception& e) {
-      throw std::runtime_error(fmt::format("malformed message: {}", e.getDescription().cStr()));
-    }
-  } else {
-    reader_ = std::make_unique<PackedReader>(frame.data(), frame.size());
-    envelope_ = reader_->root<wire::Envelope>();
+MessageReader::MessageReader(const void* data, size_t size) {
+  if (size == 0) throw std::runtime_error("malformed message: empty");
+  const auto* bytes = static_cast<const kj::byte*>(data);
+  if (bytes[0] != kFlatMarker[0]) {
+    packed_ = std::make_unique<PackedReader>(data, size);
+    return;
   }
+  if (size < sizeof(kFlatMarker) || std::memcmp(bytes, kFlatMarker, sizeof(kFlatMarker)) != 0)
+    throw std::runtime_error("malformed message: unknown encoding");
+  const size_t payload = size - sizeof(kFlatMarker);
+  if (payload % sizeof(capnp::word) != 0 || payload == 0)
+    throw std::runtime_error(fmt::format("malformed message: a flat frame of {} bytes is not whole words", payload));
+  const kj::byte* first = bytes + sizeof(kFlatMarker);
+  kj::ArrayPtr<const capnp::word> words;
+  if (reinterpret_cast<uintptr_t>(first) % alignof(capnp::word) == 0) {
+    words = kj::arrayPtr(reinterpret_cast<const capnp::word*>(first), payload / sizeof(capnp::word));
+  } else {
+    words_ = kj::heapArray<capnp::word>(payload / sizeof(capnp::word));
+    std::memcpy(words_.begin(), first, payload);
+    words = words_.asPtr();
+  }
+  try {
+    flat_ = std::make_unique<capnp::FlatArrayMessageReader>(words, optionsFor(size));
+    if (flat_->getEnd() != words.end()) throw std::runtime_error("malformed message: a flat frame longer than its message");
+  } catch (const kj::Exception& e) {
+    throw std::runtime_error(fmt::format("malformed message: {}", e.getDescription().cStr()));
+  }
+}
+
+Decoded::Decoded(const zmq::message_t& frame) : frame_(frame.data(), frame.size()) { decode(frame_.data(), frame_.size()); }
+
+Decoded::Decoded(zmq::message_t&& frame) : frame_(std::move(frame)) { decode(frame_.data(), frame_.size()); }
+
+void Decoded::decode(const void* data, size_t bytes) {
+  if (bytes > kMaxFrameBytes)
+    throw std::runtime_error(
+        fmt::format("malformed message: {} bytes is over the {} byte limit", bytes, kMaxFrameBytes));
+  if (bytes == 0) throw std::runtime_error("malformed message: empty frame");
+  reader_ = std::make_unique<MessageReader>(data, bytes);
+  envelope_ = reader_->root<wire::Envelope>();
   try {
     (void)envelope_.which();   // a malformed root fails here, not deep in a handler
   } catch (const kj::Exception& e) {

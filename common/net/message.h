@@ -56,22 +56,49 @@ class PackedReader {
   std::unique_ptr<capnp::PackedMessageReader> reader_;
 };
 
-// A decoded envelope from one ZeroMQ frame of either encoding. The frame is
-// read (unpacked, or a flat one copied to aligned words) while constructing;
-// nothing refers to it after.
+// Reads a message of either encoding from bytes that stay alive as long as
+// this reader: frames, and the blobs kept in jobs.db and its files. A flat
+// message is read in place where its words are 8-byte aligned (ZeroMQ's
+// and malloc's allocations are), else after one copy to aligned words.
+// Throws std::runtime_error("malformed message: ...") on bad input.
+class MessageReader {
+ public:
+  MessageReader(const void* data, size_t bytes);
+  template <typename T>
+  typename T::Reader root() {
+    try {
+      return packed_ ? packed_->root<T>() : flat_->getRoot<T>();
+    } catch (const kj::Exception& e) {
+      throw std::runtime_error(std::string("malformed message: ") + e.getDescription().cStr());
+    }
+  }
+
+ private:
+  std::unique_ptr<PackedReader> packed_;
+  kj::Array<capnp::word> words_;   // a copy of unaligned flat words
+  std::unique_ptr<capnp::FlatArrayMessageReader> flat_;
+};
+
+// A decoded envelope from one ZeroMQ frame of either encoding. Handed the
+// frame (an rvalue), it keeps it and reads a flat one in place; from a
+// const frame, it reads a copy, and nothing refers to the frame after.
 class Decoded {
  public:
   explicit Decoded(const zmq::message_t& frame);
+  explicit Decoded(zmq::message_t&& frame);
   wire::Envelope::Reader envelope() const { return envelope_; }
 
  private:
-  std::unique_ptr<PackedReader> reader_;
-  kj::Array<capnp::word> words_;
-  std::unique_ptr<capnp::FlatArrayMessageReader> flat_;
+  void decode(const void* data, size_t bytes);
+
+  zmq::message_t frame_;   // the frame, or a copy of it
+  std::unique_ptr<MessageReader> reader_;
   wire::Envelope::Reader envelope_;
 };
 
-// Packs a standalone message (for blobs stored in SQLite).
+// A standalone message as bytes (for blobs stored in jobs.db and its files),
+// packed or flat; MessageReader reads both.
 std::string packToString(capnp::MessageBuilder& message);
+std::string flatToString(capnp::MessageBuilder& message);
 
 }  // namespace portico::net

@@ -247,6 +247,8 @@ void rayBatchSeeds(const fs::path& dir, const std::string& store) {
     const auto rays = sampleRays(RayKind::Camera, 8);
     fillRays(m.initRoot<wire::RayBatch>().initRays(static_cast<unsigned>(rays.size())), rays);
     putPacked("rays", 0, m);
+    const std::string flat = std::string(1, char(2)) + net::flatToString(m);   // as onResult stores crossings
+    write(dir / "rays-flat.bin", flat.data(), flat.size());
   }
   {
     capnp::MallocMessageBuilder m;

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <chrono>
 #include <filesystem>
 #include <random>
 
@@ -21,9 +22,26 @@ class JobStoreTest : public ::testing::Test {
     std::filesystem::remove(path_);
   }
   void TearDown() override {
-    for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(path_.string() + suffix);
+    for (const char* suffix : {"", "-wal", "-shm"}) {
+      std::filesystem::remove(path_.string() + suffix);
+      std::filesystem::remove(snapshotPath() + suffix);
+    }
     std::filesystem::remove_all(path_.string() + "-photons");
     std::filesystem::remove_all(path_.string() + "-batches");
+    std::filesystem::remove_all(snapshotPath() + "-photons");
+    std::filesystem::remove_all(snapshotPath() + "-batches");
+  }
+  // A coordinator holds its jobs.db exclusively: what a store freshly
+  // opened on it would read is read from a copy of its files (the database
+  // and its write-ahead log; the -batches and -photons files are not needed).
+  std::string snapshotPath() const { return path_.string() + ".snapshot"; }
+  JobStore openSnapshot() const {
+    for (const char* suffix : {"", "-wal"}) {
+      std::filesystem::remove(snapshotPath() + suffix);
+      if (std::filesystem::exists(path_.string() + suffix))
+        std::filesystem::copy_file(path_.string() + suffix, snapshotPath() + suffix);
+    }
+    return JobStore(snapshotPath());
   }
   std::filesystem::path path_;
 };
@@ -40,6 +58,24 @@ TEST_F(JobStoreTest, CreatesSchemaAtCurrentVersionInWalMode) {
 TEST_F(JobStoreTest, RefusesANewerSchema) {
   { JobStore store(path_.string()); store.database().setUserVersion(JobStore::kSchemaVersion + 1); }
   EXPECT_THROW(JobStore{path_.string()}, std::runtime_error);
+}
+
+// One coordinator per jobs.db: a second store on a database that a live
+// one holds is refused at once, naming the file, and the first one goes on.
+TEST_F(JobStoreTest, ASecondStoreOnAHeldDatabaseIsRefusedAtOnce) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  const auto started = std::chrono::steady_clock::now();
+  try {
+    JobStore second(path_.string());
+    FAIL() << "a second store opened a held jobs.db";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path_.string() + ": in use by another process"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(2));
+  store.addBatch(job, 1, 0, BatchKind::Rays, 5, "rays");
+  EXPECT_EQ(store.pendingCells(10).size(), 1u);
 }
 
 // The coordinator's rounds (one commit for all it handled) nest each
@@ -76,7 +112,7 @@ TEST_F(JobStoreTest, ANestedTransactionRollsBackAloneAndTheCacheFollows) {
     sql::Transaction inner(store.database());
     inner.commit();
   }   // the round rolls back, taking the committed savepoint with it
-  JobStore reopened(path_.string());
+  JobStore reopened = openSnapshot();
   auto pending = reopened.pendingCells(10);
   ASSERT_EQ(pending.size(), 2u);
   EXPECT_EQ(pending[0].cell, 3u);
@@ -228,7 +264,7 @@ TEST_F(JobStoreTest, PendingCellsStayTrueToTheBatchesTableThroughLeasesRequeuesA
   std::mt19937 random(11);
   std::vector<uint64_t> open;
   const auto expectSameAsFromTheTable = [&](int step) {
-    JobStore fresh(path_.string());
+    JobStore fresh = openSnapshot();
     const auto a = store.pendingCells(1000), b = fresh.pendingCells(1000);
     ASSERT_EQ(a.size(), b.size()) << "step " << step;
     for (size_t i = 0; i < a.size(); ++i) {
