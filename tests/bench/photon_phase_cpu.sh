@@ -6,6 +6,9 @@
 #   tests/bench/photon_phase_cpu.sh BIN_DIR STORE WORKERS PHOTONS [RUNS]
 #
 # BIN_DIR: portico, portico-coordinator and portico-worker (e.g. build/bin).
+# COORDINATOR=PATH runs another coordinator binary (an A/B of two builds).
+# Also printed: the machine's idle core-seconds over the phase (/proc/stat),
+# and the coordinator's CPU over the workers' (which cancels the VM's drift).
 # STORE: a scene store (e.g. the one `portico bench pipeline --store DIR` keeps).
 set -euo pipefail
 bin=${1:?usage: photon_phase_cpu.sh BIN_DIR STORE WORKERS PHOTONS [RUNS]}
@@ -15,6 +18,7 @@ photons=${4:?usage: photon_phase_cpu.sh BIN_DIR STORE WORKERS PHOTONS [RUNS]}
 runs=${5:-1}
 ticks=$(getconf CLK_TCK)
 
+idle() { awk '/^cpu /{print $5 + $6}' /proc/stat; }   # idle + iowait ticks, all cores
 cpu() {   # CPU ticks (user + system) of the given processes, all threads
   local total=0
   for p in "$@"; do total=$((total + $(awk '{print $14 + $15}' "/proc/$p/stat"))); done
@@ -23,7 +27,7 @@ cpu() {   # CPU ticks (user + system) of the given processes, all threads
 
 for run in $(seq "$runs"); do
   work=$(mktemp -d /tmp/portico-phase-cpu-XXXXXX)
-  "$bin/portico-coordinator" --listen "tcp://127.0.0.1:*" --db "$work/jobs.db" --endpoint-file "$work/endpoint" \
+  "${COORDINATOR:-$bin/portico-coordinator}" --listen "tcp://127.0.0.1:*" --db "$work/jobs.db" --endpoint-file "$work/endpoint" \
     --log-level info > "$work/coordinator.log" 2>&1 &
   coordinator=$!
   for _ in $(seq 200); do [[ -s "$work/endpoint" ]] && break; sleep 0.05; done
@@ -34,12 +38,12 @@ for run in $(seq "$runs"); do
     pids+=($!)
   done
   sleep 0.5
-  c0=$(cpu "$coordinator"); w0=$(cpu "${pids[@]}"); t0=$(date +%s.%N)
+  c0=$(cpu "$coordinator"); w0=$(cpu "${pids[@]}"); t0=$(date +%s.%N); i0=$(idle)
   "$bin/portico" submit "$store" --coordinator "$endpoint" -o "$work/x.exr" --photons "$photons" --spp 1 \
     --gather 0 --width 8 --height 8 --accel grid > /dev/null
   until grep -q "photon phase done" "$work/coordinator.log"; do sleep 0.02; done
-  c1=$(cpu "$coordinator"); w1=$(cpu "${pids[@]}"); t1=$(date +%s.%N)
-  python3 -c "print('workers %s  photon phase %.2f s  coordinator %.2f CPU-s  workers %.2f CPU-s' % ('$workers', $t1 - $t0, ($c1 - $c0) / $ticks, ($w1 - $w0) / $ticks))"
+  c1=$(cpu "$coordinator"); w1=$(cpu "${pids[@]}"); t1=$(date +%s.%N); i1=$(idle)
+  python3 -c "c, w = ($c1 - $c0) / $ticks, ($w1 - $w0) / $ticks; print('workers %s  photon phase %.2f s  coordinator %.2f CPU-s  workers %.2f CPU-s  coordinator/workers %.3f  idle %.2f core-s' % ('$workers', $t1 - $t0, c, w, c / w, ($i1 - $i0) / $ticks))"
   kill "$coordinator" "${pids[@]}" 2> /dev/null || true
   wait 2> /dev/null || true
   rm -rf "$work"
