@@ -132,6 +132,41 @@ TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
   expectSameAsReference(dir / "image.exr");
 }
 
+// The same for the queued rays: an operating-system crash can lose pages of
+// a batch file (jobs.db-batches/job-J-S.bin) that committed rows point to.
+// Here the job is queued with no worker to take it, the coordinator killed,
+// every batch file of the job overwritten, and the coordinator restarted
+// with two workers: leasing finds the damage (nothing is leased), the job's
+// photon pass runs again, and the image comes out the same, bit for bit.
+TEST_F(Resilience, ADamagedBatchFileRunsThePhotonPassAgainWithTheSameBits) {
+  const fs::path dir = dir_ / "damaged-batches";
+  LocalCluster cluster(dir, 0);
+  const std::string endpoint = cluster.endpoint();
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  cluster.killCoordinator();
+  size_t damaged = 0;
+  const std::string prefix = "job-" + std::to_string(job) + "-";
+  for (const auto& entry : fs::directory_iterator(dir / "jobs.db-batches")) {
+    if (entry.path().filename().string().rfind(prefix, 0) != 0) continue;
+    const auto size = fs::file_size(entry.path());
+    std::ofstream out(entry.path(), std::ios::binary | std::ios::in | std::ios::out);
+    const std::string garbage(size_t(size), '\x5a');
+    out.write(garbage.data(), std::streamsize(garbage.size()));
+    damaged += size > 0;
+  }
+  ASSERT_GT(damaged, 0u) << "no batch file of job " << job << " in " << (dir / "jobs.db-batches");
+  cluster.startCoordinator(endpoint);
+  cluster.addWorker({});
+  cluster.addWorker({});
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  const std::string log = readFile(dir / "coordinator.log");
+  EXPECT_NE(log.find("running its photon pass again"), std::string::npos) << log;
+  EXPECT_NE(log.find("CRC mismatch"), std::string::npos) << log;
+  EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
+  expectSameAsReference(dir / "image.exr");
+}
+
 // A cell whose work dies with every worker that takes it (here: workers
 // that take a lease and vanish, as one that crashes on the cell's geometry
 // would) is retried with rising attempt numbers, then fails its job with a
