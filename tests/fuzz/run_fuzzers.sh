@@ -23,7 +23,7 @@ mkdir -p "$out"
 declare -A max_len=([envelope]=8192 [ray_batch]=4096 [photon_records]=4096 [cell_file]=8192 [scene_db]=16384)
 status=0
 printf '%-16s %10s %8s %8s\n' target executions seconds crashes
-for target in envelope ray_batch photon_records cell_file scene_db; do
+for target in ${TARGETS:-envelope ray_batch photon_records cell_file scene_db}; do   # TARGETS="..." runs some
   corpus="$out/corpus/$target"
   mkdir -p "$corpus" "$out/artifacts"
   cp "$out/seeds/$target"/* "$corpus/"
