@@ -66,7 +66,7 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
     throw std::runtime_error(fmt::format("{}: in use by another process (is another coordinator running on it?): {}",
                                          path, e.what()));
   }
-  sqlite3_busy_timeout(db_.handle(), 5000);
+  sqlite3_busy_timeout(db_.handle(), sql::Database::kBusyTimeoutMs);
   // NORMAL is durable across process crashes in WAL mode (only an OS crash
   // can lose the last commits), which is the failure portico guards against.
   db_.exec("PRAGMA synchronous = NORMAL");

@@ -18,16 +18,22 @@ namespace {
 // first word is the segment table, whose bytes 1-3 (the high bytes of the
 // segment count) are zero, so its packing tag has those bits clear.
 constexpr unsigned char kFlatMarker[8] = {0xff, 'F', 'L', 'A', 'T', 0, 0, 1};
+
+// Bytes of the flat encoding of a message: the marker, then its words.
+size_t flatSize(capnp::MessageBuilder& message) {
+  return sizeof(kFlatMarker) + capnp::computeSerializedSizeInWords(message) * sizeof(capnp::word);
+}
+void writeFlat(capnp::MessageBuilder& message, kj::byte* into, size_t size) {
+  std::memcpy(into, kFlatMarker, sizeof(kFlatMarker));
+  kj::ArrayOutputStream out(kj::arrayPtr(into + sizeof(kFlatMarker), size - sizeof(kFlatMarker)));
+  capnp::writeMessage(out, message);
+}
 }  // namespace
 
 zmq::message_t encode(capnp::MessageBuilder& message, Encoding encoding) {
   if (encoding == Encoding::Flat) {
-    const size_t words = capnp::computeSerializedSizeInWords(message);
-    zmq::message_t frame(sizeof(kFlatMarker) + words * sizeof(capnp::word));
-    auto* bytes = static_cast<kj::byte*>(frame.data());
-    std::memcpy(bytes, kFlatMarker, sizeof(kFlatMarker));
-    kj::ArrayOutputStream out(kj::arrayPtr(bytes + sizeof(kFlatMarker), words * sizeof(capnp::word)));
-    capnp::writeMessage(out, message);
+    zmq::message_t frame(flatSize(message));
+    writeFlat(message, static_cast<kj::byte*>(frame.data()), frame.size());
     return frame;
   }
   kj::VectorOutputStream stream;
@@ -37,12 +43,8 @@ zmq::message_t encode(capnp::MessageBuilder& message, Encoding encoding) {
 }
 
 std::string flatToString(capnp::MessageBuilder& message) {
-  const size_t words = capnp::computeSerializedSizeInWords(message);
-  std::string bytes(sizeof(kFlatMarker) + words * sizeof(capnp::word), '\0');
-  std::memcpy(bytes.data(), kFlatMarker, sizeof(kFlatMarker));
-  kj::ArrayOutputStream out(
-      kj::arrayPtr(reinterpret_cast<kj::byte*>(bytes.data()) + sizeof(kFlatMarker), words * sizeof(capnp::word)));
-  capnp::writeMessage(out, message);
+  std::string bytes(flatSize(message), '\0');
+  writeFlat(message, reinterpret_cast<kj::byte*>(bytes.data()), bytes.size());
   return bytes;
 }
 

@@ -86,7 +86,7 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
     throw std::runtime_error(fmt::format("sqlite: cannot open {}: {}", path, message));
   }
   sqlite3_extended_result_codes(db_, 1);
-  sqlite3_busy_timeout(db_, 5000);
+  sqlite3_busy_timeout(db_, kBusyTimeoutMs);
 }
 
 Database::~Database() {

@@ -51,6 +51,8 @@ class Statement {
 class Database {
  public:
   enum class Mode { ReadOnly, ReadWriteCreate };
+  // How long a statement waits for another connection's lock before failing.
+  static constexpr int kBusyTimeoutMs = 5000;
   Database(const std::string& path, Mode mode);
   ~Database();
   Database(const Database&) = delete;
