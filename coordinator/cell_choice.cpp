@@ -5,30 +5,50 @@
 namespace portico {
 
 namespace {
-bool heldByAnotherWorker(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell) {
-  for (const auto& [identity, other] : workers)
-    if (&other != &worker && other.holds(job, cell)) return true;
-  return false;
+double speedOf(const WorkerInfo& worker) {
+  return worker.workPerSecond > 0 ? worker.workPerSecond : kUnmeasuredWorkPerSecond;
+}
+
+// Whether another worker holds the cell, and whether one of those holders
+// has less than `seconds` of leased work still to trace.
+struct Holders {
+  bool any = false;
+  bool freeWithin = false;
+};
+Holders holdersOf(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell,
+                  double seconds) {
+  Holders holders;
+  for (const auto& [identity, other] : workers) {
+    if (&other == &worker || !other.holds(job, cell)) continue;
+    holders.any = true;
+    if (!other.ready) continue;
+    int64_t queued = 0;
+    for (const auto& [id, lease] : other.leases) queued += lease.work;
+    if (double(queued) / speedOf(other) < seconds) holders.freeWithin = true;
+  }
+  return holders;
 }
 }  // namespace
 
-const PendingCell& chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
+const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
                               const WorkerInfo& worker, const WorkerRegistry& workers) {
-  const double speed = worker.workPerSecond > 0 ? worker.workPerSecond : kUnmeasuredWorkPerSecond;
-  const PendingCell* chosen = &candidates.front();
+  const double speed = speedOf(worker);
+  const PendingCell* chosen = nullptr;
   double best = -std::numeric_limits<double>::infinity();
   for (const PendingCell& c : candidates) {
     if (c.job != candidates.front().job) break;
     const bool mine = worker.holds(c.job, c.cell);
-    const bool secondCopy = !mine && heldByAnotherWorker(worker, workers, c.job, c.cell);
     const double triangles = c.cell < cells.size() ? double(cells[c.cell].triangleCount) : 0.0;
-    const double value = double(c.work) - (secondCopy ? triangles * kLoadSecondsPerTriangle * speed : 0.0);
+    const double loadSeconds = triangles * kLoadSecondsPerTriangle;
+    const Holders holders = mine ? Holders{} : holdersOf(worker, workers, c.job, c.cell, loadSeconds);
+    const double value = double(c.work) - (holders.any ? loadSeconds * speed : 0.0);
+    if (value < 0 && holders.freeWithin) continue;   // its holder takes it sooner
     if (value > best || (value == best && mine)) {
       best = value;
       chosen = &c;
     }
   }
-  return *chosen;
+  return chosen;
 }
 
 }  // namespace portico

@@ -347,23 +347,27 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
 
 void Coordinator::dispatch() {
   for (auto& [identity, worker] : workers_) {
-    for (size_t k = 0; k < WorkerInfo::kMostLeasesInFlight && worker.wantsLease(); ++k)
-      if (!assignWork(worker)) return;   // nothing left to hand out
+    for (size_t k = 0; k < WorkerInfo::kMostLeasesInFlight && worker.wantsLease(); ++k) {
+      const Assignment assigned = assignWork(worker);
+      if (assigned == Assignment::NothingLeft) return;
+      if (assigned == Assignment::NothingForThisWorker) break;
+    }
   }
 }
 
-bool Coordinator::assignWork(WorkerInfo& worker) {
+Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   const auto candidates = store_.pendingCells(kLeaseCandidates);
-  if (candidates.empty()) return false;
+  if (candidates.empty()) return Assignment::NothingLeft;
   JobContext* job;
   try {
     job = &context(candidates.front().job);
   } catch (const std::exception& e) {
     failJob(candidates.front().job, e.what());
-    return true;
+    return Assignment::Assigned;
   }
   const auto& cells = job->scene->cells();
-  const PendingCell* chosen = &chooseCell(candidates, cells, worker, workers_);
+  const PendingCell* chosen = chooseCell(candidates, cells, worker, workers_);
+  if (!chosen) return Assignment::NothingForThisWorker;
   const auto cachedBytes = [&](uint32_t cell) {
     return cell < cells.size() ? kCachedBytesPerFileByte * cells[cell].byteCount : 0;
   };
@@ -403,10 +407,10 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
     // someone wrote to the file): nothing was leased. The passes are
     // deterministic, so the job starts over rather than fail.
     restartPhotonPass(chosen->job, e.what());
-    return true;
+    return Assignment::Assigned;
   }
   const uint64_t lease = opened.id;
-  if (!lease) return true;
+  if (!lease) return Assignment::Assigned;
   capnp::MallocMessageBuilder message;
   auto assign = message.initRoot<wire::Envelope>().initAssign();
   assign.setLease(lease);
@@ -441,9 +445,10 @@ bool Coordinator::assignWork(WorkerInfo& worker) {
                  worker.name, chosen->job, chosen->cell, chosen->phase, opened.attempt, batches.size(),
                  moreCells.size());
   else
-    spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches, {} more cells)", lease, worker.name,
-                  chosen->job, chosen->cell, chosen->phase, batches.size(), moreCells.size());
-  return true;
+    spdlog::debug("lease {} -> {}: job {} cell {} phase {} ({} batches, {} more cells, work {}; it holds {} cells)", lease,
+                  worker.name, chosen->job, chosen->cell, chosen->phase, batches.size(), moreCells.size(), leaseWork,
+                  worker.cells.size());
+  return Assignment::Assigned;
 }
 
 void Coordinator::onResult(const std::string& identity, wire::Result::Reader result) {

@@ -68,7 +68,11 @@ class Coordinator {
   void onGoodbye(const std::string& identity);
 
   void dispatch();
-  bool assignWork(WorkerInfo& worker);
+  // One lease for the worker; or none, because no work is pending at all
+  // (dispatch stops) or because what is pending is best left to the
+  // workers that hold its cells (the next worker is asked).
+  enum class Assignment { Assigned, NothingForThisWorker, NothingLeft };
+  Assignment assignWork(WorkerInfo& worker);
   // Requeues a failed lease; fails the job once its cell has failed too often.
   // `failedCell`: which of the lease's cells failed (default: its own).
   void recordCellFailure(const LeaseRecord& lease, const std::string& message,

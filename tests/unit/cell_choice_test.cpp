@@ -35,7 +35,7 @@ TEST(ChooseCell, TakesTheMostWorkWhenNoCopyIsNeeded) {
   // Cell 1 is big and nobody holds it: loading it is due some time anyway,
   // so it is not deferred behind the small cell the worker holds.
   const std::vector<PendingCell> candidates{{1, 1, 0, 5000}, {1, 0, 0, 200}};
-  EXPECT_EQ(chooseCell(candidates, cells, w.a, w.workers).cell, 1u);
+  EXPECT_EQ(chooseCell(candidates, cells, w.a, w.workers)->cell, 1u);
 }
 
 TEST(ChooseCell, SplitsAnothersCellOnlyWhenItsWorkOutweighsASecondLoad) {
@@ -43,15 +43,36 @@ TEST(ChooseCell, SplitsAnothersCellOnlyWhenItsWorkOutweighsASecondLoad) {
   const auto cells = cellsOf({100000, 1000});   // a second load of cell 0: 10 000 rays
   w.b.cells.use(1, 0, 1);
   const std::vector<PendingCell> small{{1, 0, 0, 9000}, {1, 1, 0, 100}};
-  EXPECT_EQ(chooseCell(small, cells, w.a, w.workers).cell, 1u);
+  EXPECT_EQ(chooseCell(small, cells, w.a, w.workers)->cell, 1u);
   const std::vector<PendingCell> large{{1, 0, 0, 20000}, {1, 1, 0, 100}};
-  EXPECT_EQ(chooseCell(large, cells, w.a, w.workers).cell, 0u);
+  EXPECT_EQ(chooseCell(large, cells, w.a, w.workers)->cell, 0u);
   // The worker holding it takes it whatever its size.
-  EXPECT_EQ(chooseCell(small, cells, w.b, w.workers).cell, 0u);
-  // With nothing else pending, even a small queue of another's cell is split:
-  // a worker never waits while there is work.
+  EXPECT_EQ(chooseCell(small, cells, w.b, w.workers)->cell, 0u);
+  // With nothing else pending, even a small queue of another's cell is split
+  // when its holder is not free for it: a worker never waits while there is work.
   const std::vector<PendingCell> only{{1, 0, 0, 10}};
-  EXPECT_EQ(chooseCell(only, cells, w.a, w.workers).cell, 0u);
+  EXPECT_EQ(chooseCell(only, cells, w.a, w.workers)->cell, 0u);
+}
+
+TEST(ChooseCell, LeavesASmallQueueToAHolderThatIsFreeSooner) {
+  TwoWorkers w;
+  const auto cells = cellsOf({100000, 1000});   // a second load of cell 0: 10 ms, 10 000 rays
+  w.b.cells.use(1, 0, 1);
+  w.b.ready = true;
+  const std::vector<PendingCell> only{{1, 0, 0, 10}};
+  // b is idle: it takes the 10 rays at once, without a load.
+  EXPECT_EQ(chooseCell(only, cells, w.a, w.workers), nullptr);
+  EXPECT_EQ(chooseCell(only, cells, w.b, w.workers)->cell, 0u);
+  // Another candidate that nobody holds still goes to a.
+  const std::vector<PendingCell> two{{1, 0, 0, 10}, {1, 1, 0, 5}};
+  EXPECT_EQ(chooseCell(two, cells, w.a, w.workers)->cell, 1u);
+  // b is busy for 50 ms, longer than a's load: a takes it after all.
+  w.b.leases[7] = {0, 50000};
+  EXPECT_EQ(chooseCell(only, cells, w.a, w.workers)->cell, 0u);
+  // A queue that outweighs the load is split whatever b does.
+  w.b.leases.clear();
+  const std::vector<PendingCell> large{{1, 0, 0, 20000}};
+  EXPECT_EQ(chooseCell(large, cells, w.a, w.workers)->cell, 0u);
 }
 
 TEST(ChooseCell, PrefersItsOwnCellOnATieAndKeepsToTheFirstJob) {
@@ -59,10 +80,10 @@ TEST(ChooseCell, PrefersItsOwnCellOnATieAndKeepsToTheFirstJob) {
   const auto cells = cellsOf({1000, 1000, 1000});
   w.a.cells.use(1, 2, 1);
   const std::vector<PendingCell> tie{{1, 0, 0, 500}, {1, 2, 0, 500}};
-  EXPECT_EQ(chooseCell(tie, cells, w.a, w.workers).cell, 2u);
+  EXPECT_EQ(chooseCell(tie, cells, w.a, w.workers)->cell, 2u);
   // Job 2's cell has more work, but job 1 came first.
   const std::vector<PendingCell> jobs{{1, 0, 0, 500}, {2, 1, 0, 90000}};
-  EXPECT_EQ(chooseCell(jobs, cells, w.a, w.workers).job, 1u);
+  EXPECT_EQ(chooseCell(jobs, cells, w.a, w.workers)->job, 1u);
 }
 
 TEST(CellCacheModel, ForgetsTheLeastRecentlyUsedBeyondTheBudget) {
