@@ -70,6 +70,12 @@ Coordinator::Coordinator(CoordinatorOptions options)
   const auto active = store_.jobs(true);
   spdlog::info("coordinator listening on {} (db {}, {} active jobs, {} leases requeued)", endpoint_,
                options_.database, active.size(), requeued);
+  // Photon tables written by an older portico in another record format
+  // cannot be read: such a job's photon pass runs again (same photons).
+  for (const JobRecord& job : active)
+    if (job.photonRecordBytes != int(sizeof(PhotonRecord)))
+      restartPhotonPass(job.id, fmt::format("its photon tables hold {}-byte records of an older portico, not {}",
+                                            job.photonRecordBytes, sizeof(PhotonRecord)));
   // A coordinator killed between a phase's last result and the next phase
   // resumes here.
   for (const JobRecord& job : active) advanceIfPhaseDone(job.id);

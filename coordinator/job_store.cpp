@@ -1,5 +1,6 @@
 #include "coordinator/job_store.h"
 
+#include "common/transport/photon_record.h"
 #include "common/util/crc32c.h"
 
 #include <fmt/format.h>
@@ -215,6 +216,16 @@ void JobStore::migrate() {
     db_.setUserVersion(4);
     tx.commit();
   }
+  if (version < 5) {
+    // Photon records went from 24 bytes of floats to 16 on a lattice over
+    // each cell (common/transport/photon_record.h). Each job says which
+    // records its tables hold; the coordinator runs the photon pass of an
+    // unfinished job with old ones again (Coordinator's constructor).
+    sql::Transaction tx(db_);
+    db_.exec("ALTER TABLE jobs ADD COLUMN photon_record_bytes INTEGER NOT NULL DEFAULT 24");
+    db_.setUserVersion(5);
+    tx.commit();
+  }
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -252,8 +263,10 @@ void JobStore::rechecksumPhotonFiles() {
 }
 
 uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
-  auto& s = db_.prepare("INSERT INTO jobs(spec, state, created_ms, phase_started_ms) VALUES (?, ?, ?, ?)");
+  auto& s = db_.prepare(
+      "INSERT INTO jobs(spec, state, created_ms, phase_started_ms, photon_record_bytes) VALUES (?, ?, ?, ?, ?)");
   s.bindBlob(1, spec.data(), spec.size()).bind(2, toString(JobState::Photons)).bind(3, nowMs).bind(4, nowMs);
+  s.bind(5, int64_t(sizeof(PhotonRecord)));
   s.run();
   return static_cast<uint64_t>(db_.lastInsertRowId());
 }
@@ -269,9 +282,11 @@ JobRecord readJob(sql::Statement& s) {
   job.createdMs = s.columnInt(4);
   job.phaseStartedMs = s.columnInt(5);
   job.finishedMs = s.columnInt(6);
+  job.photonRecordBytes = int(s.columnInt(7));
   return job;
 }
-constexpr const char* kJobColumns = "id, state, error, spec, created_ms, phase_started_ms, finished_ms";
+constexpr const char* kJobColumns =
+    "id, state, error, spec, created_ms, phase_started_ms, finished_ms, photon_record_bytes";
 }  // namespace
 
 std::optional<JobRecord> JobStore::job(uint64_t id) {
@@ -579,6 +594,9 @@ void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   counters.bind(1, int64_t(job)).bind(2, kPhotonPassRestarts);
   counters.run();
   addCounter(job, kPhotonPassRestarts, 1);
+  auto& records = db_.prepare("UPDATE jobs SET photon_record_bytes = ? WHERE id = ?");
+  records.bind(1, int64_t(sizeof(PhotonRecord))).bind(2, int64_t(job));
+  records.run();
   setJobState(job, JobState::Photons, nowMs);
   photons_.forget({job, 0});
 }

@@ -36,6 +36,9 @@ struct JobRecord {
   std::string error;
   std::string spec;            // packed wire::JobSpec
   int64_t createdMs = 0, phaseStartedMs = 0, finishedMs = 0;
+  // The size of the records its photon tables hold: sizeof(PhotonRecord),
+  // or 24 for a job begun by a portico before schema 5.
+  int photonRecordBytes = 0;
 };
 
 struct PendingCell {
@@ -63,7 +66,7 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 4;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells
+const protocolVersion :UInt32 = 5;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records
 
 enum Phase {
   photons @0;
@@ -43,7 +43,7 @@ struct Ray {
 # (so density estimates near a doorway see both sides).
 struct CellPhotons {
   cell @0 :UInt32;
-  records @1 :Data;        # 24-byte photon records (common/transport/photon_record.h)
+  records @1 :Data;        # 16-byte photon records on the cell's lattice (common/transport/photon_record.h)
 }
 
 # Work generators: compact descriptions the worker expands itself, so a job
@@ -173,7 +173,7 @@ struct FetchPhotons {
 struct PhotonsReply {
   job @0 :UInt64;
   cell @1 :UInt32;
-  batches @2 :List(Data);   # the cell's photon table: 24-byte records, batch by batch
+  batches @2 :List(Data);   # the cell's photon table: 16-byte records, batch by batch
   error @3 :Text;           # non-empty: the table could not be read (no batches); the lease is failed, nothing cached
 }
 

@@ -28,10 +28,13 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
   return p;
 }
 
-std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect) {
-  std::vector<StoredPhoton> photons;
-  for (auto blob : reply.getBatches()) unpackRecords(blob.begin(), blob.size(), includeDirect, photons);
-  return photons;
+std::string photonTableOf(wire::PhotonsReply::Reader reply) {
+  size_t size = 0;
+  for (auto blob : reply.getBatches()) size += blob.size();
+  std::string records;
+  records.reserve(size);
+  for (auto blob : reply.getBatches()) records.append(reinterpret_cast<const char*>(blob.begin()), blob.size());
+  return records;
 }
 
 // `--accel auto`: the cell with the structure the cost model picks for the
@@ -100,7 +103,7 @@ int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std:
 
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
-                                                      std::optional<std::vector<StoredPhoton>> photons,
+                                                      std::optional<std::string> photonRecords,
                                                       const std::string& storeDirectory, int64_t forwardRays) {
   const auto started = std::chrono::steady_clock::now();
   auto spec = assign.getSpec();
@@ -123,9 +126,17 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   if (renderPhase) {
     indirect = cache.photonMap(assign.getJob(), cellId);
     if (!indirect) {
-      if (!photons) throw std::logic_error("render lease without photons");
-      cache.makeRoom(2 * photons->size() * sizeof(StoredPhoton));   // the map, and its build's scratch
-      indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(*photons)));
+      if (!photonRecords) throw std::logic_error("render lease without photons");
+      // Final gathering uses every photon; the estimate at a camera hit only
+      // those that bounced (direct light is sampled with shadow rays).
+      const size_t count = photonRecords->size() / sizeof(PhotonRecord);
+      cache.makeRoom(count * sizeof(StoredPhoton));
+      std::vector<StoredPhoton> photons;
+      unpackRecords(photonRecords->data(), photonRecords->size(),
+                    PhotonFrame(scene.cells()[cellId].bounds, parameters.photonRadius), spec.getGather() > 0, photons);
+      photonRecords.reset();
+      cache.makeRoom(2 * photons.size() * sizeof(StoredPhoton));   // the map, and its build's scratch
+      indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(photons)));
     }
   }
 

@@ -19,10 +19,9 @@ namespace portico {
 
 JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
 
-// Photons that arrived in a PhotonsReply, decoded. Final gathering uses all
-// of them; the estimate at a camera hit only those that bounced at least
-// once (direct light is sampled with shadow rays instead).
-std::vector<StoredPhoton> decodePhotons(wire::PhotonsReply::Reader reply, bool includeDirect);
+// The photon table that arrived in a PhotonsReply: its batches' records, in
+// order, still encoded (runLease decodes them on its cell's PhotonFrame).
+std::string photonTableOf(wire::PhotonsReply::Reader reply);
 
 // A failure in one of the lease's more cells (Assign.moreCells): the
 // coordinator blames that cell, not the lease's own.
@@ -38,7 +37,7 @@ struct MoreCellError : std::runtime_error {
 // none); see forwardToHeldCells in lease_runner.cpp.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
-                                                      std::optional<std::vector<StoredPhoton>> photons,
+                                                      std::optional<std::string> photonRecords,
                                                       const std::string& storeDirectory, int64_t forwardRays);
 
 }  // namespace portico

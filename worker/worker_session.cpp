@@ -89,13 +89,13 @@ WorkerSession::WorkerSession(WorkerOptions options)
 
 WorkerSession::~WorkerSession() { ::close(leaseDone_); }
 
-FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::optional<std::vector<StoredPhoton>> photons) {
+FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::optional<std::string> photonRecords) {
   FinishedLease done;
   try {
     auto assign = decoded.envelope().getAssign();
     done.lease = assign.getLease();
     const std::string store = assign.getSpec().getStore();
-    done.message = runLease(cache_, chooser_, assign, std::move(photons),
+    done.message = runLease(cache_, chooser_, assign, std::move(photonRecords),
                             mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays);
   } catch (const MoreCellError& e) {
     done.error = e.what();
@@ -125,14 +125,14 @@ bool WorkerSession::readyToTrace(const net::Decoded& decoded) {
 // when the cores were busy: a tenth of a two-worker photon pass, whose
 // leases last a few milliseconds. Each finished lease is handed over at
 // once (leaseDone_), so its Result leaves while the next one is traced.
-void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<std::vector<StoredPhoton>> photons) {
+void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<std::string> photonRecords) {
   // Denormals cost ~100x per operation and never matter to a picture.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
   std::unique_ptr<net::Decoded> assign = std::move(first);
   while (assign) {
-    FinishedLease done = traceLease(*assign, std::move(photons));
-    photons.reset();
+    FinishedLease done = traceLease(*assign, std::move(photonRecords));
+    photonRecords.reset();
     assign.reset();
     // What the finished lease pinned may go now; and before the readiness
     // check below, whose photon map lookup pins the map for the next lease
@@ -190,13 +190,13 @@ int WorkerSession::run() {
       chain_.abandon = false;
     }
     constexpr size_t kMostQueued = 12;   // more than the coordinator sends (kMostLeasesInFlight): refuse beyond it
-    const auto startTracing = [&](std::optional<std::vector<StoredPhoton>> photons) {
+    const auto startTracing = [&](std::optional<std::string> photonRecords) {
       {
         std::lock_guard lock(chain_.mutex);
         chain_.running = true;
       }
       if (tracing.valid()) tracing.wait();   // the previous chain's thread, done but for its return
-      tracing = std::async(std::launch::async, [this, assign = std::move(lease->assign), p = std::move(photons)]() mutable {
+      tracing = std::async(std::launch::async, [this, assign = std::move(lease->assign), p = std::move(photonRecords)]() mutable {
         runChain(std::move(assign), std::move(p));
       });
       lease.reset();
@@ -319,13 +319,9 @@ int WorkerSession::run() {
                   failLease(reply.getError().cStr());
                   break;
                 }
-                // Room for the decoded photons before decoding them (24-byte records).
-                uint64_t records = 0;
-                for (auto batch : reply.getBatches()) records += batch.size() / 24;
-                cache_.makeRoom(records * sizeof(StoredPhoton));
-                auto photons = decodePhotons(reply, assign.getSpec().getGather() > 0);
+                auto records = photonTableOf(reply);
                 lease->waitingForPhotons = false;
-                startTracing(std::move(photons));
+                startTracing(std::move(records));
                 break;
               }
               case wire::Envelope::ERROR:

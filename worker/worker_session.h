@@ -65,10 +65,10 @@ class WorkerSession {
   void stop() { stopping_ = true; }
 
  private:
-  FinishedLease traceLease(const net::Decoded& assign, std::optional<std::vector<StoredPhoton>> photons);
+  FinishedLease traceLease(const net::Decoded& assign, std::optional<std::string> photonRecords);
   bool readyToTrace(const net::Decoded& assign);
   // The tracing thread: `first`, then each queued lease ready to trace.
-  void runChain(std::unique_ptr<net::Decoded> first, std::optional<std::vector<StoredPhoton>> photons);
+  void runChain(std::unique_ptr<net::Decoded> first, std::optional<std::string> photonRecords);
 
   WorkerOptions options_;
   std::unique_ptr<StoreMirror> mirror_;

@@ -315,15 +315,20 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
 
 void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {
   ++out.counters.photonDeposits;
+  // A map cannot hold such a photon (and never did: tables dropped them).
+  if (!isFinite(photon.position) || !isFinite(photon.power)) return;
+  // Each table's records lie on its own cell's lattice (PhotonFrame).
+  const auto record = [&](uint32_t cell) {
+    return toRecord(photon, PhotonFrame(scene_.cells()[cell].bounds, parameters_.photonRadius));
+  };
   const uint32_t cell = tracer_.cell().id();
-  const PhotonRecord record = toRecord(photon);
-  out.deposits[cell].push_back(record);
+  out.deposits[cell].push_back(record(cell));
   // Copies for neighbours across a nearby portal, so their estimates near
   // the doorway see this side too (no seam at the threshold).
   thread_local std::vector<uint32_t> neighbors;
   tracer_.neighborsNear(photon.position, parameters_.photonRadius, neighbors);
   for (uint32_t neighbor : neighbors) {
-    out.deposits[neighbor].push_back(record);
+    out.deposits[neighbor].push_back(record(neighbor));
     ++out.counters.photonCopies;
   }
 }

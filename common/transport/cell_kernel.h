@@ -44,7 +44,7 @@ Vec3 portalCountColour(uint32_t crossings);
 struct KernelOutputs {
   // By the cell whose table receives them: the cell traced, and neighbours
   // for photons within the photon radius of their shared portal. Encoded
-  // as they are stored (24 bytes, not a StoredPhoton's 48): the Result
+  // as they are stored (16 bytes, not a StoredPhoton's 48): the Result
   // takes each table with one copy.
   std::map<uint32_t, std::vector<PhotonRecord>> deposits;
   std::map<uint32_t, std::vector<RayState>> crossings;   // by destination cell

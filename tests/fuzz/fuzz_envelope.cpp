@@ -29,11 +29,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case wire::Envelope::RESULT:
         for (const auto crossing : envelope.getResult().getCrossings()) (void)fuzz::readRays(crossing.getRays());
         for (const auto deposits : envelope.getResult().getDeposits())
-          unpackRecords(deposits.getRecords().begin(), deposits.getRecords().size(), true, photons);
+          unpackRecords(deposits.getRecords().begin(), deposits.getRecords().size(), fuzz::photonFrame(), true,
+                        photons);
         break;
-      case wire::Envelope::PHOTONS:   // the worker's decodePhotons
+      case wire::Envelope::PHOTONS:   // the worker's photonTableOf, then runLease's decoding
         for (const auto blob : envelope.getPhotons().getBatches())
-          unpackRecords(blob.begin(), blob.size(), false, photons);
+          unpackRecords(blob.begin(), blob.size(), fuzz::photonFrame(), false, photons);
         fuzz::buildPhotonMap(photons);
         break;
       default: break;

@@ -1,4 +1,4 @@
-// Fuzz target: a photon table (24-byte records, as stored in jobs.db and
+// Fuzz target: a photon table (16-byte records, as stored per cell and
 // sent in PhotonsReply) unpacked and built into a photon map, as the worker does.
 #include <cstddef>
 #include <cstdint>
@@ -11,7 +11,7 @@ using namespace portico;
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<StoredPhoton> photons;
   try {
-    unpackRecords(data, size, size % 2 == 0, photons);
+    unpackRecords(data, size, fuzz::photonFrame(), size % 2 == 0, photons);
     fuzz::buildPhotonMap(photons);
   } catch (const std::runtime_error&) {
   }

@@ -14,6 +14,7 @@
 #include "common/net/message.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/ray_state.h"
+#include "tests/fuzz/fuzz_support.h"
 
 using namespace portico;
 namespace fs = std::filesystem;
@@ -61,7 +62,7 @@ std::string sampleRecords(size_t count) {
     photons[i].power = Vec3(0.01f, 0.012f, 0.009f);
     photons[i].bounce = static_cast<uint16_t>(i % 3);
   }
-  return packRecords(photons);
+  return packRecords(photons, fuzz::photonFrame());
 }
 
 capnp::Data::Reader asData(const std::string& bytes) {

@@ -47,6 +47,13 @@ inline size_t readRays(capnp::List<wire::Ray>::Reader rays) {
   return valid;
 }
 
+// The lattice of the photon tables the targets decode (and the seeds are
+// written on): a 20 m cell.
+inline const PhotonFrame& photonFrame() {
+  static const PhotonFrame frame(Bounds3(Vec3(-10.0f), Vec3(10.0f)), 0.5f);
+  return frame;
+}
+
 // Photon tables as the worker turns them into a photon map.
 inline void buildPhotonMap(const std::vector<StoredPhoton>& photons) {
   if (photons.empty()) return;

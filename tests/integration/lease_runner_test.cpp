@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/scene/scene_store.h"
+#include "common/transport/photon_record.h"
 #include "tests/integration/service_harness.h"
 #include "worker/lease_runner.h"
 
@@ -67,8 +68,10 @@ std::map<uint32_t, std::multiset<std::string>> depositsOf(capnp::MallocMessageBu
   std::map<uint32_t, std::multiset<std::string>> deposits;
   for (auto cell : message.getRoot<wire::Envelope>().getResult().getDeposits()) {
     auto bytes = cell.getRecords();
-    for (size_t at = 0; at + 24 <= bytes.size(); at += 24)
-      deposits[cell.getCell()].insert(std::string(reinterpret_cast<const char*>(bytes.begin() + at), 24));
+    EXPECT_EQ(bytes.size() % sizeof(PhotonRecord), 0u);
+    for (size_t at = 0; at + sizeof(PhotonRecord) <= bytes.size(); at += sizeof(PhotonRecord))
+      deposits[cell.getCell()].insert(
+          std::string(reinterpret_cast<const char*>(bytes.begin() + at), sizeof(PhotonRecord)));
   }
   return deposits;
 }

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "common/net/message.h"
+#include "common/util/sqlite.h"
 #include "tests/integration/service_harness.h"
 
 namespace portico {
@@ -163,6 +164,33 @@ TEST_F(Resilience, ADamagedBatchFileRunsThePhotonPassAgainWithTheSameBits) {
   const std::string log = readFile(dir / "coordinator.log");
   EXPECT_NE(log.find("running its photon pass again"), std::string::npos) << log;
   EXPECT_NE(log.find("CRC mismatch"), std::string::npos) << log;
+  EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
+  expectSameAsReference(dir / "image.exr");
+}
+
+// A jobs.db left by a portico of 24-byte photon records (schema 4) with an
+// unfinished job: the photon tables it holds cannot be read by today's
+// workers, so the restarted coordinator runs that job's photon pass again,
+// and the image is the same as ever.
+TEST_F(Resilience, AJobBegunWithAnOlderPhotonRecordRunsItsPhotonPassAgainWithTheSameBits) {
+  const fs::path dir = dir_ / "older-records";
+  LocalCluster cluster(dir, 0);
+  const std::string endpoint = cluster.endpoint();
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  cluster.killCoordinator();
+  {
+    sql::Database db((dir / "jobs.db").string(), sql::Database::Mode::ReadWriteCreate);
+    auto& update = db.prepare("UPDATE jobs SET photon_record_bytes = 24 WHERE id = ?");
+    update.bind(1, int64_t(job));
+    update.run();
+  }
+  cluster.startCoordinator(endpoint);
+  cluster.addWorker({});
+  cluster.addWorker({});
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  const std::string log = readFile(dir / "coordinator.log");
+  EXPECT_NE(log.find("its photon tables hold 24-byte records of an older portico"), std::string::npos) << log;
   EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
   expectSameAsReference(dir / "image.exr");
 }

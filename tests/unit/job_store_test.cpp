@@ -242,6 +242,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
     for (const char* column : {"file_offset", "file_size", "file_crc"})
       store.database().exec(std::string("ALTER TABLE photons DROP COLUMN ") + column);
     store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
+    store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
     store.database().setUserVersion(1);
   }
   JobStore migrated(path_.string());
@@ -367,6 +368,7 @@ namespace {
 TEST_F(JobStoreTest, PhotonTablesRoundTripThroughDiskWithoutLoss) {
   // Records written batch by batch come back byte for byte, after the
   // database is closed and reopened, in the order they were appended.
+  const PhotonFrame frame(Bounds3(Vec3(0.0f), Vec3(1100.0f, 10.0f, 1.0f)), 0.5f);
   std::vector<std::string> written;
   {
     JobStore store(path_.string());
@@ -379,17 +381,17 @@ TEST_F(JobStoreTest, PhotonTablesRoundTripThroughDiskWithoutLoss) {
         photons[i].power = Vec3(0.001f * (i + 1), 0.002f, 0.0005f);
         photons[i].bounce = static_cast<uint16_t>(i % 4);
       }
-      written.push_back(packRecords(photons));
+      written.push_back(packRecords(photons, frame));
       store.addPhotons(job, 3, int64_t(photons.size()), written.back());
     }
-    store.addPhotons(job, 4, 1, packRecords({StoredPhoton{}}));
+    store.addPhotons(job, 4, 1, packRecords({StoredPhoton{}}, frame));
   }
   JobStore reopened(path_.string());
   const auto read = reopened.photonBatches(1, 3);
   ASSERT_EQ(read.size(), written.size());
   for (size_t i = 0; i < read.size(); ++i) EXPECT_EQ(read[i], written[i]) << i;
   std::vector<StoredPhoton> decoded;
-  for (const std::string& blob : read) unpackRecords(blob.data(), blob.size(), true, decoded);
+  for (const std::string& blob : read) unpackRecords(blob.data(), blob.size(), frame, true, decoded);
   EXPECT_EQ(decoded.size(), 1000u + 1001 + 1002 + 1003 + 1004);
   EXPECT_EQ(reopened.photonBatches(1, 4).size(), 1u);
   EXPECT_TRUE(reopened.photonBatches(1, 5).empty());
@@ -614,11 +616,13 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
       update.bind(1, int64_t(zlibCrc)).bind(2, int64_t(cell));
       update.run();
     }
+    store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
     store.database().setUserVersion(3);
   }
   overwriteByte(path_.string() + "-photons/job-1.bin", 240 + 7);   // the second batch
   JobStore migrated(path_.string());
-  EXPECT_EQ(migrated.database().userVersion(), 4);
+  EXPECT_EQ(migrated.database().userVersion(), JobStore::kSchemaVersion);
+  EXPECT_EQ(migrated.job(1)->photonRecordBytes, 24);   // written before schema 5
   EXPECT_EQ(migrated.photonBatches(1, 1), std::vector<std::string>{good});
   EXPECT_THROW(migrated.photonBatches(1, 2), DamagedFileError);
   std::vector<QueuedBatch> batches;

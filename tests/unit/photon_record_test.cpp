@@ -2,46 +2,92 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 namespace portico {
 namespace {
 
-TEST(PhotonRecord, RoundTripsWithinItsPrecision) {
+// A 50 x 6 x 35 m cell, off the origin.
+const Bounds3 kCell(Vec3(-30.0f, -2.0f, 5.0f), Vec3(20.0f, 4.0f, 40.0f));
+constexpr float kRadius = 0.5f;
+
+TEST(PhotonRecord, RoundTripsWithinHalfALatticeStep) {
+  const PhotonFrame frame(kCell, kRadius);
+  // 50 m + 2 radii over 2^21 steps: ~25 um.
+  EXPECT_LT(frame.step().x, 26e-6f);
   std::mt19937 random(5);
-  std::uniform_real_distribution<float> unit(-1, 1), power(1e-6f, 3.0f);
+  std::uniform_real_distribution<float> unit(-1, 1), along(0, 1), power(1e-6f, 3.0f);
   for (int i = 0; i < 10000; ++i) {
     StoredPhoton p;
-    p.position = {unit(random) * 100, unit(random) * 100, unit(random) * 100};
+    // Inside the cell, or (a copy across a portal) up to the radius outside it.
+    for (int axis = 0; axis < 3; ++axis)
+      p.position[axis] = kCell.lo[axis] - kRadius + (kCell.hi[axis] - kCell.lo[axis] + 2 * kRadius) * along(random);
     p.direction = normalize(Vec3(unit(random), unit(random), unit(random)));
     const float base = power(random);
     p.power = {base, base * 0.5f * (1 + unit(random)), base * 0.25f * (1 + unit(random))};
     p.bounce = static_cast<uint16_t>(i % 300);
-    const StoredPhoton q = fromRecord(toRecord(p));
-    EXPECT_EQ(q.position, p.position);
+    const PhotonRecord r = toRecord(p, frame);
+    const StoredPhoton q = fromRecord(r, frame);
+    for (int axis = 0; axis < 3; ++axis) {
+      // Half a step, and the float rounding of coordinates up to 40 m.
+      const float tolerance = 0.5f * frame.step()[axis] + 8e-6f;
+      EXPECT_NEAR(q.position[axis], p.position[axis], tolerance) << i << " axis " << axis;
+    }
     EXPECT_GT(dot(q.direction, p.direction), 0.99999f);
     const float largest = maxComponent(p.power);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(q.power[c], p.power[c], largest / 128.0f) << c;
-    EXPECT_EQ(q.bounce, std::min<uint16_t>(p.bounce, 255));
+    EXPECT_EQ(q.bounce, p.bounce > 0 ? 1 : 0);
+    // A decoded photon is a lattice point: it encodes to the same record,
+    // so a table re-encoded anywhere stays bit-identical.
+    const PhotonRecord again = toRecord(q, frame);
+    EXPECT_EQ(again.position, r.position) << i;
   }
 }
 
+TEST(PhotonRecord, ClampsPointsOutsideItsFrameAndRejectsFramesThatAreNotBoxes) {
+  const PhotonFrame frame(kCell, kRadius);
+  StoredPhoton far;
+  far.position = Vec3(1000.0f, -1000.0f, 20.0f);
+  far.direction = Vec3(0, 1, 0);
+  const Vec3 clamped = fromRecord(toRecord(far, frame), frame).position;
+  EXPECT_NEAR(clamped.x, kCell.hi.x + kRadius, 2e-3f);
+  EXPECT_NEAR(clamped.y, kCell.lo.y - kRadius, 2e-3f);
+  EXPECT_NEAR(clamped.z, 20.0f, 1e-4f);
+  StoredPhoton nan = far;
+  nan.position.x = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_TRUE(isFinite(fromRecord(toRecord(nan, frame), frame).position));
+
+  // A flat cell (a floor alone) still has a lattice across its thickness.
+  const PhotonFrame flat(Bounds3(Vec3(0.0f), Vec3(10.0f, 0.0f, 10.0f)), 0.0f);
+  EXPECT_GT(flat.step().y, 0.0f);
+  StoredPhoton onFloor = far;
+  onFloor.position = Vec3(3.0f, 0.0f, 7.0f);
+  EXPECT_NEAR(fromRecord(toRecord(onFloor, flat), flat).position.y, 0.0f, 1e-6f);
+
+  const float inf = std::numeric_limits<float>::infinity();
+  EXPECT_THROW(PhotonFrame(Bounds3(), kRadius), std::invalid_argument);   // empty
+  EXPECT_THROW(PhotonFrame(Bounds3(Vec3(0.0f), Vec3(inf)), kRadius), std::invalid_argument);
+  EXPECT_THROW(PhotonFrame(kCell, std::numeric_limits<float>::quiet_NaN()), std::invalid_argument);
+}
+
 TEST(PhotonRecord, UnpackFiltersDirectPhotonsAndRejectsTornTables) {
+  const PhotonFrame frame(kCell, kRadius);
   std::vector<StoredPhoton> photons(3);
   for (int i = 0; i < 3; ++i) {
-    photons[i].position = Vec3(float(i));
+    photons[i].position = Vec3(float(i), 0.0f, 10.0f);
     photons[i].direction = {0, -1, 0};
     photons[i].power = Vec3(1);
     photons[i].bounce = static_cast<uint16_t>(i);
   }
-  const std::string bytes = packRecords(photons);
+  const std::string bytes = packRecords(photons, frame);
   ASSERT_EQ(bytes.size(), 3 * sizeof(PhotonRecord));
   std::vector<StoredPhoton> all, indirect;
-  unpackRecords(bytes.data(), bytes.size(), true, all);
-  unpackRecords(bytes.data(), bytes.size(), false, indirect);
+  unpackRecords(bytes.data(), bytes.size(), frame, true, all);
+  unpackRecords(bytes.data(), bytes.size(), frame, false, indirect);
   EXPECT_EQ(all.size(), 3u);
   EXPECT_EQ(indirect.size(), 2u);
-  EXPECT_THROW(unpackRecords(bytes.data(), bytes.size() - 1, true, all), std::runtime_error);
+  EXPECT_THROW(unpackRecords(bytes.data(), bytes.size() - 1, frame, true, all), std::runtime_error);
 }
 
 TEST(PhotonRecord, ZeroAndTinyPowersStayFinite) {
