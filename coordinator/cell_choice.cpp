@@ -30,6 +30,10 @@ Holders holdersOf(const WorkerInfo& worker, const WorkerRegistry& workers, uint6
 }
 }  // namespace
 
+bool heldByAnotherWorker(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell) {
+  return holdersOf(worker, workers, job, cell, 0.0).any;
+}
+
 const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
                               const WorkerInfo& worker, const WorkerRegistry& workers) {
   const double speed = speedOf(worker);

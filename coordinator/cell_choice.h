@@ -37,6 +37,9 @@ namespace portico {
 const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
                               const WorkerInfo& worker, const WorkerRegistry& workers);
 
+// Whether a worker other than `worker` holds the cell (by the cache models).
+bool heldByAnotherWorker(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell);
+
 // Load time per triangle: a grid build and the cell's read (bench pipeline, octagon).
 constexpr double kLoadSecondsPerTriangle = 1e-7;
 // A worker's speed before its first timed lease (work per second).

@@ -8,6 +8,7 @@
 #include <set>
 
 #include "common/transport/photon_record.h"
+#include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
@@ -27,9 +28,12 @@ constexpr size_t kLeaseCandidates = 1024;
 // What a worker's cache holds per byte of a cell's file: the geometry and
 // an accelerator about twice its size (a grid; worker/cell_cache.h).
 constexpr uint64_t kCachedBytesPerFileByte = 3;
-// Photon pass: a lease under this much of its worker's time takes on more of
-// the cells the worker holds, at most kMostCellsPerLease in all.
-constexpr double kSmallLeaseSeconds = 0.01;
+// Photon pass: a lease under this much of its worker's time takes on more
+// cells, at most kMostCellsPerLease in all. A cell's emission is ~10 ms of
+// a worker's time on the octagon: at 0.03 s a photon pass takes ~130
+// leases instead of ~290, and the coordinator half the CPU (about half its
+// photon-pass CPU is per lease: statements, commits, messages).
+constexpr double kSmallLeaseSeconds = 0.03;
 constexpr size_t kMostCellsPerLease = 16;
 constexpr uint32_t kLeaseOwnCell = 0xffffffff;   // Failure.failedCell's default
 
@@ -156,7 +160,10 @@ void Coordinator::runRound() {
     if (envelope.which() != wire::Envelope::RESULT) continue;
     if (auto worker = workers_.find(in.identity); worker != workers_.end()) {
       const uint64_t lease = envelope.getResult().getLease();
-      worker->second.recordLease(lease, wallMs());
+      int64_t workerMicros = 0;
+      for (auto counter : envelope.getResult().getCounters())
+        if (std::string_view(counter.getName().cStr()) == kLeaseTimeCounter) workerMicros = counter.getValue();
+      worker->second.recordLease(lease, wallMs(), workerMicros);
       worker->second.leases.erase(lease);
       resultsArrived = true;
     }
@@ -385,17 +392,19 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     sql::Transaction tx(store_.database());
     opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
     for (const QueuedBatch& batch : batches) leaseWork += batch.work;
-    // Photon pass: a lease of a few photons (the end of the pass) takes on
-    // more of the cells this worker holds, up to kSmallLeaseSeconds of its
-    // work: one round trip and one Result for all of them. Their cache
-    // footprint is capped, so a worker whose cache forgot them (the model
-    // errs) does not pin more than a quarter of its budget reloading them.
+    // Photon pass: a lease under kSmallLeaseSeconds of the worker's work
+    // (a cell's emission, the end of the pass) takes on more cells, those
+    // it holds and those no other worker holds, up to that much work: one
+    // round trip and one Result for all of them. Their cache footprint is
+    // capped, so a worker whose cache forgot them (the model errs) does not
+    // pin more than a quarter of its budget reloading them.
     const int64_t smallLease = int64_t(worker.workPerSecond * kSmallLeaseSeconds);
     uint64_t extraBytes = 0;
     if (opened.id && chosen->phase == 0 && leaseWork < smallLease) {
       for (const PendingCell& c : candidates) {
         if (leaseWork >= smallLease || moreCells.size() + 1 >= kMostCellsPerLease) break;
-        if (&c == chosen || c.job != chosen->job || c.phase != chosen->phase || !worker.holds(c.job, c.cell) ||
+        if (&c == chosen || c.job != chosen->job || c.phase != chosen->phase ||
+            (!worker.holds(c.job, c.cell) && heldByAnotherWorker(worker, workers_, c.job, c.cell)) ||
             failedCells_.count({c.job, c.cell}))
           continue;
         if (worker.memoryBytes > 0 && extraBytes + cachedBytes(c.cell) > worker.memoryBytes / 4) continue;

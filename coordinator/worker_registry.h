@@ -59,18 +59,27 @@ struct WorkerInfo {
     if (workPerSecond <= 0) return std::min<int64_t>(maxWork, 10 * kMinLeaseWork);   // a first, short lease to measure
     return std::clamp<int64_t>(int64_t(workPerSecond * kLeaseSeconds), std::min(kMinLeaseWork, maxWork), maxWork);
   }
-  // A lease's Result arrived: fold its speed into the estimate. A queued
-  // lease starts when the one before it ends, so it is timed from the later
-  // of its sending and the previous Result. Leases under 20 ms measure the
-  // round trip more than the tracing.
-  void recordLease(uint64_t lease, int64_t nowMs) {
+  // A lease's Result arrived: fold its speed into the estimate. The worker
+  // says how long the lease took it (`workerMicros`, 0 from a worker that
+  // does not); a photon pass's leases last a few milliseconds, too short to
+  // time from here, where the round trip and the queue dominate, so that
+  // the speed stayed unmeasured (0) for half a pass, and a third of the
+  // true one after. Without the worker's figure a lease is timed here,
+  // from the later of its sending and the previous Result (a queued lease
+  // starts when the one before it ends), when it took 20 ms or more.
+  void recordLease(uint64_t lease, int64_t nowMs, int64_t workerMicros = 0) {
     auto it = leases.find(lease);
     const int64_t previousResultMs = lastResultMs;
     lastResultMs = nowMs;
-    if (it == leases.end()) return;
-    const int64_t elapsed = nowMs - std::max(it->second.sentMs, previousResultMs);
-    if (it->second.work <= 0 || elapsed < 20) return;
-    const double rate = double(it->second.work) * 1000.0 / double(elapsed);
+    if (it == leases.end() || it->second.work <= 0) return;
+    double rate;
+    if (workerMicros >= 1000) {
+      rate = double(it->second.work) * 1e6 / double(workerMicros);
+    } else {
+      const int64_t elapsed = nowMs - std::max(it->second.sentMs, previousResultMs);
+      if (elapsed < 20) return;
+      rate = double(it->second.work) * 1000.0 / double(elapsed);
+    }
     workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
   }
 

@@ -237,6 +237,11 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   named.push_back({"leases.extra_cells", int64_t(assign.getMoreCells().size())});
   // Microseconds: most builds take well under a millisecond.
   named.push_back({"time.accel_build_us", std::llround(cacheStats.acceleratorBuildMs * 1e3)});
+  // The lease's own time here, loads included: the coordinator sizes this
+  // worker's leases from it (WorkerInfo::recordLease).
+  named.push_back({std::string_view(kLeaseTimeCounter),
+                   std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started)
+                       .count()});
   // Which structure each cell got (auto's choices): the job's statistics
   // list them per cell and count them per spec.
   std::deque<std::string> buildNames;   // owns the names `named` views

@@ -225,7 +225,12 @@ int WorkerSession::run() {
       if (mirror_) {
         std::optional<std::string> file;
         try {
+          // The lease's own cell, then its more cells (Assign.moreCells).
           file = mirror_->missing(assign.getSpec().getStore(), assign.getCell());
+          for (auto more : assign.getMoreCells()) {
+            if (file) break;
+            file = mirror_->missing(assign.getSpec().getStore(), more.getCell());
+          }
         } catch (const std::exception& e) {
           failLease(e.what());
           return;

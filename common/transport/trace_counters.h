@@ -9,6 +9,10 @@
 
 namespace portico {
 
+// A Result's counter of the lease's time on its worker, in microseconds
+// (loads included); the coordinator reads each worker's speed from it.
+inline constexpr std::string_view kLeaseTimeCounter = "time.lease_us";
+
 struct TraceCounters {
   int64_t photonsEmitted = 0;
   int64_t photonDeposits = 0;

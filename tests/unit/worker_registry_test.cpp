@@ -44,6 +44,28 @@ TEST(WorkerInfo, TimesAQueuedLeaseFromThePreviousResult) {
   EXPECT_EQ(worker.lastResultMs, 300);
 }
 
+// A photon pass's leases last a few milliseconds: too short to time at the
+// coordinator (round trip, queueing), so the worker's own figure is used.
+TEST(WorkerInfo, TakesTheWorkersOwnTimeOfAShortLease) {
+  WorkerInfo worker;
+  worker.ready = true;
+  worker.leases.emplace(1, WorkerInfo::LeaseInFlight{0, 6000});
+  worker.recordLease(1, 12, /*workerMicros=*/8000);   // 6000 photons in 8 ms
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 750000.0);
+  worker.leases.erase(1);
+  // Later leases fold in with the same weights as coordinator-timed ones.
+  worker.leases.emplace(2, WorkerInfo::LeaseInFlight{20, 3000});
+  worker.recordLease(2, 30, 6000);                     // 500 000 per second
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, 0.7 * 750000.0 + 0.3 * 500000.0);
+  worker.leases.erase(2);
+  // Under a millisecond the figure is mostly overhead: timed here instead
+  // (and ignored, being under 20 ms here too).
+  const double before = worker.workPerSecond;
+  worker.leases.emplace(3, WorkerInfo::LeaseInFlight{40, 10});
+  worker.recordLease(3, 45, 300);
+  EXPECT_DOUBLE_EQ(worker.workPerSecond, before);
+}
+
 // At the end of a photon pass leases hold a few photons and are over before
 // the next could arrive: a worker is kept up to kMostLeasesInFlight of them
 // while they add up to under kQueuedSeconds of its work.
