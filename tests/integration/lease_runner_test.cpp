@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <random>
@@ -143,6 +144,53 @@ TEST_F(LeaseRunner, ABadCellAmongTheMoreCellsIsTheOneBlamed) {
   } catch (const MoreCellError& e) {
     EXPECT_EQ(e.cell, bad.cell);
     EXPECT_NE(std::string(e.what()).find(scene.cells()[bad.cell].file), std::string::npos) << e.what();
+  }
+}
+
+// Photon records store positions on a lattice over their table's cell
+// (PhotonFrame: the cell's bounds grown by the photon radius), clamping
+// what lies outside. Nothing a lease deposits may need the clamp: not the
+// photons in rooms, not their copies across portals, not those in voxel
+// cells whose triangles stick out of the voxel.
+TEST_F(LeaseRunner, EveryDepositLiesInsideItsTablesLattice) {
+  const fs::path voxels = dir_ / "two_rooms_grid3";
+  ASSERT_EQ(runCommand({kBin + "portico", "scene", "import", "--grid", "3",
+                        std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/two_rooms/scene.json", voxels.string()},
+                       dir_ / "import-grid.log"),
+            0)
+      << readFile(dir_ / "import-grid.log");
+  for (const fs::path& store : {store_, voxels}) {
+    const SceneStore scene = SceneStore::open(store.string());
+    AcceleratorChooser chooser(CostModel::builtIn());
+    CellCache cache(uint64_t(1) << 30);
+    size_t records = 0, copies = 0;
+    for (uint32_t light = 0; light < scene.lights().size(); ++light) {
+      capnp::MallocMessageBuilder assign;
+      fillAssign(assign.initRoot<wire::Assign>(), store.string(), {{light, scene.lights()[light].cell}}, 20000);
+      // Crossings into cells an earlier lease loaded are traced here too.
+      auto result = runLease(cache, chooser, assign.getRoot<wire::Assign>().asReader(), std::nullopt, store.string(),
+                             1000000);
+      for (auto table : result->getRoot<wire::Envelope>().getResult().getDeposits()) {
+        const uint32_t cell = table.getCell();
+        ASSERT_LT(cell, scene.cells().size());
+        const PhotonFrame frame(scene.cells()[cell].bounds, 0.5f);   // fillAssign's photon radius
+        auto bytes = table.getRecords();
+        ASSERT_EQ(bytes.size() % sizeof(PhotonRecord), 0u);
+        for (size_t at = 0; at < bytes.size(); at += sizeof(PhotonRecord)) {
+          PhotonRecord r;
+          std::memcpy(&r, bytes.begin() + at, sizeof r);
+          for (uint32_t axis = 0; axis < 3; ++axis) {
+            const uint64_t step = (r.position >> (PhotonFrame::kBits * axis)) & PhotonFrame::kLastStep;
+            ASSERT_GT(step, 0u) << store << " cell " << cell << " axis " << axis;
+            ASSERT_LT(step, PhotonFrame::kLastStep) << store << " cell " << cell << " axis " << axis;
+          }
+          ++records;
+          copies += cell != scene.lights()[light].cell;
+        }
+      }
+    }
+    EXPECT_GT(records, 500u) << store;
+    EXPECT_GT(copies, 0u) << store << ": no copy across a portal was checked";
   }
 }
 
