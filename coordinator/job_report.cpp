@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "common/image/image_writer.h"
+#include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
 
 namespace portico {
@@ -87,6 +88,9 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
                       {"render", get(counters, "time.render_ms")},
                       {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},
+                      // The workers' time inside leases, all workers added up:
+                      // against the phases' time x workers, how busy they were.
+                      {"leases", std::llround(get(counters, std::string(kLeaseTimeCounter)) * 1e-3)},
                       {"total", (job.finishedMs ? job.finishedMs : job.phaseStartedMs) - job.createdMs}};
   stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
   addAcceleratorChoices(counters, stats);

@@ -274,6 +274,11 @@ TEST_F(Pipeline, RenderCommandWritesImageAndStatistics) {
     EXPECT_TRUE(stats["photons"].contains(key)) << key;
   EXPECT_TRUE(stats["time_ms"].contains("photons"));
   EXPECT_TRUE(stats["time_ms"].contains("render"));
+  // The workers' time in leases: more than nothing, less than both workers
+  // busy for the whole job.
+  const int64_t leases = stats["time_ms"].value("leases", int64_t(-1));
+  EXPECT_GT(leases, 0);
+  EXPECT_LE(leases, 2 * stats["time_ms"]["total"].get<int64_t>());
   EXPECT_GT(stats["cells"]["loaded"].get<int64_t>(), 0);
 }
 
