@@ -311,11 +311,24 @@ int runBenchPipeline(const BenchPipelineOptions& options) {
         p.deposits, p.deposits ? 100.0 * double(e.deposits - p.deposits) / double(p.deposits) : 0.0, e.absorbed,
         p.absorbed, e.escaped, p.escaped);
   }
+  // The ratio of the medians, and the median of each round's own ratio:
+  // the two modes of a round run a few seconds apart, so a machine whose
+  // speed drifts over minutes moves both alike.
   for (const ModeResult* p : porticos)
     if (p->mode.workers > 1)
       for (const ModeResult* q : porticos)
-        if (q->mode.workers == 1)
-          std::cout << fmt::format("{} / {}: {:.2f}x\n", p->mode.name, q->mode.name, q->seconds() / p->seconds());
+        if (q->mode.workers == 1) {
+          std::vector<double> rounds;
+          for (size_t i = 0; i < std::min(p->samples.size(), q->samples.size()); ++i)
+            if (p->samples[i].seconds > 0) rounds.push_back(q->samples[i].seconds / p->samples[i].seconds);
+          std::string perRound;
+          if (rounds.size() > 1)
+            perRound = fmt::format(" (per round: median {:.2f}, {:.2f}-{:.2f})", median(rounds),
+                                   *std::min_element(rounds.begin(), rounds.end()),
+                                   *std::max_element(rounds.begin(), rounds.end()));
+          std::cout << fmt::format("{} / {}: {:.2f}x{}\n", p->mode.name, q->mode.name, q->seconds() / p->seconds(),
+                                   perRound);
+        }
 
   if (!options.csv.empty()) {
     std::ofstream out(options.csv);
