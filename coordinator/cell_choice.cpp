@@ -30,8 +30,10 @@ Holders holdersOf(const WorkerInfo& worker, const WorkerRegistry& workers, uint6
 }
 }  // namespace
 
-bool heldByAnotherWorker(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell) {
-  return holdersOf(worker, workers, job, cell, 0.0).any;
+bool mayJoinLease(const PendingCell& c, const PendingCell& chosen, const WorkerInfo& worker,
+                  const WorkerRegistry& workers, bool failedBefore) {
+  if (&c == &chosen || c.job != chosen.job || c.phase != chosen.phase || failedBefore) return false;
+  return worker.holds(c.job, c.cell) || !holdersOf(worker, workers, c.job, c.cell, 0.0).any;
 }
 
 const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,

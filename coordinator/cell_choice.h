@@ -37,8 +37,13 @@ namespace portico {
 const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
                               const WorkerInfo& worker, const WorkerRegistry& workers);
 
-// Whether a worker other than `worker` holds the cell (by the cache models).
-bool heldByAnotherWorker(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell);
+// Whether candidate `c` may join `worker`'s photon lease about `chosen` as
+// one of its more cells (Assign.moreCells): same job and phase, a cell this
+// worker holds or that no other worker holds (taking another's would load
+// it a second time), and not one that failed before (a failure in a lease
+// of several cells names its cell, which then goes alone).
+bool mayJoinLease(const PendingCell& c, const PendingCell& chosen, const WorkerInfo& worker,
+                  const WorkerRegistry& workers, bool failedBefore);
 
 // Load time per triangle: a grid build and the cell's read (bench pipeline, octagon).
 constexpr double kLoadSecondsPerTriangle = 1e-7;

@@ -403,10 +403,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     if (opened.id && chosen->phase == 0 && leaseWork < smallLease) {
       for (const PendingCell& c : candidates) {
         if (leaseWork >= smallLease || moreCells.size() + 1 >= kMostCellsPerLease) break;
-        if (&c == chosen || c.job != chosen->job || c.phase != chosen->phase ||
-            (!worker.holds(c.job, c.cell) && heldByAnotherWorker(worker, workers_, c.job, c.cell)) ||
-            failedCells_.count({c.job, c.cell}))
-          continue;
+        if (!mayJoinLease(c, *chosen, worker, workers_, failedCells_.count({c.job, c.cell}) != 0)) continue;
         if (worker.memoryBytes > 0 && extraBytes + cachedBytes(c.cell) > worker.memoryBytes / 4) continue;
         std::vector<QueuedBatch> extra;
         const int64_t added = store_.addToLease(opened.id, c, smallLease - leaseWork, extra);

@@ -86,6 +86,26 @@ TEST(ChooseCell, PrefersItsOwnCellOnATieAndKeepsToTheFirstJob) {
   EXPECT_EQ(chooseCell(jobs, cells, w.a, w.workers)->job, 1u);
 }
 
+TEST(MayJoinLease, TakesCellsItHoldsOrNobodyHoldsOfTheSameJobAndPhase) {
+  TwoWorkers w;
+  w.a.cells.use(1, 1, 1);   // a holds cell 1
+  w.b.cells.use(1, 2, 1);   // b holds cell 2; nobody holds 3
+  const std::vector<PendingCell> pending{{1, 0, 0, 500}, {1, 1, 0, 400}, {1, 2, 0, 300}, {1, 3, 0, 200},
+                                         {2, 3, 0, 100}, {1, 4, 1, 100}};
+  const PendingCell& chosen = pending[0];
+  EXPECT_FALSE(mayJoinLease(pending[0], chosen, w.a, w.workers, false));   // the lease's own cell
+  EXPECT_TRUE(mayJoinLease(pending[1], chosen, w.a, w.workers, false));    // a holds it
+  EXPECT_FALSE(mayJoinLease(pending[2], chosen, w.a, w.workers, false));   // b holds it: a second copy
+  EXPECT_TRUE(mayJoinLease(pending[3], chosen, w.a, w.workers, false));    // nobody holds it
+  EXPECT_FALSE(mayJoinLease(pending[4], chosen, w.a, w.workers, false));   // another job
+  EXPECT_FALSE(mayJoinLease(pending[5], chosen, w.a, w.workers, false));   // another phase
+  EXPECT_FALSE(mayJoinLease(pending[1], chosen, w.a, w.workers, true));    // it failed before
+  // And b, by the same rule, takes cell 2 and cell 3 but not cell 1.
+  EXPECT_FALSE(mayJoinLease(pending[1], chosen, w.b, w.workers, false));
+  EXPECT_TRUE(mayJoinLease(pending[2], chosen, w.b, w.workers, false));
+  EXPECT_TRUE(mayJoinLease(pending[3], chosen, w.b, w.workers, false));
+}
+
 TEST(CellCacheModel, ForgetsTheLeastRecentlyUsedBeyondTheBudget) {
   CellCacheModel model(1000);
   model.use(1, 0, 400);
