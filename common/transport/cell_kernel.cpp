@@ -20,6 +20,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
     : scene_(scene),
       tracer_(tracer),
       parameters_(parameters),
+      ownFrame_(scene.cells()[tracer.cell().id()].bounds, parameters.photonRadius),
       photons_(photons),
       lightSampler_(scene.lights(), LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops)) {
   if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
@@ -318,17 +319,14 @@ void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {
   // A map cannot hold such a photon (and never did: tables dropped them).
   if (!isFinite(photon.position) || !isFinite(photon.power)) return;
   // Each table's records lie on its own cell's lattice (PhotonFrame).
-  const auto record = [&](uint32_t cell) {
-    return toRecord(photon, PhotonFrame(scene_.cells()[cell].bounds, parameters_.photonRadius));
-  };
-  const uint32_t cell = tracer_.cell().id();
-  out.deposits[cell].push_back(record(cell));
+  out.deposits[tracer_.cell().id()].push_back(toRecord(photon, ownFrame_));
   // Copies for neighbours across a nearby portal, so their estimates near
   // the doorway see this side too (no seam at the threshold).
   thread_local std::vector<uint32_t> neighbors;
   tracer_.neighborsNear(photon.position, parameters_.photonRadius, neighbors);
   for (uint32_t neighbor : neighbors) {
-    out.deposits[neighbor].push_back(record(neighbor));
+    const PhotonFrame neighborFrame(scene_.cells()[neighbor].bounds, parameters_.photonRadius);
+    out.deposits[neighbor].push_back(toRecord(photon, neighborFrame));
     ++out.counters.photonCopies;
   }
 }

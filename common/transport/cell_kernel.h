@@ -77,6 +77,9 @@ class CellKernel {
   const SceneStore& scene_;
   const CellTracer& tracer_;
   const JobParameters& parameters_;
+  // The lattice of this cell's photon table, made once: every deposit is
+  // encoded on it (copies across portals on their neighbour's).
+  const PhotonFrame ownFrame_;
   const PhotonMap* photons_;
   LightSampler lightSampler_;
   std::optional<CameraModel> camera_;
