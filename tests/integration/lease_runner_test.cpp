@@ -154,11 +154,7 @@ TEST_F(LeaseRunner, ABadCellAmongTheMoreCellsIsTheOneBlamed) {
 // cells whose triangles stick out of the voxel.
 TEST_F(LeaseRunner, EveryDepositLiesInsideItsTablesLattice) {
   const fs::path voxels = dir_ / "two_rooms_grid3";
-  ASSERT_EQ(runCommand({kBin + "portico", "scene", "import", "--grid", "3",
-                        std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/two_rooms/scene.json", voxels.string()},
-                       dir_ / "import-grid.log"),
-            0)
-      << readFile(dir_ / "import-grid.log");
+  ASSERT_EQ(importVoxelStore("two_rooms", 3, voxels), "");
   for (const fs::path& store : {store_, voxels}) {
     const SceneStore scene = SceneStore::open(store.string());
     AcceleratorChooser chooser(CostModel::builtIn());

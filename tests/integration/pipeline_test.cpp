@@ -183,11 +183,7 @@ TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
   // the image are identical whatever structure each cell uses — in rooms,
   // and in voxel cells cut by a uniform grid, whose triangles stick out.
   const fs::path voxels = dir_ / "two_rooms_grid3";
-  ASSERT_EQ(runCommand({kBin + "portico", "scene", "import", "--grid", "3",
-                        std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/two_rooms/scene.json", voxels.string()},
-                       dir_ / "import-grid.log"),
-            0)
-      << readFile(dir_ / "import-grid.log");
+  ASSERT_EQ(importVoxelStore("two_rooms", 3, voxels), "");
   const std::vector<std::string> specs{"grid", "grid:res=7", "hgrid:res=4,max=8", "kd:median", "kd:sah", "kd:bbox",
                                        "brute", "auto"};
   for (const fs::path& store : {store_, voxels}) {

@@ -8,6 +8,7 @@
 
 #include <csignal>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -40,6 +41,29 @@ class Resilience : public ::testing::Test {
     expectConservation(stats);
     EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
     EXPECT_EQ(differingFloats(image, dir_ / "reference.exr"), 0u);
+  }
+  // Submits the test job (image at dir/image.exr) with no worker to take it,
+  // kills the coordinator, lets `whileDown` change its files, restarts it on
+  // the same endpoint with two workers and waits: the job must be done, its
+  // photon pass run once more, and its image the reference's, bit for bit.
+  // Returns the coordinator's log, for what each test expects it to say.
+  static std::string restartAfter(const fs::path& dir, const std::function<void(uint64_t job)>& whileDown) {
+    LocalCluster cluster(dir, 0);
+    const std::string endpoint = cluster.endpoint();
+    const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+    cluster.killCoordinator();
+    whileDown(job);
+    cluster.startCoordinator(endpoint);
+    cluster.addWorker({});
+    cluster.addWorker({});
+    const auto status = cluster.wait(job);
+    const std::string log = readFile(dir / "coordinator.log");
+    EXPECT_EQ(status.value("state", ""), "done") << status.dump(2) << log;
+    if (status.value("state", "") != "done") return log;
+    EXPECT_NE(log.find("running its photon pass again"), std::string::npos) << log;
+    EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
+    expectSameAsReference(dir / "image.exr");
+    return log;
   }
   // Submits the test job (image at dir/image.exr) and polls until it is in
   // its render pass, with camera rays traced when asked; 0 if it finished
@@ -141,31 +165,20 @@ TEST_F(Resilience, ADamagedPhotonFileRunsThePhotonPassAgainWithTheSameBits) {
 // photon pass runs again, and the image comes out the same, bit for bit.
 TEST_F(Resilience, ADamagedBatchFileRunsThePhotonPassAgainWithTheSameBits) {
   const fs::path dir = dir_ / "damaged-batches";
-  LocalCluster cluster(dir, 0);
-  const std::string endpoint = cluster.endpoint();
-  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  cluster.killCoordinator();
-  size_t damaged = 0;
-  const std::string prefix = "job-" + std::to_string(job) + "-";
-  for (const auto& entry : fs::directory_iterator(dir / "jobs.db-batches")) {
-    if (entry.path().filename().string().rfind(prefix, 0) != 0) continue;
-    const auto size = fs::file_size(entry.path());
-    std::ofstream out(entry.path(), std::ios::binary | std::ios::in | std::ios::out);
-    const std::string garbage(size_t(size), '\x5a');
-    out.write(garbage.data(), std::streamsize(garbage.size()));
-    damaged += size > 0;
-  }
-  ASSERT_GT(damaged, 0u) << "no batch file of job " << job << " in " << (dir / "jobs.db-batches");
-  cluster.startCoordinator(endpoint);
-  cluster.addWorker({});
-  cluster.addWorker({});
-  const auto status = cluster.wait(job);
-  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
-  const std::string log = readFile(dir / "coordinator.log");
-  EXPECT_NE(log.find("running its photon pass again"), std::string::npos) << log;
+  const std::string log = restartAfter(dir, [&](uint64_t job) {
+    size_t damaged = 0;
+    const std::string prefix = "job-" + std::to_string(job) + "-";
+    for (const auto& entry : fs::directory_iterator(dir / "jobs.db-batches")) {
+      if (entry.path().filename().string().rfind(prefix, 0) != 0) continue;
+      const auto size = fs::file_size(entry.path());
+      std::ofstream out(entry.path(), std::ios::binary | std::ios::in | std::ios::out);
+      const std::string garbage(size_t(size), '\x5a');
+      out.write(garbage.data(), std::streamsize(garbage.size()));
+      damaged += size > 0;
+    }
+    EXPECT_GT(damaged, 0u) << "no batch file of job " << job << " in " << (dir / "jobs.db-batches");
+  });
   EXPECT_NE(log.find("CRC mismatch"), std::string::npos) << log;
-  EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
-  expectSameAsReference(dir / "image.exr");
 }
 
 // A jobs.db left by a portico of 24-byte photon records (schema 4) with an
@@ -174,25 +187,13 @@ TEST_F(Resilience, ADamagedBatchFileRunsThePhotonPassAgainWithTheSameBits) {
 // and the image is the same as ever.
 TEST_F(Resilience, AJobBegunWithAnOlderPhotonRecordRunsItsPhotonPassAgainWithTheSameBits) {
   const fs::path dir = dir_ / "older-records";
-  LocalCluster cluster(dir, 0);
-  const std::string endpoint = cluster.endpoint();
-  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  cluster.killCoordinator();
-  {
+  const std::string log = restartAfter(dir, [&](uint64_t job) {
     sql::Database db((dir / "jobs.db").string(), sql::Database::Mode::ReadWriteCreate);
     auto& update = db.prepare("UPDATE jobs SET photon_record_bytes = 24 WHERE id = ?");
     update.bind(1, int64_t(job));
     update.run();
-  }
-  cluster.startCoordinator(endpoint);
-  cluster.addWorker({});
-  cluster.addWorker({});
-  const auto status = cluster.wait(job);
-  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
-  const std::string log = readFile(dir / "coordinator.log");
+  });
   EXPECT_NE(log.find("its photon tables hold 24-byte records of an older portico"), std::string::npos) << log;
-  EXPECT_EQ(nlohmann::json::parse(readFile(dir / "image.exr.json"))["photon_pass_restarts"], 1);
-  expectSameAsReference(dir / "image.exr");
 }
 
 // A cell whose work dies with every worker that takes it (here: workers

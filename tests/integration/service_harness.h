@@ -93,6 +93,17 @@ inline std::string generateDemoStore(const fs::path& store, int seed) {
   return code == 0 ? std::string() : "portico scene generate failed: " + readFile(log);
 }
 
+// Imports tests/scenes/NAME/scene.json into `store`, its meshes cut into
+// voxel cells of a grid x grid x grid lattice (`portico scene import
+// --grid`); returns "" on success, else the command's log.
+inline std::string importVoxelStore(const std::string& name, int grid, const fs::path& store) {
+  const fs::path log = store.string() + ".import.log";
+  const int code = runCommand({kBin + "portico", "scene", "import", "--grid", std::to_string(grid),
+                               std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/" + name + "/scene.json", store.string()},
+                              log);
+  return code == 0 ? std::string() : "portico scene import failed: " + readFile(log);
+}
+
 // How a LocalCluster's services are started beyond the defaults.
 struct ClusterOptions {
   std::string listen = "tcp://127.0.0.1:*";
