@@ -4,8 +4,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace portico {
+
+namespace {
+constexpr float kPortalSlack = 1e-4f;   // metres
+// Growth of a box, relative to the largest coordinate involved, that lies
+// far beyond the triangle test's rounding: 2^-16, 256 float ulps.
+constexpr float kRelativeReach = 1.0f / 65536.0f;
+
+float largestMagnitude(const Vec3& p) { return std::max(std::abs(p.x), std::max(std::abs(p.y), std::abs(p.z))); }
+
+Bounds3 grown(Bounds3 box, float by) {
+  box.lo = box.lo - Vec3(by);
+  box.hi = box.hi + Vec3(by);
+  return box;
+}
+}  // namespace
 
 CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
     : cell_(cell), accelerator_(accelerator) {
@@ -30,14 +46,20 @@ CellTracer::CellTracer(const CellGeometry& cell, const Accelerator& accelerator)
     Bounds3 bounds;
     for (const Vec3& p : portal.polygon) bounds.extend(p);
     portalPolygons_.push_back({portal.polygon, normal, portal.neighborCell, bounds});
-    for (size_t i = 1; i + 1 < portal.polygon.size(); ++i)
+    for (size_t i = 1; i + 1 < portal.polygon.size(); ++i) {
+      const Vec3 &v0 = portal.polygon[0], &v1 = portal.polygon[i], &v2 = portal.polygon[i + 1];
+      Bounds3 box;
+      box.extend(v0);
+      box.extend(v1);
+      box.extend(v2);
+      const float magnitude = std::max(largestMagnitude(box.lo), largestMagnitude(box.hi));
       portalTriangles_.push_back(
-          {portal.polygon[0], portal.polygon[i], portal.polygon[i + 1], normal, portal.neighborCell});
+          {v0, v1, v2, normal, portal.neighborCell, grown(box, kPortalSlack + kRelativeReach * magnitude)});
+    }
   }
 }
 
 namespace {
-constexpr float kPortalSlack = 1e-4f;   // metres
 
 float distanceToSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Vec3 ab = b - a;
@@ -98,18 +120,41 @@ CellEvent CellTracer::trace(const Ray& ray) const {
   // portal it moves out of, so a ray that just entered through a portal
   // never re-crosses it at t = 0.
   if (!portalTriangles_.empty()) {
-    const WatertightRay frame(ray.direction);
     Ray limited = ray;
     limited.tMax = event.kind == CellEvent::Kind::Surface ? hit.t : ray.tMax;
     // A ray starting on a portal's plane (a camera exactly on a voxel face)
     // and moving out must leave at t = 0, whatever the rounding of t: an
     // outward portal a hair behind the origin still counts.
     limited.tMin = std::min(ray.tMin, -kPortalSlack);
+    // The box of the segment the portal test accepts hits on. The test is
+    // backward stable: a point it reports (origin + t * direction, exactly)
+    // lies within a few ulps of the triangle, measured in the magnitudes of
+    // the coordinates involved; the segment's computed ends are as close to
+    // the exact ones. So a hit is impossible unless the segment's box, grown
+    // by 2^-16 of the ray's coordinates, meets the triangle's `reach` (grown
+    // likewise by its own and by the slack). Skipping on that changes no
+    // answer. An unbounded segment (no surface hit) skips nothing.
+    Bounds3 segment{Vec3(-kInfinity), Vec3(kInfinity)};
+    if (std::isfinite(limited.tMax)) {
+      const Vec3 start = ray.origin + ray.direction * limited.tMin;
+      const Vec3 end = ray.origin + ray.direction * limited.tMax;
+      // The magnitudes before any cancellation in origin + t * direction.
+      const float magnitude = largestMagnitude(ray.origin) +
+                              largestMagnitude(ray.direction) * std::max(-limited.tMin, limited.tMax);
+      segment = grown(Bounds3{min(start, end), max(start, end)}, kRelativeReach * magnitude);
+    }
+    // Made for the first portal that passes the box test (most rays: none).
+    std::optional<WatertightRay> frame;
     for (const PortalTriangle& portal : portalTriangles_) {
+      if (segment.hi.x < portal.reach.lo.x || segment.lo.x > portal.reach.hi.x ||
+          segment.hi.y < portal.reach.lo.y || segment.lo.y > portal.reach.hi.y ||
+          segment.hi.z < portal.reach.lo.z || segment.lo.z > portal.reach.hi.z)
+        continue;
       if (dot(ray.direction, portal.outward) <= 0) continue;
+      if (!frame) frame.emplace(ray.direction);
       float t, u, v;
       // Strictly nearer than the geometry: a wall at the same t wins.
-      if (intersectTriangle(frame, limited, portal.v0, portal.v1, portal.v2, t, u, v) && t < limited.tMax) {
+      if (intersectTriangle(*frame, limited, portal.v0, portal.v1, portal.v2, t, u, v) && t < limited.tMax) {
         limited.tMax = t;
         event.kind = CellEvent::Kind::Portal;
         event.t = t;

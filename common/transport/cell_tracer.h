@@ -31,6 +31,10 @@ class CellTracer {
     Vec3 v0, v1, v2;
     Vec3 outward;            // unit normal pointing out of this cell
     uint32_t neighborCell;
+    // The triangle's box, grown by far more than the triangle test's
+    // rounding: a ray segment whose box misses it cannot hit the triangle
+    // (cell_tracer.cpp), so most rays skip the exact test.
+    Bounds3 reach;
   };
   struct PortalPolygon {
     std::vector<Vec3> points;
