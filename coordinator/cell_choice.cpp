@@ -39,13 +39,15 @@ bool mayJoinLease(const PendingCell& c, const PendingCell& chosen, const WorkerI
 const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const std::vector<CellInfo>& cells,
                               const WorkerInfo& worker, const WorkerRegistry& workers) {
   const double speed = speedOf(worker);
+  const double loadSecondsPerTriangle =
+      worker.loadSecondsPerTriangle > 0 ? worker.loadSecondsPerTriangle : kLoadSecondsPerTriangle;
   const PendingCell* chosen = nullptr;
   double best = -std::numeric_limits<double>::infinity();
   for (const PendingCell& c : candidates) {
     if (c.job != candidates.front().job) break;
     const bool mine = worker.holds(c.job, c.cell);
     const double triangles = c.cell < cells.size() ? double(cells[c.cell].triangleCount) : 0.0;
-    const double loadSeconds = triangles * kLoadSecondsPerTriangle;
+    const double loadSeconds = triangles * loadSecondsPerTriangle;
     const Holders holders = mine ? Holders{} : holdersOf(worker, workers, c.job, c.cell, loadSeconds);
     const double value = double(c.work) - (holders.any ? loadSeconds * speed : 0.0);
     if (value < 0 && holders.freeWithin) continue;   // its holder takes it sooner

@@ -14,8 +14,10 @@ namespace portico {
 // nobody holds costs nothing extra whichever worker takes it, and whenever:
 // ranking it below held cells deferred big cells (450 K triangles) to the
 // end of a photon pass, where they ran alone. What costs is a second copy:
-// a cell another worker holds is read and built again, about
-// kLoadSecondsPerTriangle per triangle, worth that many rays (or photons)
+// a cell another worker holds is read and built again, at what a load
+// costs this worker per triangle (WorkerInfo::loadSecondsPerTriangle,
+// measured from its Results; kLoadSecondsPerTriangle until then), worth
+// that many rays (or photons)
 // at this worker's speed, and its later work is then split between two
 // caches. Each candidate is valued at its pending work less that cost; the
 // best value wins (on a tie, one the worker holds). A large queue is thus
@@ -45,7 +47,8 @@ const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const 
 bool mayJoinLease(const PendingCell& c, const PendingCell& chosen, const WorkerInfo& worker,
                   const WorkerRegistry& workers, bool failedBefore);
 
-// Load time per triangle: a grid build and the cell's read (bench pipeline, octagon).
+// Load time per triangle before a worker's own is measured: a grid build
+// and the cell's read (bench pipeline, octagon).
 constexpr double kLoadSecondsPerTriangle = 1e-7;
 // A worker's speed before its first timed lease (work per second).
 constexpr double kUnmeasuredWorkPerSecond = 2e5;

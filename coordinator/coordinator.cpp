@@ -160,10 +160,15 @@ void Coordinator::runRound() {
     if (envelope.which() != wire::Envelope::RESULT) continue;
     if (auto worker = workers_.find(in.identity); worker != workers_.end()) {
       const uint64_t lease = envelope.getResult().getLease();
-      int64_t workerMicros = 0;
-      for (auto counter : envelope.getResult().getCounters())
-        if (std::string_view(counter.getName().cStr()) == kLeaseTimeCounter) workerMicros = counter.getValue();
+      int64_t workerMicros = 0, loadMicros = 0, trianglesLoaded = 0;
+      for (auto counter : envelope.getResult().getCounters()) {
+        const std::string_view name = counter.getName().cStr();
+        if (name == kLeaseTimeCounter) workerMicros = counter.getValue();
+        else if (name == kLoadTimeCounter) loadMicros = counter.getValue();
+        else if (name == kTrianglesLoadedCounter) trianglesLoaded = counter.getValue();
+      }
       worker->second.recordLease(lease, wallMs(), workerMicros);
+      worker->second.recordLoads(trianglesLoaded, loadMicros);
       worker->second.leases.erase(lease);
       resultsArrived = true;
     }

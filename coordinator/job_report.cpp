@@ -79,6 +79,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["cells"] = {{"loaded", get(counters, "cells.loaded")},
                     {"cache_hits", get(counters, "cells.cache_hits")},
                     {"bytes_read", get(counters, "cells.bytes_read")},
+                    {"triangles_loaded", get(counters, std::string(kTrianglesLoadedCounter))},
                     {"photon_maps_built", get(counters, "photon_maps.built")}};
   stats["leases"] = get(counters, "leases.completed");
   // Photon-pass leases that carried more cells than their own, and how many.
@@ -88,6 +89,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
                       {"render", get(counters, "time.render_ms")},
                       {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},
+                      // Cell loads: reading, validating and building, all workers added up.
+                      {"cell_loads", std::llround(get(counters, std::string(kLoadTimeCounter)) * 1e-3)},
                       // The workers' time inside leases, all workers added up:
                       // against the phases' time x workers, how busy they were.
                       {"leases", std::llround(get(counters, std::string(kLeaseTimeCounter)) * 1e-3)},

@@ -83,6 +83,19 @@ struct WorkerInfo {
     workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
   }
 
+  // What loading a cell costs it, per triangle (read and accelerator
+  // build): 0 until a Result reports a load of at least kMinTimedLoadTriangles.
+  // It depends on the accelerator (a grid builds ~5x faster than Embree's
+  // BVH here) and on the machine, so it is measured rather than assumed.
+  double loadSecondsPerTriangle = 0;
+  static constexpr int64_t kMinTimedLoadTriangles = 10000;
+  void recordLoads(int64_t triangles, int64_t micros) {
+    if (triangles < kMinTimedLoadTriangles || micros <= 0) return;
+    const double measured = double(micros) * 1e-6 / double(triangles);
+    loadSecondsPerTriangle =
+        loadSecondsPerTriangle <= 0 ? measured : 0.7 * loadSecondsPerTriangle + 0.3 * measured;
+  }
+
   bool holds(uint64_t job, uint32_t cell) const { return cells.holds(job, cell); }
 };
 

@@ -1,5 +1,7 @@
 #include "worker/cell_cache.h"
 
+#include <chrono>
+
 #include <malloc.h>
 #include <spdlog/spdlog.h>
 
@@ -61,9 +63,12 @@ LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const
     throw std::runtime_error("cell " + std::to_string(cellId) + " does not exist in " + directory);
   const uint64_t fileBytes = store.cells()[cellId].byteCount;
   makeRoom(uint64_t(loadedBytesPerFileByte_ * double(fileBytes)));
+  const auto started = std::chrono::steady_clock::now();
   auto loaded = std::make_unique<LoadedCell>();
   loaded->geometry = CellGeometry::load(store.cellPath(cellId), cellId, store.materials().size());
   buildAccelerator(*loaded, resolve ? resolve() : acceleratorSpec);
+  statistics_.loadMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
+  statistics_.trianglesLoaded += int64_t(loaded->geometry->mesh().triangleCount);
   ++statistics_.cellsLoaded;
   statistics_.bytesRead += loaded->geometry->bytes();
   // Learn the ratio (with a margin for the build's scratch memory).

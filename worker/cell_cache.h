@@ -33,6 +33,9 @@ struct LoadedCell {
 struct CacheStatistics {
   int64_t cellsLoaded = 0, cellHits = 0, bytesRead = 0, photonMapsBuilt = 0;
   double acceleratorBuildMs = 0;
+  // Loads only: their triangles, and their time (read, validation and build).
+  int64_t trianglesLoaded = 0;
+  double loadMs = 0;
   std::vector<std::pair<uint32_t, std::string>> builds;   // (cell, spec) of each accelerator built
 };
 

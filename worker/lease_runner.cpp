@@ -237,6 +237,10 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   named.push_back({"leases.extra_cells", int64_t(assign.getMoreCells().size())});
   // Microseconds: most builds take well under a millisecond.
   named.push_back({"time.accel_build_us", std::llround(cacheStats.acceleratorBuildMs * 1e3)});
+  // What loading a cell costs this worker: the coordinator weighs a second
+  // copy of a cell by it (chooseCell).
+  named.push_back({std::string_view(kLoadTimeCounter), std::llround(cacheStats.loadMs * 1e3)});
+  named.push_back({std::string_view(kTrianglesLoadedCounter), cacheStats.trianglesLoaded});
   // The lease's own time here, loads included: the coordinator sizes this
   // worker's leases from it (WorkerInfo::recordLease).
   named.push_back({std::string_view(kLeaseTimeCounter),

@@ -12,6 +12,11 @@ namespace portico {
 // A Result's counter of the lease's time on its worker, in microseconds
 // (loads included); the coordinator reads each worker's speed from it.
 inline constexpr std::string_view kLeaseTimeCounter = "time.lease_us";
+// Its cells loaded: their time on the worker (read and accelerator build,
+// microseconds) and their triangles; the coordinator reads each worker's
+// cost of loading a cell from them.
+inline constexpr std::string_view kLoadTimeCounter = "time.load_us";
+inline constexpr std::string_view kTrianglesLoadedCounter = "cells.triangles_loaded";
 
 struct TraceCounters {
   int64_t photonsEmitted = 0;

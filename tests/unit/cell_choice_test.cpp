@@ -54,6 +54,26 @@ TEST(ChooseCell, SplitsAnothersCellOnlyWhenItsWorkOutweighsASecondLoad) {
   EXPECT_EQ(chooseCell(only, cells, w.a, w.workers)->cell, 0u);
 }
 
+TEST(ChooseCell, WeighsASecondLoadAtTheWorkersMeasuredLoadCost) {
+  TwoWorkers w;
+  const auto cells = cellsOf({100000, 1000});
+  w.b.cells.use(1, 0, 1);
+  const std::vector<PendingCell> candidates{{1, 0, 0, 20000}, {1, 1, 0, 100}};
+  // Unmeasured: the default cost (10 000 rays) is outweighed by 20 000.
+  EXPECT_EQ(chooseCell(candidates, cells, w.a, w.workers)->cell, 0u);
+  // a's Results say its loads take 0.4 us a triangle (an Embree build, say):
+  // a second load of cell 0 is now worth 40 000 rays, more than its queue.
+  w.a.recordLoads(50000, 20000);
+  EXPECT_DOUBLE_EQ(w.a.loadSecondsPerTriangle, 4e-7);
+  EXPECT_EQ(chooseCell(candidates, cells, w.a, w.workers)->cell, 1u);
+  // Loads too small to time well teach nothing.
+  w.a.recordLoads(500, 1);
+  EXPECT_DOUBLE_EQ(w.a.loadSecondsPerTriangle, 4e-7);
+  // Later loads are folded in.
+  w.a.recordLoads(100000, 10000);
+  EXPECT_DOUBLE_EQ(w.a.loadSecondsPerTriangle, 0.7 * 4e-7 + 0.3 * 1e-7);
+}
+
 TEST(ChooseCell, LeavesASmallQueueToAHolderThatIsFreeSooner) {
   TwoWorkers w;
   const auto cells = cellsOf({100000, 1000});   // a second load of cell 0: 10 ms, 10 000 rays
