@@ -91,9 +91,13 @@ constexpr AcceleratorKind kKinds[] = {
     {"embree",
      [](AcceleratorParameters& parameters, const MeshView* mesh,
         std::string_view text) -> std::unique_ptr<Accelerator> {
+       const std::string quality = parameters.variant({"low", "medium", "high"}, "medium");
        parameters.reportUnused();
        if (!mesh) return nullptr;
-       return std::make_unique<EmbreeAccelerator>(*mesh, text);
+       return std::make_unique<EmbreeAccelerator>(*mesh, text,
+                                                  quality == "low"    ? EmbreeBuildQuality::Low
+                                                  : quality == "high" ? EmbreeBuildQuality::High
+                                                                      : EmbreeBuildQuality::Medium);
      }},
 };
 

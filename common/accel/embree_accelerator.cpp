@@ -117,7 +117,10 @@ bool configureEmbreeDevice(std::string_view config) {
   return true;
 }
 
-EmbreeAccelerator::EmbreeAccelerator(const MeshView& mesh, std::string_view spec) {
+EmbreeAccelerator::EmbreeAccelerator(const MeshView& mesh, std::string_view spec, EmbreeBuildQuality quality) {
+  const RTCBuildQuality buildQuality = quality == EmbreeBuildQuality::Low    ? RTC_BUILD_QUALITY_LOW
+                                       : quality == EmbreeBuildQuality::High ? RTC_BUILD_QUALITY_HIGH
+                                                                             : RTC_BUILD_QUALITY_MEDIUM;
   const auto start = std::chrono::steady_clock::now();
   stats_.spec = std::string(spec);
   if (mesh.triangleCount >= kNoPrimitive || mesh.vertexCount >= std::numeric_limits<uint32_t>::max())
@@ -136,11 +139,11 @@ EmbreeAccelerator::EmbreeAccelerator(const MeshView& mesh, std::string_view spec
   scene_ = scene;
   try {
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_NONE);
-    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_MEDIUM);
+    rtcSetSceneBuildQuality(scene, buildQuality);
     if (mesh.triangleCount > 0 && mesh.vertexCount > 0) {
       RTCGeometry geometry = rtcNewGeometry(device.device, RTC_GEOMETRY_TYPE_TRIANGLE);
       if (!geometry) failEmbree("cannot create a triangle geometry");
-      rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
+      rtcSetGeometryBuildQuality(geometry, buildQuality);
       // Embree loads each float3 vertex with a 16-byte load: the last one
       // needs one readable float after it.
       const float* positions = mesh.positions;

@@ -142,11 +142,15 @@ TEST(EmbreeAccelerator, AgreesWithBruteForceOnClearCutRays) {
   const TestMesh mixed = accel_test::mixedScene(2);
   for (const TestMesh* mesh : std::initializer_list<const TestMesh*>{&soup, &room, &thin, &cluster, &hall, &mixed}) {
     SCOPED_TRACE(std::to_string(mesh->triangleCount()) + " triangles");
-    const EmbreeAccelerator embree(mesh->view());
-    const Agreement agreement = expectAgreesWithBruteForce(*mesh, embree, 3000, 10);
-    // Not only misses (long thin triangles are mostly hit at grazing angles
-    // or near an edge, so few of their hits are clear-cut).
-    EXPECT_GT(agreement.hits, 10);
+    for (const EmbreeBuildQuality quality :
+         {EmbreeBuildQuality::Low, EmbreeBuildQuality::Medium, EmbreeBuildQuality::High}) {
+      SCOPED_TRACE("build quality " + std::to_string(int(quality)));
+      const EmbreeAccelerator embree(mesh->view(), "embree", quality);
+      const Agreement agreement = expectAgreesWithBruteForce(*mesh, embree, 3000, 10);
+      // Not only misses (long thin triangles are mostly hit at grazing angles
+      // or near an edge, so few of their hits are clear-cut).
+      EXPECT_GT(agreement.hits, 10);
+    }
   }
 }
 
@@ -248,7 +252,7 @@ TEST(EmbreeAccelerator, AnswersFromManyThreadsAtOnce) {
   for (int count : mismatches) EXPECT_EQ(count, 0);
 }
 
-TEST(EmbreeAcceleratorSpec, TakesNoParameters) {
+TEST(EmbreeAcceleratorSpec, TakesABuildQualityAndNoParameters) {
   const TestMesh mesh = accel_test::mixedScene(7);
   const auto errorOf = [&](const char* text) -> std::string {
     try {
@@ -260,8 +264,10 @@ TEST(EmbreeAcceleratorSpec, TakesNoParameters) {
   };
   EXPECT_EQ(errorOf("embree:quality=high"),
             "accelerator spec 'embree:quality=high': unknown parameter 'quality' for embree (it takes none)");
-  EXPECT_EQ(errorOf("embree:fast"), "accelerator spec 'embree:fast': embree takes no variant (got 'fast')");
-  EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec("embree")));
+  EXPECT_EQ(errorOf("embree:fast"),
+            "accelerator spec 'embree:fast': unknown variant 'fast' for embree (known: low, medium, high)");
+  for (const char* text : {"embree", "embree:low", "embree:medium", "embree:high"})
+    EXPECT_NO_THROW(validateAcceleratorSpec(parseAcceleratorSpec(text))) << text;
 }
 
 }  // namespace
