@@ -338,7 +338,8 @@ int runBenchPipeline(const BenchPipelineOptions& options) {
   }
   if (!options.plot.empty()) {
     const std::string title =
-        fmt::format("{}: {} photons, {} triangles", options.preset, options.photons, scene.totalTriangles());
+        fmt::format("{}: {} photons, {} triangles, portico --accel {}", options.preset, options.photons,
+                    scene.totalTriangles(), options.accel);
     writeBarPlot(options.plot, title, results, options.photons, embreeRate);
     std::cout << "wrote " << options.plot << "\n";
   }
