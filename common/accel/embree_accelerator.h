@@ -16,7 +16,7 @@
 // (FlushDenormalsScope), as Embree recommends.
 //
 // Variant: the build quality, `embree:low` (Embree's Morton builder: about
-// 2.4x faster builds on the octagon's cells, for somewhat slower rays; the
+// 2.4x faster builds on the octagon's cells, rays ~0.6x as fast; the
 // better choice for a cell that traces a few rays per triangle, as a photon
 // pass's cells do), `embree` = `embree:medium` (binned SAH), `embree:high`
 // (with spatial splits). Statistics: bytes is what the device allocated for this
