@@ -80,7 +80,7 @@ struct WorkerInfo {
       if (elapsed < 20) return;
       rate = double(it->second.work) * 1000.0 / double(elapsed);
     }
-    workPerSecond = workPerSecond <= 0 ? rate : 0.7 * workPerSecond + 0.3 * rate;
+    foldIn(workPerSecond, rate);
   }
 
   // What loading a cell costs it, per triangle (read and accelerator
@@ -91,12 +91,17 @@ struct WorkerInfo {
   static constexpr int64_t kMinTimedLoadTriangles = 10000;
   void recordLoads(int64_t triangles, int64_t micros) {
     if (triangles < kMinTimedLoadTriangles || micros <= 0) return;
-    const double measured = double(micros) * 1e-6 / double(triangles);
-    loadSecondsPerTriangle =
-        loadSecondsPerTriangle <= 0 ? measured : 0.7 * loadSecondsPerTriangle + 0.3 * measured;
+    foldIn(loadSecondsPerTriangle, double(micros) * 1e-6 / double(triangles));
   }
 
   bool holds(uint64_t job, uint32_t cell) const { return cells.holds(job, cell); }
+
+ private:
+  // An estimate (0: none yet) follows its measurements with a memory of a
+  // few: the first one taken as it is, each later one weighing 30 %.
+  static void foldIn(double& estimate, double measured) {
+    estimate = estimate <= 0 ? measured : 0.7 * estimate + 0.3 * measured;
+  }
 };
 
 using WorkerRegistry = std::map<std::string, WorkerInfo>;

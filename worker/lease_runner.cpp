@@ -129,13 +129,13 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
       if (!photonRecords) throw std::logic_error("render lease without photons");
       // Final gathering uses every photon; the estimate at a camera hit only
       // those that bounced (direct light is sampled with shadow rays).
+      // Room for the decoded photons, which become the map, and its build's scratch.
       const size_t count = photonRecords->size() / sizeof(PhotonRecord);
-      cache.makeRoom(count * sizeof(StoredPhoton));
+      cache.makeRoom(2 * count * sizeof(StoredPhoton));
       std::vector<StoredPhoton> photons;
       unpackRecords(photonRecords->data(), photonRecords->size(),
                     PhotonFrame(scene.cells()[cellId].bounds, parameters.photonRadius), spec.getGather() > 0, photons);
       photonRecords.reset();
-      cache.makeRoom(2 * photons.size() * sizeof(StoredPhoton));   // the map, and its build's scratch
       indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(photons)));
     }
   }
