@@ -353,7 +353,7 @@ void SmallNodeSplitter::findSplit(std::span<const Reference> references, const N
 // best, always on a face of a triangle's box.
 class BinnedSplitter {
  public:
-  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(2 * (3 * binCount + 1)) {}
+  explicit BinnedSplitter(uint32_t binCount) : binCount_(binCount), counts_(3 * binCount + 1) {}
   void findSplit(std::span<const Reference> references, const Box& box, const NodeCost& cost, BestSplit& best);
 
  private:
@@ -397,28 +397,15 @@ void BinnedSplitter::countEvents(std::span<const Reference> references, const Bi
   const Int4 lane = {0, 1, 2, 3};
   const Int4 starts = lane + int32_t(4 * kStart * binCount_), planars = lane + int32_t(4 * kPlanar * binCount_);
   const Int4 ends = lane + int32_t(4 * kEnd * binCount_), planarsFromStarts = planars - starts;
-  // Two sets of counters, for alternate references: neighbouring triangles
-  // mostly fall in the same bins, and one set made each increment wait for
-  // the previous one's store (perf, 500 K hall: the increments were a sixth
-  // of the SAH build).
-  const size_t setSize = 3 * binCount_ + 1;
-  uint32_t* const first = reinterpret_cast<uint32_t*>(counts_.data());
-  uint32_t* const second = reinterpret_cast<uint32_t*>(counts_.data() + setSize);
-  const auto count = [&](const Reference& reference, uint32_t* counters) {
+  uint32_t* const counters = reinterpret_cast<uint32_t*>(counts_.data());
+  for (const Reference& reference : references) {
     const Float4 lo = reference.lo4(), hi = reference.hi4();
     const Int4 planar = lo == hi;
     const Int4 loIndex = starts + (planar & planarsFromStarts) + (bin(lo) << 2);
     const Int4 hiIndex = ends + (bin(hi) << 2);
     ++counters[loIndex[0]], ++counters[loIndex[1]], ++counters[loIndex[2]];
     ++counters[hiIndex[0]], ++counters[hiIndex[1]], ++counters[hiIndex[2]];
-  };
-  const size_t pairs = references.size() / 2;
-  for (size_t i = 0; i < pairs; ++i) {
-    count(references[2 * i], first);
-    count(references[2 * i + 1], second);
   }
-  if (references.size() % 2) count(references.back(), first);
-  for (size_t i = 0; i < setSize; ++i) counts_[i] += counts_[setSize + i];
 }
 
 // The cheapest inner bin boundary over the three axes at once (planar
