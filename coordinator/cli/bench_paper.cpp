@@ -52,7 +52,6 @@ namespace fs = std::filesystem;
 using Rgb = std::array<uint8_t, 3>;
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr uint64_t kPaperPhotonsPerLight = 50000, kPaperFewPhotonsPerLight = 20000;
 const std::vector<std::string> kKdHeuristics{"kd:median", "kd:sah", "kd:bbox"};
 const std::vector<std::string> kExperiments{"fig4_5_grid_resolution", "fig6_hgrid_init",
                                             "table3_kd_depth",        "fig7_8_kd_heuristics",

@@ -82,7 +82,7 @@ struct BenchPipelineOptions {
   std::string store;        // reuse the scene store there, or generate it there (and keep it); "" = temporary
   uint32_t floors = 0;      // the tower's floors
   uint64_t sceneSeed = 1;   // furnishing seed of the generated building
-  uint64_t photons = 1000000;
+  uint64_t photons = 0;     // 0: the paper's workload, kPaperPhotonsPerLight per light of the building
   uint64_t seed = 1;        // the photon pass's seed
   std::string modes = "embree-incore-2t,portico-1w,portico-2w";
   std::string accel = "grid";
