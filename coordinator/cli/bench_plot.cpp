@@ -29,6 +29,24 @@ struct Axis {
   }
 };
 
+// The panel's title centred on centreX (the plot's middle) but kept within
+// the panel; one too wide for the panel goes on two lines, broken after the
+// last comma that lets the first line fit (else the last space).
+void drawTitle(Canvas& canvas, int originX, int width, int centreX, const std::string& title) {
+  const int room = width - 8;
+  const auto centred = [&](const std::string& line, int y) {
+    const int lowest = originX + 4, highest = std::max(lowest, originX + width - 4 - textWidth(line));
+    canvas.text(std::clamp(centreX - textWidth(line) / 2, lowest, highest), y, line, kBlack);
+  };
+  if (textWidth(title) <= room) return centred(title, 14);
+  const size_t fits = size_t(std::max(1, room / kCharAdvance));
+  size_t cut = title.rfind(", ", fits - 1);
+  cut = cut == std::string::npos ? title.rfind(' ', fits) : cut + 1;
+  if (cut == std::string::npos || cut == 0) cut = fits;
+  centred(title.substr(0, cut), 4);
+  centred(title.substr(title[cut] == ' ' ? cut + 1 : cut), 8 + kTextHeight);
+}
+
 // "1k", "10k", "2.5M", "0.1", "40"...
 std::string tickLabel(double value) {
   char buffer[32];
@@ -148,7 +166,7 @@ void drawPanel(Canvas& canvas, int originX, int width, int height, const PlotPan
   canvas.line(x0, y1, x1, y1, kBlack, 1, false);
   canvas.line(x1, y0, x1, y1, kBlack, 1, false);
   canvas.line(x0, y0, x1, y0, kBlack, 1, false);
-  canvas.text(originX + (kLeft + width - kRight) / 2 - textWidth(panel.title) / 2, 14, panel.title, kBlack);
+  drawTitle(canvas, originX, width, originX + (kLeft + width - kRight) / 2, panel.title);
   canvas.text((x0 + x1) / 2 - textWidth(panel.xLabel) / 2, y1 + 36, panel.xLabel, kGrey);
   canvas.text(originX + 12, (y0 + y1) / 2 + textWidth(panel.yLabel) / 2, panel.yLabel, kGrey, true);
 
@@ -224,7 +242,7 @@ void drawBarPanel(Canvas& canvas, int originX, int width, int height, const BarP
   }
   canvas.line(x0, y0, x0, y1, kBlack, 1, false);
   canvas.line(x0, y1, x1, y1, kBlack, 1, false);
-  canvas.text(originX + (kLeft + width - kRight) / 2 - textWidth(panel.title) / 2, 14, panel.title, kBlack);
+  drawTitle(canvas, originX, width, originX + (kLeft + width - kRight) / 2, panel.title);
   canvas.text(originX + 12, (y0 + y1) / 2 + textWidth(panel.yLabel) / 2, panel.yLabel, kGrey, true);
 
   const int slot = (x1 - x0) / std::max<int>(1, int(panel.groups.size()));
