@@ -226,8 +226,16 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
   const SceneStore scene = SceneStore::open(store);
   // By default the paper's workload for the building: at 1 M photons the
   // octagon's photon phase is ~1.5 s with one worker, a third of it loading
-  // and building its 233 cells, which the paper's 7.75 M amortise.
-  if (options.photons == 0) options.photons = kPaperPhotonsPerLight * scene.lights().size();
+  // and building its 233 cells, which the paper's 7.75 M amortise. At most
+  // 10 M: the in-core tracer keeps every deposit in memory (~130 bytes per
+  // photon), and Soda Hall's 135 M would take 17 GiB of it.
+  constexpr uint64_t kMostDefaultPhotons = 10000000;
+  if (options.photons == 0) {
+    options.photons = std::min<uint64_t>(kPaperPhotonsPerLight * scene.lights().size(), kMostDefaultPhotons);
+    if (options.photons == kMostDefaultPhotons)
+      std::cout << fmt::format("photons: {} (the paper's 50 000 per light would be {}; --photons sets any count)\n",
+                               options.photons, kPaperPhotonsPerLight * scene.lights().size());
+  }
   if (options.photons == 0) throw std::invalid_argument(fmt::format("the scene store {} has no lights", store));
   uint64_t storeBytes = 0;
   for (const CellInfo& cell : scene.cells()) storeBytes += cell.byteCount;

@@ -119,8 +119,8 @@ int main(int argc, char** argv) {
   benchPipelineCommand->add_option("--preset", benchPipeline.preset, "building preset: l-shape, z-building, octagon, soda-hall, tower")
       ->required();
   benchPipelineCommand->add_option("--photons", benchPipeline.photons,
-                                   "photons of the pass (default: the paper's workload, 50 000 per light: 7.75 M for "
-                                   "the octagon, 1.2 M for the l-shape)");
+                                   "photons of the pass (default: the paper's workload, 50 000 per light, at most 10 M: "
+                                   "7.75 M for the octagon, 1.2 M for the l-shape)");
   benchPipelineCommand->add_option("--store", benchPipeline.store,
                                    "scene store to reuse, or to generate the building into and keep (default: a temporary one)");
   benchPipelineCommand->add_option("--floors", benchPipeline.floors, "floors of the tower preset");
