@@ -3,14 +3,15 @@
 # photon pass on the l-shape preset, three ways. Checks that the CSV has the
 # three modes with positive numbers, that portico with 1 and 2 workers
 # deposits the same photons, and that the in-core Embree tracer does the same
-# work as portico (deposits within 10 %).
+# work as portico (deposits within 10 %). Then, on the same store, that the
+# default photon count is the paper's: 50 000 per light of the building.
 # Usage: pipeline_smoke_test.sh BIN_DIR
 set -euo pipefail
 bin="$1"
 work="$(mktemp -d /tmp/portico-bench-smoke-XXXXXX)"
 trap 'rm -rf "$work"' EXIT
 
-"$bin/portico" bench pipeline --preset l-shape --photons 20000 --memory 1GiB \
+"$bin/portico" bench pipeline --preset l-shape --photons 20000 --memory 1GiB --store "$work/store" \
   --csv "$work/pipeline.csv" --plot "$work/pipeline.png" >"$work/out.txt" 2>&1 || {
   cat "$work/out.txt"; echo "FAIL: portico bench pipeline exited with $?"; exit 1; }
 cat "$work/out.txt"
@@ -40,4 +41,13 @@ awk -F, '
     else printf "deposits: in-core %d, portico %d (%+.2f %%)\n", e, p, 100 * (e - p) / p
     exit bad
   }' "$work/pipeline.csv"
+
+"$bin/portico" bench pipeline --preset l-shape --store "$work/store" --modes embree-incore-2t \
+  --csv "$work/default.csv" >"$work/default.txt" 2>&1 || {
+  cat "$work/default.txt"; echo "FAIL: portico bench pipeline (default photons) exited with $?"; exit 1; }
+lights=$(sed -n 's/^scene: .* \([0-9][0-9]*\) lights,.*/\1/p' "$work/default.txt")
+photons=$(awk -F, 'NR == 2 { print $2 }' "$work/default.csv")
+[[ -n "$lights" && "$photons" == "$((lights * 50000))" ]] || {
+  cat "$work/default.txt"; echo "FAIL: default photons $photons, not 50 000 per light of $lights"; exit 1; }
+echo "default photons: $photons (50 000 per light of $lights)"
 echo "PASS"
