@@ -231,10 +231,11 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
   // photon), and Soda Hall's 135 M would take 17 GiB of it.
   constexpr uint64_t kMostDefaultPhotons = 10000000;
   if (options.photons == 0) {
-    options.photons = std::min<uint64_t>(kPaperPhotonsPerLight * scene.lights().size(), kMostDefaultPhotons);
-    if (options.photons == kMostDefaultPhotons)
+    const uint64_t paperPhotons = kPaperPhotonsPerLight * scene.lights().size();
+    options.photons = std::min(paperPhotons, kMostDefaultPhotons);
+    if (paperPhotons > kMostDefaultPhotons)
       std::cout << fmt::format("photons: {} (the paper's 50 000 per light would be {}; --photons sets any count)\n",
-                               options.photons, kPaperPhotonsPerLight * scene.lights().size());
+                               options.photons, paperPhotons);
   }
   if (options.photons == 0) throw std::invalid_argument(fmt::format("the scene store {} has no lights", store));
   uint64_t storeBytes = 0;
