@@ -6,8 +6,8 @@
 // and evicts the least recently used; the model does the same with the
 // bytes a cell likely takes there, so it forgets a cell about when the
 // worker drops it. A worker holds every cell it can keep, often hundreds:
-// a model of a fixed few dozen forgot most of them, and in a two-worker
-// photon pass a fifth of the cells were loaded and built twice.
+// a model of a fixed few dozen forgets most of them, and in a two-worker
+// photon pass a fifth of the cells are then loaded and built twice.
 #pragma once
 
 #include <cstddef>

@@ -100,11 +100,11 @@ void Coordinator::run() {
   spdlog::info("coordinator stopping");
 }
 
-// Group commit. Every Result used to cost two commits (the worker's next
-// lease, then the Result), each writing its pages to the WAL: a third of
-// the coordinator's CPU in a photon pass, and at the end of a pass, where
-// Results of a few photons each arrive faster than they were committed,
-// the coordinator was what the workers waited for. A round takes all that
+// Group commit. Two commits per Result (the worker's next lease, then the
+// Result), each writing its pages to the WAL, cost a third of the
+// coordinator's CPU in a photon pass, and at the end of a pass, where
+// Results of a few photons each arrive faster than they are committed,
+// the workers would wait for the coordinator. A round takes all that
 // has arrived and makes two transactions of it, whatever the number of
 // messages: the leases refilling the slots that the Results freed, then
 // the messages themselves with the timers and the scheduling (each

@@ -167,7 +167,7 @@ void JobStore::migrate() {
     tx.commit();
   }
   if (version < 3) {
-    // Photon payloads move to append-only files (photon_files.h); rows keep
+    // Photon payloads move to append-only files (append_files.h); rows keep
     // where each lies. Rows written before keep their blob (file_offset NULL).
     sql::Transaction tx(db_);
     db_.exec(R"sql(
@@ -190,7 +190,7 @@ void JobStore::migrate() {
       ALTER TABLE batches ADD COLUMN file_crc INTEGER NOT NULL DEFAULT 0;
     )sql");
     rechecksumPhotonFiles();
-    // Closed leases leave no row any more: the table holds the open ones,
+    // Closed leases leave no row: the table holds the open ones,
     // a handful, and needs no index (two fewer index updates per lease);
     // its state column stays as schema 3 had it, 'open' in every row.
     // Ids must still never repeat (a late Result names its lease by id):

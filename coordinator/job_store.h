@@ -128,7 +128,7 @@ class JobStore {
   void addCounter(uint64_t job, std::string_view name, int64_t delta);
   std::map<std::string, int64_t> counters(uint64_t job);
 
-  // The payload goes to the job's photon file (photon_files.h) at once, its
+  // The payload goes to the job's photon file (append_files.h) at once, its
   // place into jobs.db with the caller's transaction: a view into a Result
   // will do.
   void addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload);

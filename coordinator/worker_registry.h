@@ -30,7 +30,7 @@ struct WorkerInfo {
   // queued there) while it traces the current one, so it never waits for
   // the round trip through the coordinator. Leases hold a cell's pending
   // work, often well under the second they may hold, and that round trip
-  // was about a fifth of a worker's time in a photon pass.
+  // would be about a fifth of a worker's time in a photon pass.
   static constexpr size_t kLeasesInFlight = 2;
   // Tiny leases (the end of a photon pass: a few photons per cell) are
   // over before the next one can arrive: a worker is kept up to

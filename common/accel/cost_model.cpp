@@ -150,8 +150,8 @@ std::vector<double> fitNonNegativeRelative(const std::vector<std::vector<double>
 
 CostModel CostModel::builtIn() {
   // `portico bench calibrate` on the 2-core development machine (Debian
-  // bookworm VM, AVX-512), 2026-11-23 (session 6), with that day's grid
-  // (rows by voxel, packed walk) and kd:sah builder, trace passes timed by
+  // bookworm VM, AVX-512), with the grid of one row per voxel and a packed
+  // walk and the binned kd:sah builder, trace passes timed by
   // thread CPU time: 25 cells (22 of l-shape, 3 halls), 20 000 photon-like
   // rays each.
   CostModel model;

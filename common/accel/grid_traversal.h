@@ -133,11 +133,11 @@ struct TriangleVoxelOverlap {
 };
 
 // Allocator for a grid's large arrays: elements are left uninitialised (the
-// build writes every one). No huge pages: madvise(MADV_HUGEPAGE) made a
+// build writes every one). No huge pages: madvise(MADV_HUGEPAGE) makes a
 // build in isolation up to 2x faster (fewer TLB misses in the counting sort),
 // but in a worker, where every cell's grid lands on fresh memory, the kernel
-// zeroing 2 MiB pages took 15-20 % of the worker's CPU and the photon pass
-// ran ~20 % slower (docs/pipeline-benchmark.md).
+// zeroing 2 MiB pages takes 15-20 % of the worker's CPU and the photon pass
+// runs ~20 % slower (docs/pipeline-benchmark.md).
 template <typename T>
 struct LargeArrayAllocator {
   using value_type = T;

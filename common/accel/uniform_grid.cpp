@@ -99,8 +99,8 @@ constexpr uint32_t kBoxOnlyVoxels = 8;
 constexpr uint32_t kFirstVoxel = 0x80000000u;
 // Traversal: occupied voxels the walk gathers ahead of the tests, and cache
 // lines of triangles and of their boxes prefetched per voxel kept. (3 rather
-// than 4 since the walk got cheaper: a few per cent faster at 10K-500K in
-// interleaved runs, 2 no better; no packet prefetch, 0 lines, was slower.)
+// than 4 with the cheap walk: a few per cent faster at 10K-500K in
+// interleaved runs, 2 no better; no packet prefetch, 0 lines, is slower.)
 constexpr int kWalkAhead = 3;
 constexpr int kPrefetchLines = 4;
 constexpr int kPrefetchBoxLines = 2;

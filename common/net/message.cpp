@@ -68,8 +68,8 @@ capnp::ReaderOptions optionsFor(size_t packedBytes) {
   // and it also caps what the reader allocates for the segments a frame
   // claims. portico's messages are floats and ids, with few zero words: one
   // word per packed byte (8x the frame) is more than any of them needs. The
-  // floor (512 KiB) is for tiny messages; it was 8 MiB, which a 10-byte
-  // garbage frame could make the coordinator allocate and zero.
+  // floor (512 KiB) is for tiny messages; a floor of 8 MiB would let a
+  // 10-byte garbage frame make the coordinator allocate and zero 8 MiB.
   capnp::ReaderOptions options;
   options.traversalLimitInWords = packedBytes + (size_t(1) << 16);
   options.nestingLimit = 16;

@@ -10,9 +10,9 @@
 // - power as shared-exponent RGB, direction in octahedral coordinates.
 //
 // Every deposit passes through the coordinator (and its sockets, files and
-// checksums) once per table it lands in: the 24-byte record of floats this
-// replaced made every one of those copies half as large again (session 10
-// measured the coordinator's photon-pass CPU 8 % lower with 16 bytes).
+// checksums) once per table it lands in: a 24-byte record of floats makes
+// every one of those copies half as large again (the coordinator's
+// photon-pass CPU is 8 % lower with 16 bytes).
 // Records are little-endian PODs, appended to a cell's table batch by batch;
 // a map sorts them, so arrival order never matters.
 #pragma once

@@ -3,7 +3,7 @@
 // and messages; a build's scratch; a Result's unpacked segments), and a
 // page taken afresh from the system is costly: the kernel zeroes it, and in
 // a VM the host may fault it in too (about 12 us a page on the development
-// VM, where fresh pages were 15-25 % of a photon pass's CPU).
+// VM, where fresh pages cost 15-25 % of a photon pass's CPU).
 #pragma once
 
 #include <cstdint>

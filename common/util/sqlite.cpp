@@ -131,7 +131,7 @@ int Database::userVersion() {
 void Database::setUserVersion(int version) { exec(fmt::format("PRAGMA user_version = {}", version)); }
 
 // Begin and commit run as prepared statements: the coordinator opens a few
-// (nested) transactions per Result, and parsing their SQL each time was ~3 %
+// (nested) transactions per Result, and parsing their SQL each time costs ~3 %
 // of its CPU in a photon pass.
 Transaction::Transaction(Database& db) : db_(db), nested_(db.inTransaction()) {
   db_.prepare(nested_ ? "SAVEPOINT nested" : "BEGIN IMMEDIATE").run();

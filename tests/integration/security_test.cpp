@@ -185,7 +185,7 @@ TEST_F(Security, GarbageTruncatedOversizedAndWrongVersionFramesAreDroppedAndAJob
   }
   // Truncated: a real Result and a real Submit cut short at several lengths.
   // The Result spans several segments, as a big one does: Cap'n Proto reads
-  // those lazily, and a truncated one used to end the coordinator.
+  // those lazily, and a truncated one must not end the coordinator.
   size_t truncatedFrames = 0;
   {
     capnp::MallocMessageBuilder result(64, capnp::AllocationStrategy::FIXED_SIZE);
