@@ -1,5 +1,5 @@
 // Which cell an idle worker's next lease is about: the scheduling half of
-// memory coherence (DESIGN.md, "Scheduling").
+// memory coherence (docs/coordinator.md, "Which cell a lease is about").
 #pragma once
 
 #include <vector>

@@ -1,5 +1,5 @@
 // Compares a rendered image with a reference the way the reference scenes
-// ask (shared/reference/README.md): the image mean, and the means of square
+// ask (docs/validation.md): the image mean, and the means of square
 // blocks, where dim blocks are judged against the image mean.
 #pragma once
 

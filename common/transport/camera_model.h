@@ -1,4 +1,4 @@
-// Pinhole camera by look-at, with the conventions of shared/reference:
+// Pinhole camera by look-at, with the conventions of tests/scenes/*/scene.json:
 // fov_y is the full vertical angle, pixels are square, x grows to the right,
 // row 0 is the top row.
 #pragma once
