@@ -80,7 +80,16 @@ struct StackEntry {
   float entry;
 };
 
-// Tests a leaf's packets, folding hits into best; with AnyHit, true at the first hit.
+// Tests a leaf's packets, folding hits into best; with AnyHit, true at the
+// first hit. A lane the 4-wide test keeps with no edge function zero is a
+// hit of intersectTriangle with the lane's t, and u = V / det, v = W / det
+// (the same divisions): its sign test and range check passed on the scalar
+// test's own values; det is not zero (t would be infinite or NaN and fail
+// the strict range check); the scalar test's exact check of T / det against
+// [tMin, tMax] in double agrees with its check of the rounded t (rounding
+// is monotone and the bounds are floats); and degenerate triangles are not
+// in the tree. Lanes with a zero edge function go to intersectTriangle,
+// which re-decides them in double.
 template <bool AnyHit>
 inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t child,
                      const grid_traversal::PacketRay& packetRay, const WatertightRay& frame, const Ray& ray,
@@ -88,17 +97,29 @@ inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t chi
   const grid_traversal::TrianglePacket* packet = packets + bvh_child::firstPacket(child);
   const grid_traversal::TrianglePacket* const end = packet + bvh_child::packetCount(child);
   for (; packet != end; ++packet) {
-    for (unsigned mask = grid_traversal::packetCandidates<AnyHit>(*packet, packetRay, best.t); mask != 0;) {
-      const int lane = std::countr_zero(mask);
-      mask &= mask - 1;
-      const Vec3 v0{packet->v[0][0][lane], packet->v[0][1][lane], packet->v[0][2][lane]};
-      const Vec3 v1{packet->v[1][0][lane], packet->v[1][1][lane], packet->v[1][2][lane]};
-      const Vec3 v2{packet->v[2][0][lane], packet->v[2][1][lane], packet->v[2][2][lane]};
-      float t, u, v;
-      if (!intersectTriangle(frame, ray, v0, v1, v2, t, u, v)) continue;
-      if constexpr (AnyHit) return true;
+    const grid_traversal::PacketLanes lanes = grid_traversal::packetLanes<AnyHit>(*packet, packetRay, best.t);
+    unsigned candidates = grid_traversal::laneBits(lanes.candidate);
+    if (candidates == 0) continue;
+    if constexpr (AnyHit) {
+      if (candidates & ~grid_traversal::laneBits(lanes.anyZero)) return true;
+    }
+    const unsigned doubtful = grid_traversal::laneBits(lanes.anyZero);
+    for (; candidates != 0; candidates &= candidates - 1) {
+      const int lane = std::countr_zero(candidates);
       const uint32_t primitive = packet->primitive[lane];
-      if (closerThan(t, primitive, best)) best = Hit{t, primitive, u, v};
+      Hit hit{lanes.t[lane], primitive, 0, 0};
+      if (doubtful & (1u << lane)) {
+        const Vec3 v0{packet->v[0][0][lane], packet->v[0][1][lane], packet->v[0][2][lane]};
+        const Vec3 v1{packet->v[1][0][lane], packet->v[1][1][lane], packet->v[1][2][lane]};
+        const Vec3 v2{packet->v[2][0][lane], packet->v[2][1][lane], packet->v[2][2][lane]};
+        if (!intersectTriangle(frame, ray, v0, v1, v2, hit.t, hit.u, hit.v)) continue;
+        if constexpr (AnyHit) return true;
+      } else {
+        if (!closerThan(hit.t, primitive, best)) continue;
+        hit.u = lanes.V[lane] / lanes.det[lane];
+        hit.v = lanes.W[lane] / lanes.det[lane];
+      }
+      if (closerThan(hit.t, primitive, best)) best = hit;
     }
   }
   return false;

@@ -194,19 +194,21 @@ struct PacketBoxClip {
   PacketRay::Float4 lower, upper;
 };
 
-// The lanes of `packet` that may hit: intersectTriangle's own steps
-// (translation, shear, edge functions, sign test, det, T and t = T / det)
-// on all four lanes with the very operations of the scalar test, so each
-// lane gets the scalar test's U, V, W, det and t bit for bit. A lane is
-// dropped only where intersectTriangle would return false on the same sign
-// test or the same check of t against [tMin, tMax], or (closest hit) where
-// its t is beyond bestT, so could not win under closerThan. Lanes with an
-// edge function exactly zero, which the scalar test re-decides in double,
-// are kept. Bit k: lane k.
-template <bool AnyHit>
-inline unsigned packetCandidates(const TrianglePacket& packet, const PacketRay& packetRay, float bestT) {
-  using Float4 = PacketRay::Float4;
+// intersectTriangle's own steps (translation, shear, edge functions, sign
+// test, det, T and t = T / det) on the four lanes of a packet, with the very
+// operations of the scalar test, so each lane gets the scalar test's U, V,
+// W, det and t bit for bit.
+struct PacketLanes {
   using Int4 = int32_t __attribute__((vector_size(16)));
+  PacketRay::Float4 t, det, V, W;
+  Int4 candidate;  // all ones: the lane may hit (see packetCandidates)
+  Int4 anyZero;    // all ones: an edge function is exactly zero
+};
+
+template <bool AnyHit>
+inline PacketLanes packetLanes(const TrianglePacket& packet, const PacketRay& packetRay, float bestT) {
+  using Float4 = PacketRay::Float4;
+  using Int4 = PacketLanes::Int4;
   const auto load = [](const float* p) {
     Float4 value;
     std::memcpy(&value, p, sizeof(value));
@@ -222,21 +224,37 @@ inline unsigned packetCandidates(const TrianglePacket& packet, const PacketRay& 
   const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
   const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
   const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
+  PacketLanes lanes;
   const Float4 U = Cx * By - Cy * Bx;
-  const Float4 V = Ax * Cy - Ay * Cx;
-  const Float4 W = Bx * Ay - By * Ax;
+  lanes.V = Ax * Cy - Ay * Cx;
+  lanes.W = Bx * Ay - By * Ax;
   const Float4 zero{};
-  const Int4 negative = (U < zero) | (V < zero) | (W < zero);
-  const Int4 positive = (U > zero) | (V > zero) | (W > zero);
-  const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
-  const Float4 det = U + V + W;
-  const Float4 T = U * (packetRay.scaleZ * az) + V * (packetRay.scaleZ * bz) + W * (packetRay.scaleZ * cz);
-  const Float4 hitT = T / det;
-  Int4 inRange = (hitT > packetRay.tMin) & (hitT < packetRay.tMax);
-  if constexpr (!AnyHit) inRange &= hitT <= Float4{bestT, bestT, bestT, bestT};
-  const Int4 candidate = (~(negative & positive) & inRange) | anyZero;
-  return unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
-         unsigned(candidate[3] & 8);
+  const Int4 negative = (U < zero) | (lanes.V < zero) | (lanes.W < zero);
+  const Int4 positive = (U > zero) | (lanes.V > zero) | (lanes.W > zero);
+  lanes.anyZero = (U == zero) | (lanes.V == zero) | (lanes.W == zero);
+  lanes.det = U + lanes.V + lanes.W;
+  const Float4 T =
+      U * (packetRay.scaleZ * az) + lanes.V * (packetRay.scaleZ * bz) + lanes.W * (packetRay.scaleZ * cz);
+  lanes.t = T / lanes.det;
+  Int4 inRange = (lanes.t > packetRay.tMin) & (lanes.t < packetRay.tMax);
+  if constexpr (!AnyHit) inRange &= lanes.t <= Float4{bestT, bestT, bestT, bestT};
+  lanes.candidate = (~(negative & positive) & inRange) | lanes.anyZero;
+  return lanes;
+}
+
+// Bit k set where lane k of the mask is.
+inline unsigned laneBits(PacketLanes::Int4 mask) {
+  return unsigned(mask[0] & 1) | unsigned(mask[1] & 2) | unsigned(mask[2] & 4) | unsigned(mask[3] & 8);
+}
+
+// The lanes of `packet` that may hit (bit k: lane k). A lane is dropped
+// only where intersectTriangle would return false on the same sign test or
+// the same check of t against [tMin, tMax], or (closest hit) where its t is
+// beyond bestT, so could not win under closerThan. Lanes with an edge
+// function exactly zero, which the scalar test re-decides in double, are kept.
+template <bool AnyHit>
+inline unsigned packetCandidates(const TrianglePacket& packet, const PacketRay& packetRay, float bestT) {
+  return laneBits(packetLanes<AnyHit>(packet, packetRay, bestT).candidate);
 }
 
 // Which of the four boxes the ray crosses within the span of the clip (bit k:
