@@ -29,6 +29,11 @@ namespace portico {
 namespace {
 
 constexpr int kBins = 16;
+// Ranges of at least this many references are binned into two sets of bins.
+constexpr uint32_t kTwoBinSets = 256;
+// Larger ranges bin every k-th reference, about this many in all: the
+// best plane moves little, and the top levels cost a partition each.
+constexpr uint32_t kSampledReferences = 4096;
 constexpr uint32_t kPacketSize = 4;
 constexpr uint32_t kAlwaysLeaf = 4;      // at most one packet: a leaf
 constexpr uint32_t kMaxLeaf = 8;         // at most two: a leaf unless a split is cheaper
@@ -94,7 +99,6 @@ struct Split {
   int axis = -1;
   int bin = 0;          // references with bin < this go left
   float cost = 0;       // SAH, in packet tests per unit of the parent's half area
-  __m128 leftLo, leftHi, rightLo, rightHi;
 };
 
 template <int Width>
@@ -105,8 +109,9 @@ class Builder {
   void build() {
     Range root = gatherReferences();
     if (root.count() == 0) return;
-    out_.nodes.reserve(2 * size_t(root.count()) / Width + 2);
-    out_.packets.reserve(root.count() / 2 + 4);
+    // About what the furnished halls need (leaves of ~6 triangles in ~2 packets).
+    out_.nodes.reserve(size_t(root.count()) / (2 * Width) + 2);
+    out_.packets.reserve(root.count() / 3 + 4);
     root.leaf = false;   // the root is always a node, even over one leaf
     alignas(16) float lo[4], hi[4];
     _mm_store_ps(lo, root.lo);
@@ -114,6 +119,7 @@ class Builder {
     out_.bounds = Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
     out_.triangles = root.count();
     buildNode(root, 1);
+    if (out_.packets.capacity() > out_.packets.size() + out_.packets.size() / 4) out_.packets.shrink_to_fit();
   }
 
  private:
@@ -150,34 +156,53 @@ class Builder {
   // The best binned SAH split of the range (axis -1: every centroid in one bin).
   Split findSplit(const Range& range) const {
     const Binning binning(range);
-    Bin bins[3][kBins];
-    for (auto& axis : bins)
-      for (Bin& bin : axis) bin = {_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity), 0};
-    for (uint32_t i = range.begin; i < range.end; ++i) {
-      const PrimitiveReference& reference = references_[i];
+    // Two sets of bins, for alternate references, merged after: consecutive
+    // references (neighbours in space) often fall in the same bins, and one
+    // set would chain every update on the one before.
+    Bin bins[3][kBins], odd[3][kBins];
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) bins[axis][b] = {_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity), 0};
+    if (range.count() >= kTwoBinSets)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int b = 0; b < kBins; ++b) odd[axis][b] = bins[axis][b];
+    const auto add = [&binning](Bin (&set)[3][kBins], const PrimitiveReference& reference) {
       alignas(16) int32_t index[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(_mm_add_ps(reference.lo, reference.hi)));
       for (int axis = 0; axis < 3; ++axis) {
-        Bin& bin = bins[axis][index[axis]];
+        Bin& bin = set[axis][index[axis]];
         bin.lo = _mm_min_ps(bin.lo, reference.lo);
         bin.hi = _mm_max_ps(bin.hi, reference.hi);
         ++bin.count;
       }
+    };
+    const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
+    uint32_t i = range.begin;
+    const bool twoSets = range.count() >= kTwoBinSets;
+    for (; twoSets && i + stride < range.end; i += 2 * stride) {
+      add(bins, references_[i]);
+      add(odd, references_[i + stride]);
     }
+    for (; i < range.end; i += stride) add(bins, references_[i]);
+    for (int axis = 0; twoSets && axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) {
+        Bin& bin = bins[axis][b];
+        bin.lo = _mm_min_ps(bin.lo, odd[axis][b].lo);
+        bin.hi = _mm_max_ps(bin.hi, odd[axis][b].hi);
+        bin.count += odd[axis][b].count;
+      }
     Split best;
     best.cost = kInfinity;
     for (int axis = 0; axis < 3; ++axis) {
       // Right to left: the boxes and counts of bins b.. kBins - 1.
       float rightArea[kBins];
       uint32_t rightCount[kBins];
-      __m128 rightLo[kBins], rightHi[kBins];
       __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
       uint32_t count = 0;
       for (int b = kBins - 1; b > 0; --b) {
         lo = _mm_min_ps(lo, bins[axis][b].lo);
         hi = _mm_max_ps(hi, bins[axis][b].hi);
         count += bins[axis][b].count;
-        rightLo[b] = lo, rightHi[b] = hi, rightCount[b] = count;
+        rightCount[b] = count;
         rightArea[b] = count ? halfArea(lo, hi) : 0.0f;
       }
       lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
@@ -190,19 +215,20 @@ class Builder {
         const float cost = halfArea(lo, hi) * float(packets(count)) + rightArea[b] * float(packets(rightCount[b]));
         if (cost < best.cost) {
           best.cost = cost, best.axis = axis, best.bin = b;
-          best.leftLo = lo, best.leftHi = hi, best.rightLo = rightLo[b], best.rightHi = rightHi[b];
         }
       }
     }
     return best;
   }
 
-  // Partitions the range by the split; the children's boxes come from the split.
+  // Partitions the range by the split, measuring the two sides' boxes (the
+  // split's own come from sampled bins in large ranges).
   void partition(const Range& range, const Split& split, Range& left, Range& right) {
     const Binning binning(range);
     const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
     __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
     __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
+    __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
     const auto goesLeft = [&](__m128 centroid) {
       alignas(16) int32_t index[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(centroid));
@@ -214,17 +240,21 @@ class Builder {
       if (goesLeft(centroid)) {
         leftCentroidLo = _mm_min_ps(leftCentroidLo, centroid);
         leftCentroidHi = _mm_max_ps(leftCentroidHi, centroid);
+        leftLo = _mm_min_ps(leftLo, references_[i].lo);
+        leftHi = _mm_max_ps(leftHi, references_[i].hi);
         ++i;
       } else {
         rightCentroidLo = _mm_min_ps(rightCentroidLo, centroid);
         rightCentroidHi = _mm_max_ps(rightCentroidHi, centroid);
+        rightLo = _mm_min_ps(rightLo, references_[i].lo);
+        rightHi = _mm_max_ps(rightHi, references_[i].hi);
         std::swap(references_[i], references_[--j]);
       }
     }
     left.begin = range.begin, left.end = i;
     right.begin = i, right.end = range.end;
-    left.lo = split.leftLo, left.hi = split.leftHi;
-    right.lo = split.rightLo, right.hi = split.rightHi;
+    left.lo = leftLo, left.hi = leftHi;
+    right.lo = rightLo, right.hi = rightHi;
     left.centroidLo = leftCentroidLo, left.centroidHi = leftCentroidHi;
     right.centroidLo = rightCentroidLo, right.centroidHi = rightCentroidHi;
   }
