@@ -185,7 +185,7 @@ TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
   const fs::path voxels = dir_ / "two_rooms_grid3";
   ASSERT_EQ(importVoxelStore("two_rooms", 3, voxels), "");
   const std::vector<std::string> specs{"grid",    "grid:res=7", "hgrid:res=4,max=8", "kd:median", "kd:sah", "kd:bbox",
-                                       "bvh",     "bvh:width=8", "brute",             "auto"};
+                                       "bvh",     "bvh:width=4", "brute",             "auto"};
   for (const fs::path& store : {store_, voxels}) {
     auto imageOf = [&](size_t i) { return dir_ / (store.filename().string() + "-accel" + std::to_string(i) + ".exr"); };
     for (size_t i = 0; i < specs.size(); ++i) {

@@ -12,6 +12,7 @@
 
 #include "common/accel/accelerator.h"
 #include "common/accel/brute_force.h"
+#include "common/accel/bvh_traverse_avx2.h"
 #include "common/accel/triangle_intersect.h"
 #include "tests/unit/accel_test_scenes.h"
 
@@ -94,12 +95,16 @@ void expectSameAsBruteForce(const TestMesh& mesh, const std::vector<const Accele
   EXPECT_GT(hits, minimumHitFraction * double(rays.size()));
 }
 
-// Both widths, on the shared rays starting on the 4-wide tree's box faces.
+// Both widths, the 8-wide one with its AVX2 traversal (where the processor
+// has it) and with SSE, on the shared rays starting on the 4-wide tree's box faces.
 void expectSameAsBruteForce(const TestMesh& mesh, int rayCount, uint32_t seed, double minimumHitFraction = 0.1,
                             const TestMesh* rayMesh = nullptr) {
   const auto four = buildBvh(mesh, "bvh:width=4"), eight = buildBvh(mesh, "bvh:width=8");
-  expectSameAsBruteForce(mesh, {four.get(), eight.get()}, testRays(rayMesh ? *rayMesh : mesh, *four, rayCount, seed),
-                         minimumHitFraction);
+  const std::vector<Ray> rays = testRays(rayMesh ? *rayMesh : mesh, *four, rayCount, seed);
+  expectSameAsBruteForce(mesh, {four.get(), eight.get()}, rays, minimumHitFraction);
+  useBvhAvx2(false);
+  expectSameAsBruteForce(mesh, {eight.get()}, rays, minimumHitFraction);
+  useBvhAvx2(true);
 }
 
 TestMesh mixedScene(uint32_t seed) {
@@ -324,7 +329,7 @@ TEST(BvhSpec, BuildsEachWidthAndRejectsBadSpecs) {
   const TestMesh mesh = mixedScene(12);
   const auto plain = buildBvh(mesh, "bvh");
   EXPECT_EQ(plain->stats().spec, "bvh");
-  EXPECT_NE(dynamic_cast<const WideBvh<4>*>(plain.get()), nullptr);
+  EXPECT_NE(dynamic_cast<const WideBvh<8>*>(plain.get()), nullptr);
   EXPECT_NE(dynamic_cast<const WideBvh<4>*>(buildBvh(mesh, "bvh:width=4").get()), nullptr);
   EXPECT_NE(dynamic_cast<const WideBvh<8>*>(buildBvh(mesh, "bvh:width=8").get()), nullptr);
   EXPECT_EQ(plain->bounds().lo, BruteForce(mesh.view()).bounds().lo);
