@@ -157,12 +157,12 @@ CostModel CostModel::builtIn() {
   // 25 cells (22 of l-shape, 3 halls), 20 000 photon-like rays each.
   CostModel model;
   model.origin = "built-in (development machine)";
-  model.families["grid"] = {{0.002208, 3.203e-05, 2.723e-05}, {278.9, 4.642, 0.9332}};
-  model.families["hgrid"] = {{0, 8.695e-05, 5.496e-05}, {98.89, 44.58}};
-  model.families["kd:median"] = {{0, 0.0006747, 1.616e-05}, {0, 95.19}};
-  model.families["kd:sah"] = {{0, 0, 8.966e-05}, {37.94, 27.72}};
-  model.families["kd:bbox"] = {{0, 0, 0.0001929}, {0, 70.48}};
-  model.families["bvh"] = {{0, 0, 4.157e-05}, {71.98, 13.26}};
+  model.families["grid"] = {{0.002398, 3.105e-05, 2.846e-05}, {281.8, 4.064, 0.8875}};
+  model.families["hgrid"] = {{0, 0, 6.116e-05}, {126.3, 40.82}};
+  model.families["kd:median"] = {{0, 0.0006643, 1.795e-05}, {0, 94.61}};
+  model.families["kd:sah"] = {{0, 0, 9.233e-05}, {50.02, 26.22}};
+  model.families["kd:bbox"] = {{0, 0, 0.0001987}, {0, 69.89}};
+  model.families["bvh"] = {{0, 0, 4.201e-05}, {82.32, 9.188}};
   return model;
 }
 
