@@ -11,6 +11,7 @@
 #include <string>
 
 #include "common/accel/brute_force.h"
+#include "common/accel/bvh.h"
 #include "common/accel/cost_model.h"
 #include "common/accel/embree_accelerator.h"
 #include "common/accel/hierarchical_grid.h"
@@ -35,7 +36,7 @@ std::string_view trim(std::string_view s) {
 
 // One row per kind. create() reads the parameters, reports the unused ones
 // and, when mesh is not null, builds; with a null mesh it only validates.
-// New kinds (kd, hgrid, embree, auto) add a row here.
+// New kinds add a row here.
 struct AcceleratorKind {
   std::string_view name;
   std::unique_ptr<Accelerator> (*create)(AcceleratorParameters& parameters, const MeshView* mesh,
@@ -73,6 +74,14 @@ constexpr AcceleratorKind kKinds[] = {
        parameters.reportUnused();
        if (!mesh) return nullptr;
        return std::make_unique<KdTree>(*mesh, options, text);
+     }},
+    {"bvh",
+     [](AcceleratorParameters& parameters, const MeshView* mesh,
+        std::string_view text) -> std::unique_ptr<Accelerator> {
+       const BvhOptions options = readBvhOptions(parameters);
+       parameters.reportUnused();
+       if (!mesh) return nullptr;
+       return makeBvh(*mesh, options, text);
      }},
     // Resolved to a concrete spec by the cost model (cost_model.h). Workers
     // resolve `auto` themselves, per cell, from the rays the cell is expected

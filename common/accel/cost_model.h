@@ -9,7 +9,7 @@
 //
 // The model is linear in a few features of the cell per structure family:
 //   grid:res=R   build  ~ 1, n, voxels             trace ~ 1, mean voxels per axis, n / voxels
-//   hgrid, kd:*  build  ~ 1, n, n log2 n           trace ~ 1, log2 n
+//   hgrid, kd:*, bvh  build ~ 1, n, n log2 n        trace ~ 1, log2 n
 // (n = triangles; voxels from R and the cell's shape). The grid's terms give
 // the U-shaped curve of the paper's Fig. 4: coarse grids test many triangles
 // per voxel, fine ones cross many empty voxels and take long to build. The
@@ -41,7 +41,7 @@ CellShape cellShape(const MeshView& mesh);
 // One structure with its parameters, as a spec string, and its family.
 struct AcceleratorCandidate {
   std::string spec;      // "grid", "grid:res=24", "kd:sah", ...
-  std::string family;    // "grid", "hgrid", "kd:median", "kd:sah", "kd:bbox"
+  std::string family;    // "grid", "hgrid", "kd:median", "kd:sah", "kd:bbox", "bvh"
   int gridResolution = 0;  // R for grid:res=R; 0 for plain `grid` (its automatic resolution)
 };
 
@@ -64,7 +64,8 @@ class CostModel {
   // Measured on the development machine (see cost_model.cpp).
   static CostModel builtIn();
   // Reads a calibration written by save(); throws std::runtime_error naming
-  // the file and the problem (unreadable, malformed, wrong version, missing family).
+  // the file and the problem (unreadable, malformed, wrong version, missing
+  // family). A family newer than the file (bvh) takes the built-in coefficients.
   static CostModel load(const std::string& path);
   // Written atomically (temporary file, then rename).
   void save(const std::string& path) const;

@@ -194,6 +194,69 @@ struct PacketBoxClip {
   PacketRay::Float4 lower, upper;
 };
 
+// intersectTriangle's own steps (translation, shear, edge functions, sign
+// test, det, T and t = T / det) on the four lanes of a packet, with the very
+// operations of the scalar test, so each lane gets the scalar test's U, V,
+// W, det and t bit for bit.
+struct PacketLanes {
+  using Int4 = int32_t __attribute__((vector_size(16)));
+  PacketRay::Float4 t, det, V, W;
+  Int4 candidate;  // all ones: the lane may hit (see packetCandidates)
+  Int4 anyZero;    // all ones: an edge function is exactly zero
+};
+
+template <bool AnyHit>
+inline PacketLanes packetLanes(const TrianglePacket& packet, const PacketRay& packetRay, float bestT) {
+  using Float4 = PacketRay::Float4;
+  using Int4 = PacketLanes::Int4;
+  const auto load = [](const float* p) {
+    Float4 value;
+    std::memcpy(&value, p, sizeof(value));
+    return value;
+  };
+  const int kx = packetRay.kx, ky = packetRay.ky, kz = packetRay.kz;
+  const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
+  const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
+  const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
+  const Float4 Ax = (load(packet.v[0][kx]) - packetRay.originX) - packetRay.shearX * az;
+  const Float4 Ay = (load(packet.v[0][ky]) - packetRay.originY) - packetRay.shearY * az;
+  const Float4 Bx = (load(packet.v[1][kx]) - packetRay.originX) - packetRay.shearX * bz;
+  const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
+  const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
+  const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
+  PacketLanes lanes;
+  const Float4 U = Cx * By - Cy * Bx;
+  lanes.V = Ax * Cy - Ay * Cx;
+  lanes.W = Bx * Ay - By * Ax;
+  const Float4 zero{};
+  const Int4 negative = (U < zero) | (lanes.V < zero) | (lanes.W < zero);
+  const Int4 positive = (U > zero) | (lanes.V > zero) | (lanes.W > zero);
+  lanes.anyZero = (U == zero) | (lanes.V == zero) | (lanes.W == zero);
+  lanes.det = U + lanes.V + lanes.W;
+  const Float4 T =
+      U * (packetRay.scaleZ * az) + lanes.V * (packetRay.scaleZ * bz) + lanes.W * (packetRay.scaleZ * cz);
+  lanes.t = T / lanes.det;
+  Int4 inRange = (lanes.t > packetRay.tMin) & (lanes.t < packetRay.tMax);
+  if constexpr (!AnyHit) inRange &= lanes.t <= Float4{bestT, bestT, bestT, bestT};
+  lanes.candidate = (~(negative & positive) & inRange) | lanes.anyZero;
+  return lanes;
+}
+
+// Bit k set where lane k of the mask is.
+inline unsigned laneBits(PacketLanes::Int4 mask) {
+  return unsigned(mask[0] & 1) | unsigned(mask[1] & 2) | unsigned(mask[2] & 4) | unsigned(mask[3] & 8);
+}
+
+// The lanes of `packet` that may hit (bit k: lane k). A lane is dropped
+// only where intersectTriangle would return false on the same sign test or
+// the same check of t against [tMin, tMax], or (closest hit) where its t is
+// beyond bestT, so could not win under closerThan. Lanes with an edge
+// function exactly zero, which the scalar test re-decides in double, are kept.
+template <bool AnyHit>
+inline unsigned packetCandidates(const TrianglePacket& packet, const PacketRay& packetRay, float bestT) {
+  return laneBits(packetLanes<AnyHit>(packet, packetRay, bestT).candidate);
+}
+
 // Which of the four boxes the ray crosses within the span of the clip (bit k:
 // packet 4b + k); entries[k]: where the ray enters box k within that span
 // (the latest entry over the axes and the span's start). SSE2 (the x86-64 baseline), which GCC's vector extensions
@@ -231,29 +294,13 @@ inline unsigned crossedPacketBoxes(const PacketBoxes4& boxes, const PacketBoxCli
 // found so far (often one found in an earlier packet of the voxel): the box
 // test's own argument (uniform_grid.cpp) puts the computed entry before the
 // hit of any triangle of the packet that the voxel must test, so such a
-// triangle cannot win. Four at a
-// time, intersectTriangle's own steps (translation, shear, edge functions,
-// sign test, det, T and t = T / det) run on all four lanes with the very
-// operations of the scalar test, so each lane gets the scalar test's U, V,
-// W, det and t bit for bit: a lane is dropped only where intersectTriangle
-// would return false on the same sign test or the same check of t against
-// [tMin, tMax], or where its t would lose to the best hit so far (closerThan:
-// t > best.t never wins). The others go to intersectTriangle itself, once
-// per primitive (the mailbox), which alone decides hits; so do lanes with
-// an edge function exactly zero, which the scalar test re-decides in
-// double.
+// triangle cannot win. The lanes packetCandidates keeps go to
+// intersectTriangle itself, once per primitive (the mailbox), which alone
+// decides hits.
 template <bool AnyHit, uint32_t Slots>
 inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes, uint32_t first, uint32_t end,
                         const PacketBoxClip& clip, Mailbox<Slots>& mailbox, const PacketRay& packetRay,
                         const WatertightRay& frame, const Ray& ray, Hit& best) {
-  using Float4 = PacketRay::Float4;
-  using Int4 = int32_t __attribute__((vector_size(16)));
-  const auto load = [](const float* p) {
-    Float4 value;
-    std::memcpy(&value, p, sizeof(value));
-    return value;
-  };
-  const int kx = packetRay.kx, ky = packetRay.ky, kz = packetRay.kz;
   const uint32_t endBlock = (end + 3) / 4;
   for (uint32_t block = first / 4; block < endBlock; block += 16) {
     const uint32_t blocks = std::min(endBlock - block, 16u), base = 4 * block;
@@ -277,31 +324,7 @@ inline bool testPackets(const TrianglePacket* packets, const PacketBoxes4* boxes
         if (entries[std::countr_zero(crossed)] > best.t) continue;
       }
       const TrianglePacket& packet = packets[base + std::countr_zero(crossed)];
-      const Float4 az = load(packet.v[0][kz]) - packetRay.originZ;
-      const Float4 bz = load(packet.v[1][kz]) - packetRay.originZ;
-      const Float4 cz = load(packet.v[2][kz]) - packetRay.originZ;
-      const Float4 Ax = (load(packet.v[0][kx]) - packetRay.originX) - packetRay.shearX * az;
-      const Float4 Ay = (load(packet.v[0][ky]) - packetRay.originY) - packetRay.shearY * az;
-      const Float4 Bx = (load(packet.v[1][kx]) - packetRay.originX) - packetRay.shearX * bz;
-      const Float4 By = (load(packet.v[1][ky]) - packetRay.originY) - packetRay.shearY * bz;
-      const Float4 Cx = (load(packet.v[2][kx]) - packetRay.originX) - packetRay.shearX * cz;
-      const Float4 Cy = (load(packet.v[2][ky]) - packetRay.originY) - packetRay.shearY * cz;
-      const Float4 U = Cx * By - Cy * Bx;
-      const Float4 V = Ax * Cy - Ay * Cx;
-      const Float4 W = Bx * Ay - By * Ax;
-      const Float4 zero{};
-      const Int4 negative = (U < zero) | (V < zero) | (W < zero);
-      const Int4 positive = (U > zero) | (V > zero) | (W > zero);
-      const Int4 anyZero = (U == zero) | (V == zero) | (W == zero);
-      const Float4 det = U + V + W;
-      const Float4 T = U * (packetRay.scaleZ * az) + V * (packetRay.scaleZ * bz) + W * (packetRay.scaleZ * cz);
-      const Float4 hitT = T / det;
-      Int4 inRange = (hitT > packetRay.tMin) & (hitT < packetRay.tMax);
-      if constexpr (!AnyHit) inRange &= hitT <= Float4{best.t, best.t, best.t, best.t};
-      const Int4 candidate = (~(negative & positive) & inRange) | anyZero;
-      unsigned mask = unsigned(candidate[0] & 1) | unsigned(candidate[1] & 2) | unsigned(candidate[2] & 4) |
-                      unsigned(candidate[3] & 8);
-      while (mask != 0) {
+      for (unsigned mask = packetCandidates<AnyHit>(packet, packetRay, best.t); mask != 0;) {
         const int lane = __builtin_ctz(mask);
         mask &= mask - 1;
         const uint32_t primitive = packet.primitive[lane];

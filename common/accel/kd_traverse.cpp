@@ -31,6 +31,7 @@
 #include <cstring>
 
 #include "common/accel/kd_tree.h"
+#include "common/accel/traversal_margin.h"
 #include "common/accel/triangle_intersect.h"
 
 namespace portico {
@@ -39,8 +40,6 @@ namespace {
 
 constexpr int kStackSize = 64;
 static_assert(kStackSize > kKdMaxDepthLimit);
-constexpr float kMarginScale = 1.0f / 65536.0f;        // 2^-16 = 256 float ulps
-constexpr float kOriginMarginScale = 1.0f / 1048576.0f;  // 2^-20 = 16 float ulps
 
 }  // namespace
 
@@ -78,19 +77,13 @@ template <bool AnyHit>
     uint32_t nearIsAbove;
   } axes[3];
   const Bounds3& box = tree_.bounds;
-  float reach = 0.0f, magnitude = 0.0f;
   for (int axis = 0; axis < 3; ++axis) {
     axes[axis].inverse = 1.0f / direction[axis];
     if (direction[axis] != 0.0f && !std::isfinite(axes[axis].inverse))
       return testEveryTriangle<AnyHit>(ray, best);
     axes[axis].nearIsAbove = std::signbit(direction[axis]) ? 1 : 0;
-    const float toLo = std::fabs(box.lo[axis] - origin[axis]), toHi = std::fabs(box.hi[axis] - origin[axis]);
-    reach = reach > toLo ? reach : toLo;
-    reach = reach > toHi ? reach : toHi;
-    const float coordinate = std::fabs(origin[axis]);
-    magnitude = magnitude > coordinate ? magnitude : coordinate;
   }
-  const float margin = reach * kMarginScale + magnitude * kOriginMarginScale;
+  const float margin = traversalMargin(box, origin);
 
   // Clip [tMin, tMax] to the root box, grown by the margin.
   float tNear = ray.tMin, tFar = ray.tMax;

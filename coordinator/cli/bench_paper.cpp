@@ -227,6 +227,7 @@ Rgb structureColor(const std::string& spec) {
   if (spec.rfind("kd", 0) == 0) return {140, 86, 75};
   if (spec == "embree") return {110, 110, 110};
   if (spec == "auto") return {227, 119, 194};
+  if (spec.rfind("bvh", 0) == 0) return {188, 189, 34};
   return {23, 190, 207};
 }
 constexpr Rgb kBestGridColor{158, 202, 225};   // grid at its best resolution, beside plain `grid`
@@ -1122,6 +1123,7 @@ void experimentAutoVsFixed(Bench& bench) {
     if (bestGrid) fixed.push_back(*bestGrid);
     fixed.push_back({"hgrid", &bench.measure(store, "hgrid", photons)});
     for (const SweepPoint& p : kdSweep(bench, store, photons)) fixed.push_back(p);
+    fixed.push_back({"bvh", &bench.measure(store, "bvh", photons)});
     const SweepPoint* bestFixed = fastest(fixed);
     const Measurement& automatic = bench.measure(store, "auto", photons);
     const Measurement& embree = bench.measure(store, "embree", photons);
@@ -1163,10 +1165,11 @@ void experimentAutoVsFixed(Bench& bench) {
                          {"accelerators", automatic.ok() ? nlohmann::json(automatic.typical().accelerators)
                                                          : nlohmann::json::object()}};
   }
-  for (const std::string s : {"grid", "grid:res=R (best)", "hgrid", "kd:median", "kd:sah", "kd:bbox", "auto", "embree"})
+  for (const std::string s :
+       {"grid", "grid:res=R (best)", "hgrid", "kd:median", "kd:sah", "kd:bbox", "bvh", "auto", "embree"})
     panel.legend.push_back({s, s == "grid:res=R (best)" ? kBestGridColor : structureColor(s)});
   printTable("auto_vs_fixed: photon pass (s) of --accel auto beside every fixed choice",
-             {"building", "grid", "grid best R", "hgrid", "kd:median", "kd:sah", "kd:bbox", "auto", "embree",
+             {"building", "grid", "grid best R", "hgrid", "kd:median", "kd:sah", "kd:bbox", "bvh", "auto", "embree",
               "best fixed", "auto/best", "auto's choices"},
              rows,
              autoStatus == "ok" ? "auto's choices: the statistics' \"accelerators\" (spec=cells)"

@@ -66,7 +66,7 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local);
 struct BenchAccelOptions {
   std::string sizes = "1000,10000,100000,1000000";
   uint64_t rays = 100000;
-  std::string specs = "grid,hgrid,kd:median,kd:sah,kd:bbox,embree";
+  std::string specs = "grid,hgrid,kd:median,kd:sah,kd:bbox,bvh,embree";
   std::string csv;
   std::string plot;
   uint64_t seed = 1;

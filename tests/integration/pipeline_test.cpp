@@ -184,8 +184,8 @@ TEST_F(Pipeline, EveryPorticoAcceleratorGivesTheSameBits) {
   // and in voxel cells cut by a uniform grid, whose triangles stick out.
   const fs::path voxels = dir_ / "two_rooms_grid3";
   ASSERT_EQ(importVoxelStore("two_rooms", 3, voxels), "");
-  const std::vector<std::string> specs{"grid", "grid:res=7", "hgrid:res=4,max=8", "kd:median", "kd:sah", "kd:bbox",
-                                       "brute", "auto"};
+  const std::vector<std::string> specs{"grid",    "grid:res=7", "hgrid:res=4,max=8", "kd:median", "kd:sah", "kd:bbox",
+                                       "bvh",     "bvh:width=4", "brute",             "auto"};
   for (const fs::path& store : {store_, voxels}) {
     auto imageOf = [&](size_t i) { return dir_ / (store.filename().string() + "-accel" + std::to_string(i) + ".exr"); };
     for (size_t i = 0; i < specs.size(); ++i) {
@@ -211,7 +211,7 @@ TEST_F(Pipeline, AutoPicksPerCellRebuildsBusyCellsAndKeepsTheBits) {
   // while few rays are expected, and the busy ones are rebuilt as kd-trees
   // once the rays they keep taking pay for the build. Neither changes a bit.
   nlohmann::json families;
-  for (const char* family : {"hgrid", "kd:median", "kd:bbox"})
+  for (const char* family : {"hgrid", "kd:median", "kd:bbox", "bvh"})
     families[family] = {{"build", {1e6, 0, 0}}, {"trace", {1e6, 0}}};
   families["grid"] = {{"build", {0, 0, 0}}, {"trace", {1000, 0, 0}}};
   families["kd:sah"] = {{"build", {5, 0, 0}}, {"trace", {100, 0}}};

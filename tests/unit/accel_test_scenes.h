@@ -1,14 +1,16 @@
-// Meshes and rays shared by the tests of the hierarchical grid and of the
-// Embree accelerator: triangle soups, rooms of boxes (shared faces, ties,
-// duplicates), long thin triangles, a furnished hall, a dense cluster in a
-// large empty room, and rays of every kind an accelerator must get right.
+// Meshes and rays shared by the accelerators' tests: triangle soups, rooms
+// of boxes (shared faces, ties, duplicates), long thin triangles, degenerate
+// triangles, a furnished hall, a dense cluster in a large empty room, and
+// rays of every kind an accelerator must get right.
 #pragma once
 
 #include <bit>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -120,6 +122,54 @@ inline void addClusterInEmptyRoom(TestMesh& mesh, int count, std::mt19937& rando
   }
 }
 
+// Degenerate triangles (points, segments) and exact duplicates (same t,
+// another id), some rotated.
+inline void addDegenerateAndDuplicates(TestMesh& mesh, int count, std::mt19937& random) {
+  const size_t existing = mesh.triangleCount();
+  std::uniform_real_distribution<float> position(0, 10);
+  for (int i = 0; i < count; ++i) {
+    const Vec3 a{position(random), position(random), position(random)};
+    const Vec3 b{position(random), position(random), position(random)};
+    mesh.addTriangle(a, a, a);                   // a point
+    mesh.addTriangle(a, b, a + (b - a) * 0.5f);  // (nearly) a segment
+    if (existing > 0) {
+      const uint32_t* t = &mesh.indices[3 * (random() % existing)];
+      mesh.addTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2]));  // same t, another id
+      mesh.addTriangle(mesh.vertex(t[2]), mesh.vertex(t[0]), mesh.vertex(t[1]));  // rotated
+    }
+  }
+}
+
+// A floor of 20 x 20 unit quads at z = 1: every box of it is flat, and rays
+// straight down onto its shared vertices and edges tie.
+inline void addFloor(TestMesh& mesh) {
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x)
+      mesh.addQuad({float(x), float(y), 1}, {float(x + 1), float(y), 1}, {float(x + 1), float(y + 1), 1},
+                   {float(x), float(y + 1), 1});
+}
+
+// Moves the mesh as a cell of a large building lies: coordinates in the thousands.
+inline void moveFarFromTheOrigin(TestMesh& mesh) {
+  for (size_t i = 0; i < mesh.positions.size(); i += 3) {
+    mesh.positions[i] += 3000.0f;
+    mesh.positions[i + 1] -= 1200.0f;
+    mesh.positions[i + 2] += 40.0f;
+  }
+}
+
+// Gives a NaN or infinite vertex to the first triangle, the last, a run and
+// every seventh (brute force never hits them).
+inline void poisonSomeTriangles(TestMesh& mesh) {
+  const size_t count = mesh.triangleCount();
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const auto poison = [&](size_t triangle, float value) { mesh.positions[3 * mesh.indices[3 * triangle] + 1] = value; };
+  poison(0, nan);
+  poison(count - 1, -inf);
+  for (size_t t = count / 2; t < count / 2 + 5; ++t) poison(t, inf);
+  for (size_t t = 3; t < count; t += 7) poison(t, nan);
+}
+
 inline TestMesh furnishedHall(size_t triangles, uint64_t seed) {
   const FurnishedHall hall = generateFurnishedHall(triangles, seed);
   TestMesh mesh;
@@ -204,6 +254,16 @@ inline std::vector<Ray> testRays(const TestMesh& mesh, int count, uint32_t seed,
     rays.push_back(ray);
   }
   return rays;
+}
+
+// What action throws as std::invalid_argument ("(no error)" if nothing).
+inline std::string errorOf(const std::function<void()>& action) {
+  try {
+    action();
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "(no error)";
 }
 
 inline std::string describe(const Ray& ray) {

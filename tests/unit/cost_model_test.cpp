@@ -3,6 +3,7 @@
 #include "common/accel/cost_model.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
 #include <filesystem>
@@ -66,7 +67,7 @@ TEST(CostModel, GridCandidatesStayWithinTheVoxelBudgetAndFollowTheShape) {
     EXPECT_LE(features[2], 64 * 200000.0);  // voxels
   }
   // Every family is a candidate whatever the size.
-  for (const char* family : {"hgrid", "kd:median", "kd:sah", "kd:bbox"})
+  for (const char* family : {"hgrid", "kd:median", "kd:sah", "kd:bbox", "bvh"})
     EXPECT_TRUE(std::any_of(small.begin(), small.end(), [&](const auto& c) { return c.family == family; }));
 }
 
@@ -112,7 +113,8 @@ TEST(CostModel, PlainGridIsACandidateAtItsOwnResolutionAndWinsCloseCalls) {
   // Make every grid cost the same per ray and nothing to build, the other
   // families dearer: then the plain grid ties with every grid:res=R and wins.
   model.families["grid"] = {{0, 0, 0}, {100, 0, 0}};
-  for (const char* family : {"hgrid", "kd:median", "kd:sah", "kd:bbox"}) model.families[family] = {{1, 0, 0}, {200, 0}};
+  for (const char* family : {"hgrid", "kd:median", "kd:sah", "kd:bbox", "bvh"})
+    model.families[family] = {{1, 0, 0}, {200, 0}};
   EXPECT_EQ(model.choose(cell, 1e6).candidate.spec, "grid");
   // kd:sah 5 % cheaper per ray: within the margin, the plain grid stays.
   model.families["kd:sah"] = {{0, 0, 0}, {95, 0}};
@@ -174,6 +176,14 @@ TEST_F(CalibrationFile, BadFilesAreRefusedNamingTheFileAndTheProblem) {
     std::string noFamily = good;
     noFamily.replace(noFamily.find("\"kd:bbox\""), 9, "\"kd:other\"");
     EXPECT_NE(message(write("family.json", noFamily)).find("no coefficients for kd:bbox"), std::string::npos);
+  }
+  {
+    // A calibration written before bvh existed: bvh takes the built-in coefficients.
+    nlohmann::json old = nlohmann::json::parse(good);
+    old["families"].erase("bvh");
+    const CostModel loaded = CostModel::load(write("old.json", old.dump()));
+    EXPECT_EQ(loaded.families.at("bvh").trace, CostModel::builtIn().families.at("bvh").trace);
+    EXPECT_NE(loaded.origin.find("bvh: built-in"), std::string::npos);
   }
   model.families["hgrid"].build[1] = -1;
   EXPECT_THROW(model.save((dir_ / "negative.json").string()), std::runtime_error);

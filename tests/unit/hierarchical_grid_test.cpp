@@ -109,11 +109,7 @@ TEST(HierarchicalGrid, MatchesBruteForceFarFromTheWorldOrigin) {
   TestMesh far;
   accel_test::addRoomOfBoxes(far, random);
   accel_test::addRandomTriangles(far, 300, random);
-  for (size_t i = 0; i < far.positions.size(); i += 3) {
-    far.positions[i] += 3000.0f;
-    far.positions[i + 1] -= 1200.0f;
-    far.positions[i + 2] += 40.0f;
-  }
+  accel_test::moveFarFromTheOrigin(far);
   const HierarchicalGrid grid(far.view(), HierarchicalGridOptions{4, 4, 0, 4, 2.0});
   EXPECT_GT(grid.stats().maxDepth, 1u);
   expectSameAsBruteForce(far, grid, 10000, 400);
@@ -189,10 +185,7 @@ TEST(HierarchicalGrid, ReportsStatistics) {
 
 TEST(HierarchicalGrid, HandlesFlatBoundsEmptyMeshesAndBadRays) {
   TestMesh floor;
-  for (int y = 0; y < 20; ++y)
-    for (int x = 0; x < 20; ++x)
-      floor.addQuad({float(x), float(y), 1}, {float(x + 1), float(y), 1}, {float(x + 1), float(y + 1), 1},
-                    {float(x), float(y + 1), 1});
+  accel_test::addFloor(floor);
   const HierarchicalGrid grid(floor.view(), HierarchicalGridOptions{2, 8, 0, 4, 2.0});
   EXPECT_EQ(grid.grids()[0].resolution[2], 1);
   expectSameAsBruteForce(floor, grid, 8000, 500, 0.05);

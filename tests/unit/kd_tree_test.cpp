@@ -25,6 +25,8 @@
 namespace portico {
 namespace {
 
+using accel_test::errorOf;
+
 const char* const kKdSpecs[] = {"kd:median", "kd:sah", "kd:bbox"};
 
 using accel_test::addLongThinTriangles;  // (c) long, thin triangles: each straddles many planes
@@ -39,22 +41,7 @@ void addRoom(KdTestMesh& mesh, std::mt19937& random) {
   accel_test::addRoomOfBoxes(mesh, random, /*boxes=*/40, /*duplicates=*/0);
 }
 
-// (d) Degenerate triangles (points, segments) and exact duplicates.
-void addDegenerateAndDuplicates(KdTestMesh& mesh, int count, std::mt19937& random) {
-  const size_t existing = mesh.triangleCount();
-  std::uniform_real_distribution<float> position(0, 10);
-  for (int i = 0; i < count; ++i) {
-    const Vec3 a{position(random), position(random), position(random)};
-    const Vec3 b{position(random), position(random), position(random)};
-    mesh.addTriangle(a, a, a);                 // a point
-    mesh.addTriangle(a, b, a + (b - a) * 0.5f);  // (nearly) a segment
-    if (existing > 0) {
-      const uint32_t* t = &mesh.indices[3 * (random() % existing)];
-      mesh.addTriangle(mesh.vertex(t[0]), mesh.vertex(t[1]), mesh.vertex(t[2]));  // same t, another id
-      mesh.addTriangle(mesh.vertex(t[2]), mesh.vertex(t[0]), mesh.vertex(t[1]));  // rotated
-    }
-  }
-}
+using accel_test::addDegenerateAndDuplicates;  // (d) points, segments, exact and rotated duplicates
 
 KdTestMesh mixedScene(uint32_t seed) {
   std::mt19937 random(seed);
@@ -253,21 +240,14 @@ TEST(KdTree, MatchesBruteForceFarFromTheWorldOrigin) {
   KdTestMesh mesh;
   addRoom(mesh, random);
   addRandomTriangles(mesh, 300, random);
-  for (size_t i = 0; i < mesh.positions.size(); i += 3) {
-    mesh.positions[i] += 3000.0f;
-    mesh.positions[i + 1] -= 1200.0f;
-    mesh.positions[i + 2] += 40.0f;
-  }
+  accel_test::moveFarFromTheOrigin(mesh);
   for (const char* spec : kKdSpecs) expectSameAsBruteForce(mesh, spec, 10000, 600);
 }
 
 TEST(KdTree, HandlesFlatBounds) {
   // A floor: every vertex at z = 1, so the root box has no thickness.
   KdTestMesh floor;
-  for (int y = 0; y < 20; ++y)
-    for (int x = 0; x < 20; ++x)
-      floor.addQuad({float(x), float(y), 1}, {float(x + 1), float(y), 1}, {float(x + 1), float(y + 1), 1},
-                    {float(x), float(y + 1), 1});
+  accel_test::addFloor(floor);
   const BruteForce brute(floor.view());
   for (const char* spec : kKdSpecs) {
     SCOPED_TRACE(spec);
@@ -553,15 +533,6 @@ TEST(KdTree, ReportsAverageDepthsLikeThePapersTable3) {
 
 // ---------------------------------------------------------------------------
 // Specs
-
-std::string errorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "(no error)";
-}
 
 TEST(KdTreeSpec, BuildsEachVariantThroughTheFactory) {
   const KdTestMesh mesh = mixedScene(15);

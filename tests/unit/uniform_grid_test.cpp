@@ -20,6 +20,8 @@
 namespace portico {
 namespace {
 
+using accel_test::errorOf;
+
 using accel_test::addRandomTriangles;
 using accel_test::addLongThinTriangles;
 using accel_test::describe;
@@ -97,11 +99,7 @@ TEST(UniformGrid, MatchesBruteForceFarFromTheWorldOrigin) {
   addRoom(local, random);
   addRandomTriangles(local, 300, random);
   TestMesh far = local;
-  for (size_t i = 0; i < far.positions.size(); i += 3) {
-    far.positions[i] += 3000.0f;
-    far.positions[i + 1] -= 1200.0f;
-    far.positions[i + 2] += 40.0f;
-  }
+  accel_test::moveFarFromTheOrigin(far);
   const UniformGrid grid(far.view());
   expectSameAsBruteForce(far, grid, 10000, 400);
 }
@@ -112,13 +110,7 @@ TEST(UniformGrid, MatchesBruteForceWithNonFiniteTriangles) {
   // from the intact mesh.
   const TestMesh intact = mixedScene(9);
   TestMesh mesh = intact;
-  const size_t count = mesh.triangleCount();
-  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
-  const auto poison = [&](size_t triangle, float value) { mesh.positions[3 * mesh.indices[3 * triangle] + 1] = value; };
-  poison(0, nan);
-  poison(count - 1, -inf);
-  for (size_t t = count / 2; t < count / 2 + 5; ++t) poison(t, inf);
-  for (size_t t = 3; t < count; t += 7) poison(t, nan);
+  accel_test::poisonSomeTriangles(mesh);
   const UniformGrid grid(mesh.view());
   const BruteForce brute(mesh.view());
   int hits = 0, mismatches = 0;
@@ -134,10 +126,7 @@ TEST(UniformGrid, MatchesBruteForceWithNonFiniteTriangles) {
 TEST(UniformGrid, HandlesFlatBounds) {
   // A floor: every vertex at z = 1, so the bounds have no thickness.
   TestMesh floor;
-  for (int y = 0; y < 20; ++y)
-    for (int x = 0; x < 20; ++x)
-      floor.addQuad({float(x), float(y), 1}, {float(x + 1), float(y), 1}, {float(x + 1), float(y + 1), 1},
-                    {float(x), float(y + 1), 1});
+  accel_test::addFloor(floor);
   const UniformGrid grid(floor.view());
   EXPECT_EQ(grid.resolution()[2], 1);
   EXPECT_GE(grid.resolution()[0], 8);  // a 2D grid of about density * 800 voxels
@@ -260,15 +249,6 @@ TEST(BruteForce, FindsTheNearestHitAndBreaksTiesBySmallerId) {
 
 // ---------------------------------------------------------------------------
 // Specs
-
-std::string errorOf(const std::function<void()>& action) {
-  try {
-    action();
-  } catch (const std::invalid_argument& error) {
-    return error.what();
-  }
-  return "(no error)";
-}
 
 TEST(AcceleratorSpec, ParsesKindVariantAndParameters) {
   const AcceleratorSpec grid = parseAcceleratorSpec("grid");

@@ -1,0 +1,403 @@
+// `bvh` build: binned SAH top-down (Wald, "On fast construction of SAH-based
+// bounding volume hierarchies", 2007) straight into wide nodes.
+//
+// One 32-byte reference per triangle (its box, and its id in the box's
+// spare lane) in one array, partitioned in place: a node's triangles are a
+// contiguous range of it. A node starts as one child holding its whole
+// range; the child of largest surface area is split by the best of 16
+// binned SAH planes per axis (centroids binned, the children's boxes from
+// the bins' boxes), until the node has Width children or none is worth
+// splitting. Costs count triangles in packets of four, as the leaves test
+// them (Embree's block size), so a range of at most four triangles is one
+// packet test and always a leaf, and one of at most eight becomes a leaf
+// unless a split is predicted cheaper. A range whose centroids all fall in
+// one bin, or one deeper than kBvhForcedMedianDepth, is cut at its
+// median instead. O(n log n): each level bins and partitions each triangle
+// of the levels' ranges a bounded number of times.
+#include <emmintrin.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include "common/accel/bvh_node.h"
+#include "common/accel/triangle_intersect.h"
+
+namespace portico {
+
+namespace {
+
+constexpr int kBins = 16;
+// Ranges of at least this many references are binned into two sets of bins.
+constexpr uint32_t kTwoBinSets = 256;
+// Larger ranges bin every k-th reference, about this many in all: the
+// best plane moves little, and the top levels cost a partition each.
+constexpr uint32_t kSampledReferences = 4096;
+constexpr uint32_t kPacketSize = 4;
+constexpr uint32_t kAlwaysLeaf = 4;      // at most one packet: a leaf
+constexpr uint32_t kMaxLeaf = 8;         // at most two: a leaf unless a split is cheaper
+// SAH costs, in units of one packet test: one wide node's box test.
+constexpr float kTraversalCost = 1.0f;
+
+// A triangle's box (lanes 0-2) with its primitive id in lane 3 of lo.
+struct alignas(32) PrimitiveReference {
+  __m128 lo, hi;
+  uint32_t primitive() const {
+    uint32_t id;
+    std::memcpy(&id, reinterpret_cast<const char*>(&lo) + 12, 4);
+    return id;
+  }
+};
+
+// Half the surface area of the box (lanes 0-2).
+inline float halfArea(__m128 lo, __m128 hi) {
+  alignas(16) float d[4];
+  _mm_store_ps(d, _mm_sub_ps(hi, lo));
+  return d[0] * d[1] + d[1] * d[2] + d[2] * d[0];
+}
+
+inline uint32_t packets(uint32_t triangles) { return (triangles + kPacketSize - 1) / kPacketSize; }
+
+// A contiguous range of references, with the box of their triangles and the
+// box of their centroids (taken as lo + hi: twice the centre, which bins alike).
+struct Range {
+  uint32_t begin = 0, end = 0;
+  __m128 lo, hi, centroidLo, centroidHi;
+  bool leaf = false;
+  uint32_t count() const { return end - begin; }
+};
+
+struct Bin {
+  __m128 lo, hi;
+  uint32_t count;
+};
+
+// How a range's centroids map to bins: bin = (c - base) * scale, per axis.
+struct Binning {
+  __m128 base, scale;
+  explicit Binning(const Range& range) : base(range.centroidLo) {
+    alignas(16) float extent[4];
+    _mm_store_ps(extent, _mm_sub_ps(range.centroidHi, range.centroidLo));
+    alignas(16) float s[4] = {0, 0, 0, 0};
+    for (int axis = 0; axis < 3; ++axis)
+      s[axis] = extent[axis] > 0 ? float(kBins) * 0.99999f / extent[axis] : 0.0f;
+    scale = _mm_load_ps(s);
+  }
+  // The bins of a centroid along the three axes (lane 3 unused).
+  __m128i bins(__m128 centroid) const {
+    const __m128i index = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(centroid, base), scale));
+    // Clamped to [0, kBins - 1]: rounding may stray by one at either end.
+    const __m128i top = _mm_set1_epi32(kBins - 1);
+    const __m128i clampedHigh = _mm_or_si128(_mm_and_si128(_mm_cmpgt_epi32(index, top), top),
+                                             _mm_andnot_si128(_mm_cmpgt_epi32(index, top), index));
+    return _mm_andnot_si128(_mm_cmplt_epi32(clampedHigh, _mm_setzero_si128()), clampedHigh);
+  }
+};
+
+struct Split {
+  int axis = -1;
+  int bin = 0;          // references with bin < this go left
+  float cost = 0;       // SAH, in packet tests per unit of the parent's half area
+};
+
+template <int Width>
+class Builder {
+ public:
+  Builder(const MeshView& mesh, BvhData<Width>& out) : mesh_(mesh), out_(out) {}
+
+  void build() {
+    Range root = gatherReferences();
+    if (root.count() == 0) return;
+    // About what the furnished halls need (leaves of ~6 triangles in ~2 packets).
+    out_.nodes.reserve(size_t(root.count()) / (2 * Width) + 2);
+    out_.packets.reserve(root.count() / 3 + 4);
+    root.leaf = false;   // the root is always a node, even over one leaf
+    alignas(16) float lo[4], hi[4];
+    _mm_store_ps(lo, root.lo);
+    _mm_store_ps(hi, root.hi);
+    out_.bounds = Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
+    out_.triangles = root.count();
+    buildNode(root, 1);
+    if (out_.packets.capacity() > out_.packets.size() + out_.packets.size() / 4) out_.packets.shrink_to_fit();
+  }
+
+ private:
+  // References to every finite, non-degenerate triangle, and their range.
+  Range gatherReferences() {
+    references_.resize(mesh_.triangleCount);
+    uint32_t count = 0;
+    __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
+    __m128 centroidLo = lo, centroidHi = hi;
+    for (uint32_t primitive = 0; primitive < mesh_.triangleCount; ++primitive) {
+      Vec3 v0, v1, v2;
+      mesh_.triangle(primitive, v0, v1, v2);
+      if (!isFinite(v0) || !isFinite(v1) || !isFinite(v2) || isDegenerateTriangle(v0, v1, v2)) continue;
+      const __m128 a = _mm_setr_ps(v0.x, v0.y, v0.z, 0), b = _mm_setr_ps(v1.x, v1.y, v1.z, 0),
+                   c = _mm_setr_ps(v2.x, v2.y, v2.z, 0);
+      PrimitiveReference& reference = references_[count++];
+      reference.lo = _mm_min_ps(_mm_min_ps(a, b), c);
+      reference.hi = _mm_max_ps(_mm_max_ps(a, b), c);
+      std::memcpy(reinterpret_cast<char*>(&reference.lo) + 12, &primitive, 4);
+      lo = _mm_min_ps(lo, reference.lo);
+      hi = _mm_max_ps(hi, reference.hi);
+      const __m128 centroid = _mm_add_ps(reference.lo, reference.hi);
+      centroidLo = _mm_min_ps(centroidLo, centroid);
+      centroidHi = _mm_max_ps(centroidHi, centroid);
+    }
+    references_.resize(count);
+    Range range;
+    range.begin = 0;
+    range.end = count;
+    range.lo = lo, range.hi = hi, range.centroidLo = centroidLo, range.centroidHi = centroidHi;
+    return range;
+  }
+
+  // The best binned SAH split of the range (axis -1: every centroid in one bin).
+  Split findSplit(const Range& range) const {
+    const Binning binning(range);
+    // Two sets of bins, for alternate references, merged after: consecutive
+    // references (neighbours in space) often fall in the same bins, and one
+    // set would chain every update on the one before.
+    Bin bins[3][kBins], odd[3][kBins];
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) bins[axis][b] = {_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity), 0};
+    if (range.count() >= kTwoBinSets)
+      for (int axis = 0; axis < 3; ++axis)
+        for (int b = 0; b < kBins; ++b) odd[axis][b] = bins[axis][b];
+    const auto add = [&binning](Bin (&set)[3][kBins], const PrimitiveReference& reference) {
+      alignas(16) int32_t index[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(_mm_add_ps(reference.lo, reference.hi)));
+      for (int axis = 0; axis < 3; ++axis) {
+        Bin& bin = set[axis][index[axis]];
+        bin.lo = _mm_min_ps(bin.lo, reference.lo);
+        bin.hi = _mm_max_ps(bin.hi, reference.hi);
+        ++bin.count;
+      }
+    };
+    const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
+    uint32_t i = range.begin;
+    const bool twoSets = range.count() >= kTwoBinSets;
+    for (; twoSets && i + stride < range.end; i += 2 * stride) {
+      add(bins, references_[i]);
+      add(odd, references_[i + stride]);
+    }
+    for (; i < range.end; i += stride) add(bins, references_[i]);
+    for (int axis = 0; twoSets && axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) {
+        Bin& bin = bins[axis][b];
+        bin.lo = _mm_min_ps(bin.lo, odd[axis][b].lo);
+        bin.hi = _mm_max_ps(bin.hi, odd[axis][b].hi);
+        bin.count += odd[axis][b].count;
+      }
+    Split best;
+    best.cost = kInfinity;
+    for (int axis = 0; axis < 3; ++axis) {
+      // Right to left: the boxes and counts of bins b.. kBins - 1.
+      float rightArea[kBins];
+      uint32_t rightCount[kBins];
+      __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
+      uint32_t count = 0;
+      for (int b = kBins - 1; b > 0; --b) {
+        lo = _mm_min_ps(lo, bins[axis][b].lo);
+        hi = _mm_max_ps(hi, bins[axis][b].hi);
+        count += bins[axis][b].count;
+        rightCount[b] = count;
+        rightArea[b] = count ? halfArea(lo, hi) : 0.0f;
+      }
+      lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
+      count = 0;
+      for (int b = 1; b < kBins; ++b) {
+        lo = _mm_min_ps(lo, bins[axis][b - 1].lo);
+        hi = _mm_max_ps(hi, bins[axis][b - 1].hi);
+        count += bins[axis][b - 1].count;
+        if (count == 0 || rightCount[b] == 0) continue;
+        const float cost = halfArea(lo, hi) * float(packets(count)) + rightArea[b] * float(packets(rightCount[b]));
+        if (cost < best.cost) {
+          best.cost = cost, best.axis = axis, best.bin = b;
+        }
+      }
+    }
+    return best;
+  }
+
+  // Partitions the range by the split, measuring the two sides' boxes (the
+  // split's own come from sampled bins in large ranges).
+  void partition(const Range& range, const Split& split, Range& left, Range& right) {
+    const Binning binning(range);
+    const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
+    __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
+    __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
+    __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
+    const auto goesLeft = [&](__m128 centroid) {
+      alignas(16) int32_t index[4];
+      _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(centroid));
+      return index[split.axis] < split.bin;
+    };
+    uint32_t i = range.begin, j = range.end;
+    while (i < j) {
+      const __m128 centroid = _mm_add_ps(references_[i].lo, references_[i].hi);
+      if (goesLeft(centroid)) {
+        leftCentroidLo = _mm_min_ps(leftCentroidLo, centroid);
+        leftCentroidHi = _mm_max_ps(leftCentroidHi, centroid);
+        leftLo = _mm_min_ps(leftLo, references_[i].lo);
+        leftHi = _mm_max_ps(leftHi, references_[i].hi);
+        ++i;
+      } else {
+        rightCentroidLo = _mm_min_ps(rightCentroidLo, centroid);
+        rightCentroidHi = _mm_max_ps(rightCentroidHi, centroid);
+        rightLo = _mm_min_ps(rightLo, references_[i].lo);
+        rightHi = _mm_max_ps(rightHi, references_[i].hi);
+        std::swap(references_[i], references_[--j]);
+      }
+    }
+    left.begin = range.begin, left.end = i;
+    right.begin = i, right.end = range.end;
+    left.lo = leftLo, left.hi = leftHi;
+    right.lo = rightLo, right.hi = rightHi;
+    left.centroidLo = leftCentroidLo, left.centroidHi = leftCentroidHi;
+    right.centroidLo = rightCentroidLo, right.centroidHi = rightCentroidHi;
+  }
+
+  // Cuts the range at its median along the longest axis of its centroids;
+  // for ranges binning cannot separate, and below the forced-median depth.
+  void splitAtMedian(const Range& range, Range& left, Range& right) {
+    alignas(16) float extent[4];
+    _mm_store_ps(extent, _mm_sub_ps(range.centroidHi, range.centroidLo));
+    const int axis = extent[0] >= extent[1] && extent[0] >= extent[2] ? 0 : (extent[1] >= extent[2] ? 1 : 2);
+    const uint32_t middle = range.begin + range.count() / 2;
+    const auto centre = [axis](const PrimitiveReference& r) {
+      alignas(16) float c[4];
+      _mm_store_ps(c, _mm_add_ps(r.lo, r.hi));
+      return c[axis];
+    };
+    std::nth_element(references_.begin() + range.begin, references_.begin() + middle,
+                     references_.begin() + range.end,
+                     [&](const PrimitiveReference& a, const PrimitiveReference& b) { return centre(a) < centre(b); });
+    left.begin = range.begin, left.end = middle;
+    right.begin = middle, right.end = range.end;
+    measure(left);
+    measure(right);
+  }
+
+  void measure(Range& range) const {
+    __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity), centroidLo = lo, centroidHi = hi;
+    for (uint32_t i = range.begin; i < range.end; ++i) {
+      lo = _mm_min_ps(lo, references_[i].lo);
+      hi = _mm_max_ps(hi, references_[i].hi);
+      const __m128 centroid = _mm_add_ps(references_[i].lo, references_[i].hi);
+      centroidLo = _mm_min_ps(centroidLo, centroid);
+      centroidHi = _mm_max_ps(centroidHi, centroid);
+    }
+    range.lo = lo, range.hi = hi, range.centroidLo = centroidLo, range.centroidHi = centroidHi;
+  }
+
+  // Splits the range in two; false when it should stay a leaf.
+  bool split(const Range& range, int depth, Range& left, Range& right) {
+    if (range.count() <= kAlwaysLeaf) return false;
+    if (depth >= kBvhForcedMedianDepth) {
+      splitAtMedian(range, left, right);
+      return true;
+    }
+    const Split best = findSplit(range);
+    if (best.axis < 0) {
+      if (range.count() <= kMaxLeaf) return false;
+      splitAtMedian(range, left, right);
+      return true;
+    }
+    if (range.count() <= kMaxLeaf) {
+      // Leaf: its packets, every ray that reaches it. Split: the children's
+      // packets, each for the fraction of those rays its box takes.
+      const float leafCost = float(packets(range.count())) * halfArea(range.lo, range.hi);
+      if (leafCost <= best.cost + kTraversalCost * halfArea(range.lo, range.hi)) return false;
+    }
+    partition(range, best, left, right);
+    return true;
+  }
+
+  // Writes the node for the range (and, depth first, its subtrees); returns its index.
+  uint32_t buildNode(const Range& range, int depth) {
+    Range children[Width];
+    int count = 1;
+    children[0] = range;
+    while (count < Width) {
+      int widest = -1;
+      float widestArea = -1;
+      for (int k = 0; k < count; ++k) {
+        if (children[k].leaf) continue;
+        const float area = halfArea(children[k].lo, children[k].hi);
+        if (area > widestArea) widestArea = area, widest = k;
+      }
+      if (widest < 0) break;
+      Range left, right;
+      if (!split(children[widest], depth, left, right)) {
+        children[widest].leaf = true;
+        continue;
+      }
+      children[widest] = left;
+      children[count++] = right;
+    }
+    // Children the node had no slot left to split: small ones become leaves.
+    for (int k = 0; k < count; ++k)
+      if (children[k].count() <= kMaxLeaf) children[k].leaf = true;
+
+    const uint32_t index = uint32_t(out_.nodes.size());
+    out_.nodes.emplace_back();
+    BvhNode<Width> node;
+    for (int k = 0; k < Width; ++k) {
+      alignas(16) float lo[4] = {kInfinity, kInfinity, kInfinity, 0}, hi[4] = {-kInfinity, -kInfinity, -kInfinity, 0};
+      if (k < count) {
+        _mm_store_ps(lo, children[k].lo);
+        _mm_store_ps(hi, children[k].hi);
+      }
+      for (int axis = 0; axis < 3; ++axis) node.box[axis][0][k] = lo[axis], node.box[axis][1][k] = hi[axis];
+      node.child[k] = 0;
+    }
+    for (int k = 0; k < count; ++k)
+      node.child[k] = children[k].leaf ? writeLeaf(children[k], depth + 1) : buildNode(children[k], depth + 1);
+    out_.nodes[index] = node;
+    return index;
+  }
+
+  uint32_t writeLeaf(const Range& range, int depth) {
+    const uint32_t first = uint32_t(out_.packets.size());
+    const uint32_t count = packets(range.count());
+    if (first + count - 1 > bvh_child::kMaxFirstPacket)
+      throw std::length_error("bvh: more than 2^28 triangle packets");
+    for (uint32_t p = 0; p < count; ++p) {
+      grid_traversal::TrianglePacket packet;
+      for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
+        const uint32_t r = std::min(range.begin + p * kPacketSize + lane, range.end - 1);
+        const uint32_t primitive = references_[r].primitive();
+        Vec3 v[3];
+        mesh_.triangle(primitive, v[0], v[1], v[2]);
+        for (int vertex = 0; vertex < 3; ++vertex)
+          for (int axis = 0; axis < 3; ++axis) packet.v[vertex][axis][lane] = v[vertex][axis];
+        packet.primitive[lane] = primitive;
+      }
+      out_.packets.push_back(packet);
+    }
+    ++out_.leaves;
+    out_.depthSum += depth;
+    out_.maxDepth = std::max<uint32_t>(out_.maxDepth, uint32_t(depth));
+    return bvh_child::leaf(first, count);
+  }
+
+  const MeshView& mesh_;
+  BvhData<Width>& out_;
+  std::vector<PrimitiveReference> references_;
+};
+
+}  // namespace
+
+template <int Width>
+BvhData<Width> buildBvh(const MeshView& mesh) {
+  BvhData<Width> tree;
+  Builder<Width>(mesh, tree).build();
+  return tree;
+}
+
+template BvhData<4> buildBvh<4>(const MeshView& mesh);
+template BvhData<8> buildBvh<8>(const MeshView& mesh);
+
+}  // namespace portico

@@ -1,0 +1,72 @@
+// The flat form of `bvh`: what the builder (bvh_build.cpp) writes and the
+// traversal (bvh_traverse.cpp) reads. Index-based, pointer-free.
+//
+// A node holds the boxes of its Width children side by side per axis and
+// side (structure of arrays), so one SIMD load brings the same bound of four
+// children and all of them are tested at once; a node fills whole cache
+// lines (4-wide: 2 lines, 8-wide: 4).
+//
+// A child is a 32-bit word: an interior child is the index of its node; a
+// leaf has bit 31 set, the number of its triangle packets less one in bits
+// 28-30 and the index of its first packet in bits 0-27. A leaf's triangles
+// are copies of the mesh's vertices, bit for bit, four to a packet (the
+// last padded with its leaf's last triangle), in the layout of the 4-wide
+// triangle test (grid_traversal.h), so a leaf is one contiguous read. An
+// unused slot has an empty box (+inf low, -inf high), which no ray enters.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/accel/grid_traversal.h"
+#include "common/accel/kd_node.h"  // CacheLineAllocator
+#include "common/math.h"
+#include "common/mesh_view.h"
+
+namespace portico {
+
+template <int Width>
+struct alignas(64) BvhNode {
+  float box[3][2][Width];   // [axis][0: low, 1: high][child]
+  uint32_t child[Width];
+};
+static_assert(sizeof(BvhNode<4>) == 128 && sizeof(BvhNode<8>) == 256);
+
+namespace bvh_child {
+constexpr uint32_t kLeafBit = 0x80000000u;
+constexpr uint32_t kMaxPackets = 8;                      // per leaf: 3 bits
+constexpr uint32_t kMaxFirstPacket = (1u << 28) - 1;     // 2^28 packets: a billion triangles
+inline bool isLeaf(uint32_t child) { return (child & kLeafBit) != 0; }
+inline uint32_t leaf(uint32_t firstPacket, uint32_t packets) {
+  return kLeafBit | ((packets - 1) << 28) | firstPacket;
+}
+inline uint32_t firstPacket(uint32_t child) { return child & kMaxFirstPacket; }
+inline uint32_t packetCount(uint32_t child) { return ((child >> 28) & 7) + 1; }
+}  // namespace bvh_child
+
+// The deepest a tree may be (root = depth 1): the builder splits ranges at
+// their median once it is kForcedMedianDepth deep, which halves them at
+// every level after; the traversal's stack holds Width - 1 entries a level.
+constexpr int kBvhForcedMedianDepth = 40;
+constexpr int kBvhMaxDepth = kBvhForcedMedianDepth + 33;
+
+// A built BVH: nodes[0] is the root; a mesh with no triangle that can be hit
+// has no nodes.
+template <int Width>
+struct BvhData {
+  std::vector<BvhNode<Width>, CacheLineAllocator<BvhNode<Width>>> nodes;
+  std::vector<grid_traversal::TrianglePacket> packets;
+  Bounds3 bounds;   // of the triangles held: the root's box
+
+  uint64_t leaves = 0;
+  uint64_t triangles = 0;   // held: every finite, non-degenerate triangle of the mesh
+  double depthSum = 0;      // over leaves, root = depth 1
+  uint32_t maxDepth = 0;
+};
+
+// Builds the tree of the mesh's finite, non-degenerate triangles (the others
+// never hit: intersectTriangle) by binned SAH (bvh_build.cpp).
+template <int Width>
+BvhData<Width> buildBvh(const MeshView& mesh);
+
+}  // namespace portico

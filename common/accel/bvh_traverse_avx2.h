@@ -1,0 +1,31 @@
+// What the two compilations of `bvh`'s traversal share (bvh_traverse_loop.h):
+// the per-ray slab constants, and the entry to the AVX2 one.
+#pragma once
+
+#include "common/accel/bvh_node.h"
+#include "common/ray.h"
+
+namespace portico {
+
+// The ray as every box test needs it, per axis: t = (bound - origin') *
+// inverse, origin' = origin + margin toward the near side for the near
+// bounds and away from it for the far bounds, the near bound being the low
+// one when the direction is positive.
+struct BvhSlabs {
+  float nearOrigin[3], farOrigin[3], inverse[3];
+  int nearSide[3];   // 0: the low bounds are the near ones; 1: the high ones
+};
+
+// Whether 8-wide trees take the AVX2 traversal: when the processor has AVX2,
+// unless useBvhAvx2(false) turned it off (tests compare both traversals).
+bool bvhAvx2InUse();
+// Turns the AVX2 traversal on (where the processor has it) or off, for
+// every tree of the process.
+void useBvhAvx2(bool use);
+
+// The traversal of 8-wide trees with all eight boxes in one AVX2 test
+// (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse().
+template <bool AnyHit>
+bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best);
+
+}  // namespace portico

@@ -1,0 +1,29 @@
+// The slab margin of the hierarchical traversals (kd_traverse.cpp,
+// bvh_traverse.cpp): how far every box is grown, per ray, so that the box
+// tests never drop a triangle the watertight test hits (see those files).
+#pragma once
+
+#include <cmath>
+
+#include "common/math.h"
+
+namespace portico {
+
+// 2^-16 (256 float ulps) of the reach R, the largest distance per axis from
+// the origin to the root box, plus 2^-20 (16 ulps) of the origin's largest
+// coordinate, for the rounding of origin +- margin.
+inline float traversalMargin(const Bounds3& root, const float origin[3]) {
+  constexpr float kMarginScale = 1.0f / 65536.0f;
+  constexpr float kOriginMarginScale = 1.0f / 1048576.0f;
+  float reach = 0.0f, magnitude = 0.0f;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float toLo = std::fabs(root.lo[axis] - origin[axis]), toHi = std::fabs(root.hi[axis] - origin[axis]);
+    reach = reach > toLo ? reach : toLo;
+    reach = reach > toHi ? reach : toHi;
+    const float coordinate = std::fabs(origin[axis]);
+    magnitude = magnitude > coordinate ? magnitude : coordinate;
+  }
+  return reach * kMarginScale + magnitude * kOriginMarginScale;
+}
+
+}  // namespace portico
