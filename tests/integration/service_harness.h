@@ -157,6 +157,8 @@ class LocalCluster {
     }
     if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir_ / "coordinator.log"));
   }
+  // SIGSTOP: it accepts requests and answers none (until killed).
+  void pauseCoordinator() { coordinator_->kill(SIGSTOP); }
   // kill -9: no chance to write anything down.
   void killCoordinator() {
     coordinator_->kill(SIGKILL);
