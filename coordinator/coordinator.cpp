@@ -5,15 +5,18 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <filesystem>
 #include <set>
 
 #include "common/transport/photon_record.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
+#include "common/util/output_path.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
+#include "coordinator/peer_rights.h"
 
 namespace portico {
 
@@ -64,8 +67,8 @@ Coordinator::Coordinator(CoordinatorOptions options)
       maxFrameBytes_(net::maxCoordinatorFrameBytes(options_.maxLeaseWork)) {
   router_.set(zmq::sockopt::linger, 0);
   router_.set(zmq::sockopt::router_mandatory, false);
-  security_ = std::make_unique<RouterSecurity>(zmq_, router_, options_.keysDirectory, maxFrameBytes_);
-  router_.bind(options_.listen);
+  security_ = std::make_unique<RouterSecurity>(zmq_, router_, options_.listen, options_.keysDirectory, maxFrameBytes_);
+  router_.bind(bindableEndpoint(options_.listen));
   endpoint_ = router_.get(zmq::sockopt::last_endpoint);
   if (!options_.endpointFile.empty()) {
     writeFileAtomically(options_.endpointFile, endpoint_ + "\n");
@@ -117,6 +120,7 @@ void Coordinator::runRound() {
     std::string identity;
     size_t bytes = 0;
     std::unique_ptr<net::Decoded> message;
+    std::optional<net::Role> role;   // what the peer was admitted as
   };
   std::vector<Incoming> arrived;
   for (int drained = 0; drained < 256; ++drained) {
@@ -141,7 +145,8 @@ void Coordinator::runRound() {
     }
     try {
       const size_t bytes = frame.size();
-      arrived.push_back({id, bytes, std::make_unique<net::Decoded>(std::move(frame))});
+      const auto role = security_->roleOf(frame);
+      arrived.push_back({id, bytes, std::make_unique<net::Decoded>(std::move(frame)), role});
     } catch (const kj::Exception& e) {
       spdlog::warn("dropped a malformed message from {}: {}", shortId(id), e.getDescription().cStr());
     } catch (const std::exception& e) {
@@ -157,7 +162,7 @@ void Coordinator::runRound() {
   bool resultsArrived = false;
   for (const Incoming& in : arrived) {
     auto envelope = in.message->envelope();
-    if (envelope.which() != wire::Envelope::RESULT) continue;
+    if (envelope.which() != wire::Envelope::RESULT || refusalFor(in.role, envelope.which())) continue;
     if (auto worker = workers_.find(in.identity); worker != workers_.end()) {
       const uint64_t lease = envelope.getResult().getLease();
       int64_t workerMicros = 0, loadMicros = 0, trianglesLoaded = 0;
@@ -176,7 +181,7 @@ void Coordinator::runRound() {
   if (resultsArrived) inRound([&] { dispatch(); });
 
   inRound([&] {
-    for (const Incoming& in : arrived) handle(in.identity, *in.message, in.bytes);
+    for (const Incoming& in : arrived) handle(in.identity, *in.message, in.bytes, in.role);
     security_->logConnectionEvents();
     const int64_t now = nowMs();
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
@@ -255,7 +260,8 @@ void Coordinator::undoRound() {
   outbox_.clear();
 }
 
-void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes) {
+void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes,
+                         std::optional<net::Role> role) {
   const int64_t started = nowMs();
   struct SlowLog {
     int64_t started;
@@ -266,15 +272,27 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
   } slowLog{started, bytes};
   try {
     auto envelope = decoded.envelope();
+    // A message its sender's role may not send is answered and logged, never acted on.
+    if (const auto refusal = refusalFor(role, envelope.which())) {
+      if (const auto leftOut = refusals_.admit(fmt::format("{} {}", shortId(identity), int(envelope.which()))))
+        spdlog::warn("{} (from {}){}", *refusal, shortId(identity), leftOutSuffix(*leftOut));
+      sendError(identity, *refusal);
+      return;
+    }
     if (auto it = workers_.find(identity); it != workers_.end()) it->second.lastSeenMs = nowMs();
     switch (envelope.which()) {
       case wire::Envelope::HELLO: onHello(identity, envelope.getHello()); break;
-      case wire::Envelope::HEARTBEAT: break;
+      case wire::Envelope::HEARTBEAT:
+        // A worker of this coordinator's previous run: it rejoins at once
+        // instead of waiting out its liveness timeout.
+        if (role != net::Role::Client && !workers_.count(identity)) sendError(identity, net::kUnknownWorkerError);
+        break;
       case wire::Envelope::READY: onReady(identity); break;
       case wire::Envelope::RESULT: onResult(identity, envelope.getResult()); break;
       case wire::Envelope::FAILURE: onFailure(identity, envelope.getFailure()); break;
       case wire::Envelope::FETCH_PHOTONS: onFetchPhotons(identity, envelope.getFetchPhotons()); break;
       case wire::Envelope::FETCH_FILE: onFetchFile(identity, envelope.getFetchFile()); break;
+      case wire::Envelope::FETCH_IMAGE: onFetchImage(identity, envelope.getFetchImage()); break;
       case wire::Envelope::SUBMIT: onSubmit(identity, envelope.getSubmit()); break;
       case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
       case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
@@ -344,7 +362,7 @@ void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello
 void Coordinator::onReady(const std::string& identity) {
   auto it = workers_.find(identity);
   if (it == workers_.end()) {
-    sendError(identity, "say Hello first");
+    sendError(identity, net::kUnknownWorkerError);
     return;
   }
   it->second.ready = true;
@@ -583,6 +601,10 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
     refuse(fmt::format("job {} is not rendering: its photon tables are not final", request.getJob()));
     return;
   }
+  if (!jobsLeasedTo(identity).count(request.getJob())) {
+    refuse(fmt::format("job {}: this worker holds no lease of it", request.getJob()));
+    return;
+  }
   std::vector<std::string> blobs;
   try {
     blobs = store_.photonBatches(request.getJob(), request.getCell());
@@ -602,14 +624,46 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
   send(identity, message, net::Encoding::Flat);   // photon records: bytes, not words to squeeze
 }
 
+std::set<uint64_t> Coordinator::jobsLeasedTo(const std::string& identity) {
+  std::set<uint64_t> jobs;
+  auto worker = workers_.find(identity);
+  if (worker == workers_.end()) return jobs;
+  for (const auto& [lease, inFlight] : worker->second.leases)
+    if (auto record = store_.lease(lease); record && record->worker == identity) jobs.insert(record->job);
+  return jobs;
+}
+
 void Coordinator::onFetchFile(const std::string& identity, wire::FetchFile::Reader request) {
+  // Only the stores of the active jobs this worker holds leases of: a
+  // finished or failed job's store is no longer served.
   std::set<std::string> stores;
-  for (const auto& [id, context] : jobs_) stores.insert(context.scene->directory());
+  for (uint64_t job : jobsLeasedTo(identity))
+    if (auto record = store_.job(job); record && isActive(record->state)) stores.insert(context(job).scene->directory());
   capnp::MallocMessageBuilder message;
   auto chunk = message.initRoot<wire::Envelope>().initFileChunk();
   serveFileChunk(stores, request, chunk);
   if (chunk.hasError() && chunk.getError().size())
     spdlog::warn("refused a file to {}: {}", shortId(identity), chunk.getError().cStr());
+  send(identity, message);
+}
+
+void Coordinator::onFetchImage(const std::string& identity, wire::FetchImage::Reader request) {
+  capnp::MallocMessageBuilder message;
+  auto reply = message.initRoot<wire::Envelope>().initImage();
+  reply.setJob(request.getJob());
+  try {
+    auto job = store_.job(request.getJob());
+    if (!job) throw std::runtime_error(fmt::format("job {} does not exist", request.getJob()));
+    if (job->state != JobState::Done)
+      throw std::runtime_error(fmt::format("job {} is {}, not done: it has no image", job->id, toString(job->state)));
+    auto spec = context(job->id).reader();
+    reply.setOutput(spec.getOutput());
+    const std::string image = encodeJobImage(store_, *job, spec);
+    reply.setImage(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(image.data()), image.size()));
+    reply.setStatistics(jobStatistics(store_, *job, spec).dump(2) + "\n");
+  } catch (const std::exception& e) {
+    reply.setError(e.what());
+  }
   send(identity, message);
 }
 
@@ -620,6 +674,14 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     auto spec = std::make_unique<capnp::MallocMessageBuilder>();
     spec->setRoot(submit.getSpec());
     auto builder = spec->getRoot<wire::JobSpec>();
+    // The store as the coordinator resolves it, once: what it serves and
+    // workers read is that directory, whatever its path's links become.
+    std::error_code unresolved;
+    const auto store = std::filesystem::canonical(builder.getStore().cStr(), unresolved);
+    if (unresolved)
+      throw std::runtime_error(fmt::format("scene store {}: {}", builder.getStore().cStr(), unresolved.message()));
+    builder.setStore(store.string());
+    checkOutputPath(builder.getOutput().cStr());
     auto scene = std::make_unique<SceneStore>(SceneStore::open(builder.getStore().cStr()));
     validateSpec(builder, *scene);
     const std::string packed = net::packToString(*spec);
@@ -753,16 +815,23 @@ void Coordinator::finishJob(uint64_t jobId) {
   JobContext& ctx = context(jobId);
   job->state = JobState::Done;
   job->finishedMs = wallMs();
+  // An image that cannot be written (its directory gone or read-only, no
+  // descriptor left) loses nothing: the job is done, its film stays, and
+  // `portico fetch-image` writes it where its client can.
+  std::string outputError;
   try {
     writeJobOutputs(store_, *job, ctx.reader());
   } catch (const std::exception& e) {
-    failJob(jobId, fmt::format("writing the image failed: {}", e.what()));
-    return;
+    outputError = fmt::format("the image could not be written ({}); `portico fetch-image {} -o FILE` writes it",
+                              e.what(), jobId);
   }
   sql::Transaction tx(store_.database());
-  store_.setJobState(jobId, JobState::Done, job->finishedMs);
+  store_.setJobState(jobId, JobState::Done, job->finishedMs, outputError);
   tx.commit();
-  spdlog::info("job {} done: {}", jobId, ctx.reader().getOutput().cStr());
+  if (outputError.empty())
+    spdlog::info("job {} done: {}", jobId, ctx.reader().getOutput().cStr());
+  else
+    spdlog::error("job {} done, but {}", jobId, outputError);
 }
 
 void Coordinator::restartPhotonPass(uint64_t jobId, const std::string& reason) {

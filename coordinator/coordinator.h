@@ -15,6 +15,8 @@
 #include <zmq.hpp>
 
 #include "common/net/message.h"
+#include "common/net/role.h"
+#include "common/util/log_throttle.h"
 #include "common/scene/scene_store.h"
 #include "coordinator/job_store.h"
 #include "coordinator/router_security.h"
@@ -52,7 +54,7 @@ class Coordinator {
     wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
   };
 
-  void handle(const std::string& identity, const net::Decoded& message, size_t bytes);
+  void handle(const std::string& identity, const net::Decoded& message, size_t bytes, std::optional<net::Role> role);
   void onHello(const std::string& identity, wire::Hello::Reader hello);
   void onReady(const std::string& identity);
   void onResult(const std::string& identity, wire::Result::Reader result);
@@ -61,6 +63,9 @@ class Coordinator {
   // The job back to the start of its photon pass (its photons unreadable).
   void restartPhotonPass(uint64_t job, const std::string& reason);
   void onFetchFile(const std::string& identity, wire::FetchFile::Reader request);
+  void onFetchImage(const std::string& identity, wire::FetchImage::Reader request);
+  // The jobs of the leases the worker holds (what it may fetch files and photons of).
+  std::set<uint64_t> jobsLeasedTo(const std::string& identity);
   void onSubmit(const std::string& identity, wire::Submit::Reader submit);
   void onStatus(const std::string& identity, wire::StatusRequest::Reader request);
   void replyStatus(const std::string& identity, uint64_t job);   // job 0: all jobs
@@ -108,6 +113,7 @@ class Coordinator {
   std::atomic<bool> stopping_{false};
   int64_t lastHeartbeatMs_ = 0;
   std::set<std::pair<uint64_t, uint32_t>> failedCells_;   // (job, cell) that failed a lease
+  LogThrottle refusals_;   // messages refused for their sender's role: a line a minute per peer and type
   // The round in progress (inRound): its replies, and the leases it opened
   // (worker identity, lease), for undoing the coordinator's memory if its
   // commit fails; the leases whose Results it applied, which decide where

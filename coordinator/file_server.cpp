@@ -6,6 +6,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <memory>
 #include <cctype>
 #include <vector>
 
@@ -21,6 +24,58 @@ bool isServableStorePath(const std::string& path) {
   return digits.size() <= 10 && std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(uint8_t(c)); });
 }
 
+namespace {
+// A file descriptor closed when it goes out of scope.
+struct FileDescriptor {
+  int fd = -1;
+  explicit FileDescriptor(int value) : fd(value) {}
+  ~FileDescriptor() {
+    if (fd >= 0) ::close(fd);
+  }
+  FileDescriptor(const FileDescriptor&) = delete;
+  FileDescriptor& operator=(const FileDescriptor&) = delete;
+};
+
+// Opens `path` (servable, so "scene.db" or "cells/N.cell") under the store
+// directory, component by component, following no symbolic link. Returns
+// the descriptor, or -1 with `error` set.
+int openInsideStore(const std::string& store, const std::string& path, std::string& error) {
+  FileDescriptor directory(::open(store.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC));
+  if (directory.fd < 0) {
+    error = fmt::format("{}: cannot open the store directory: {}", store, std::strerror(errno));
+    return -1;
+  }
+  int parent = directory.fd;
+  std::string name = path;
+  std::unique_ptr<FileDescriptor> cells;
+  if (const size_t slash = path.find('/'); slash != std::string::npos) {
+    cells = std::make_unique<FileDescriptor>(
+        ::openat(directory.fd, path.substr(0, slash).c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC));
+    if (cells->fd < 0) {
+      error = fmt::format("{}/{}: cannot open{}", store, path.substr(0, slash),
+                          errno == ELOOP || errno == ENOTDIR ? ": not a directory of the store (a symbolic link?)" : "");
+      return -1;
+    }
+    parent = cells->fd;
+    name = path.substr(slash + 1);
+  }
+  // O_NONBLOCK: a FIFO planted in the store must not stall the coordinator's loop.
+  const int fd = ::openat(parent, name.c_str(), O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    error = fmt::format("{}/{}: cannot open{}", store, path,
+                        errno == ELOOP ? ": a symbolic link (a store serves only its own regular files)" : "");
+    return -1;
+  }
+  struct stat info {};
+  if (::fstat(fd, &info) != 0 || !S_ISREG(info.st_mode)) {
+    ::close(fd);
+    error = fmt::format("{}/{}: not a regular file", store, path);
+    return -1;
+  }
+  return fd;
+}
+}  // namespace
+
 void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader request,
                     wire::FileChunk::Builder chunk) {
   const std::string store = request.getStore(), path = request.getPath();
@@ -28,22 +83,22 @@ void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader
   chunk.setPath(path);
   chunk.setOffset(request.getOffset());
   if (!stores.count(store)) {
-    chunk.setError(fmt::format("store {} belongs to no active job", store));
+    chunk.setError(fmt::format("store {} belongs to no active job this worker holds a lease of", store));
     return;
   }
   if (!isServableStorePath(path)) {
     chunk.setError(fmt::format("{} is not a scene store file (scene.db or cells/<id>.cell)", path));
     return;
   }
-  const std::string full = store + "/" + path;
-  const int fd = ::open(full.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) {
-    chunk.setError(fmt::format("{}: cannot open", full));
+  std::string error;
+  FileDescriptor file(openInsideStore(store, path, error));
+  if (file.fd < 0) {
+    chunk.setError(error);
     return;
   }
+  const std::string full = store + "/" + path;
   struct stat info {};
-  if (::fstat(fd, &info) != 0) {
-    ::close(fd);
+  if (::fstat(file.fd, &info) != 0) {
     chunk.setError(fmt::format("{}: cannot stat", full));
     return;
   }
@@ -54,11 +109,10 @@ void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader
   auto data = chunk.initData(unsigned(length));
   size_t done = 0;
   while (done < length) {
-    const ssize_t n = ::pread(fd, data.begin() + done, length - done, off_t(offset + done));
+    const ssize_t n = ::pread(file.fd, data.begin() + done, length - done, off_t(offset + done));
     if (n <= 0) break;
     done += size_t(n);
   }
-  ::close(fd);
   if (done != length) chunk.setError(fmt::format("{}: short read at byte {}", full, offset + done));
 }
 

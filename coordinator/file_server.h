@@ -1,6 +1,9 @@
 // Serves a scene store's files to workers that cannot see its file system
 // (worker --cache-dir): scene.db and cells/<id>.cell of the stores of the
-// coordinator's active jobs, nothing else, in chunks that fit a message.
+// jobs the asking worker holds leases of, nothing else, in chunks that fit
+// a message. Each path is opened one component at a time from the store's
+// directory, following no symbolic link, and only a regular file is served:
+// a store cannot hand out a file outside itself.
 #pragma once
 
 #include <cstdint>
@@ -18,8 +21,10 @@ constexpr uint64_t kFileChunkBytes = uint64_t(4) << 20;
 // Whether `path` is a file a store serves: "scene.db" or "cells/<digits>.cell".
 bool isServableStorePath(const std::string& path);
 
-// Fills `chunk` for the request; a request outside `stores` or for another
-// path, or a file that cannot be read, gets an `error` naming it.
+// Fills `chunk` for the request; a request outside `stores` (the resolved
+// store directories the asker may read) or for another path, a symbolic
+// link, anything but a regular file, or a file that cannot be read, gets
+// an `error` naming it.
 void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader request,
                     wire::FileChunk::Builder chunk);
 

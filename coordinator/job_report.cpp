@@ -3,7 +3,12 @@
 #include <cmath>
 #include <fmt/format.h>
 
+#include <stdlib.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 
 #include "common/image/image_writer.h"
 #include "common/transport/trace_counters.h"
@@ -145,7 +150,8 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
   return list;
 }
 
-void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+namespace {
+LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
   const uint32_t width = spec.getWidth(), height = spec.getHeight();
   const uint64_t pixels = uint64_t(width) * height;
   const std::vector<FixedRgb> film = store.film(job.id, pixels);
@@ -158,12 +164,40 @@ void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reade
     image.rgb[3 * p + 1] = fromFixed(film[p].g);
     image.rgb[3 * p + 2] = fromFixed(film[p].b);
   }
+  return image;
+}
+
+float exposureOf(wire::JobSpec::Reader spec) { return spec.getExposure() > 0 ? spec.getExposure() : 1.0f; }
+}  // namespace
+
+void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  // The directory was checked at submit; it is never created here, on
+  // behalf of whoever submitted.
   const std::string output = spec.getOutput().cStr();
-  if (auto parent = std::filesystem::path(output).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
-  writeImage(output, image, spec.getExposure() > 0 ? spec.getExposure() : 1.0f);
+  writeImage(output, filmImage(store, job, spec), exposureOf(spec));
   const std::string statsPath = output + ".json";
   writeFileAtomically(statsPath, jobStatistics(store, job, spec).dump(2) + "\n");
+}
+
+std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  namespace fs = std::filesystem;
+  // OpenImageIO writes files: one in a private directory, read back and removed.
+  std::string pattern = (fs::temp_directory_path() / "portico-image-XXXXXX").string();
+  if (!::mkdtemp(pattern.data()))
+    throw std::runtime_error(fmt::format("cannot create a temporary directory in {}: {}",
+                                         fs::temp_directory_path().string(), std::strerror(errno)));
+  const fs::path file = fs::path(pattern) / ("image" + fs::path(spec.getOutput().cStr()).extension().string());
+  std::string bytes;
+  try {
+    writeImage(file.string(), filmImage(store, job, spec), exposureOf(spec));
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  } catch (...) {
+    fs::remove_all(pattern);
+    throw;
+  }
+  fs::remove_all(pattern);
+  return bytes;
 }
 
 }  // namespace portico

@@ -15,7 +15,11 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);
 
-// Resolves the film into radiance and writes spec.output and spec.output + ".json".
+// Resolves the film into radiance and writes spec.output and spec.output +
+// ".json". Creates no directory.
 void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
+// The image of the job's film encoded as spec.output's extension says
+// (for `portico fetch-image`: the client writes it).
+std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 
 }  // namespace portico

@@ -18,7 +18,8 @@ int main(int argc, char** argv) {
   CLI::App app{"portico-coordinator: schedules cell work on portico workers"};
   portico::CoordinatorOptions options;
   std::string logLevel = "info";
-  app.add_option("--listen", options.listen, "ZeroMQ endpoint to bind (loopback by default; port * picks one)")
+  app.add_option("--listen", options.listen,
+                 "ZeroMQ endpoint to bind: tcp://HOST:PORT (loopback by default; port * picks one) or ipc://PATH")
       ->capture_default_str();
   app.add_option("--db", options.database, "job database (SQLite, created if missing)")->capture_default_str();
   app.add_option("--endpoint-file", options.endpointFile, "write the bound endpoint to this file");
@@ -29,8 +30,10 @@ int main(int argc, char** argv) {
   app.add_option("--max-cell-failures", options.maxCellFailures, "failed leases of one cell before its job fails")
       ->capture_default_str();
   app.add_option("--keys", options.keysDirectory,
-                 "CURVE keys directory (`portico keys generate`): encrypt, and accept only the keys in "
-                 "client.public; required to listen beyond loopback")
+                 "CURVE keys directory (`portico keys generate`): encrypt, and admit only the keys of "
+                 "{client,worker,operator}.public, each in its role; required beyond loopback. Without it, "
+                 "tcp:// uses this user's keys (~/.config/portico/keys or $PORTICO_KEYS, written on first use) "
+                 "and ipc:// admits only this user and root")
       ->check(CLI::ExistingDirectory);
   app.add_option("--fail-commits-every", options.failCommitsEvery,
                  "fault injection: every Nth transaction applying Results fails to commit, as on a full disk");

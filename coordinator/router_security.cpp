@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
+#include <unistd.h>
 
 #include <stdexcept>
 
@@ -18,18 +19,43 @@ void requireKeysBeyondLoopback(const std::string& listen, const std::string& key
         listen));
 }
 
-RouterSecurity::RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& keysDirectory,
-                               uint64_t maxFrameBytes) {
+std::string bindableEndpoint(const std::string& listen) {
+  const std::string prefix = "tcp://localhost:";
+  if (listen.rfind(prefix, 0) == 0) return "tcp://127.0.0.1:" + listen.substr(prefix.size());
+  return listen;
+}
+
+RouterSecurity::RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& listen,
+                               const std::string& keysDirectory, uint64_t maxFrameBytes) {
   // libzmq drops a longer frame before buffering it, and closes that connection.
   router.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(maxFrameBytes));
-  if (!keysDirectory.empty()) {
-    const net::ServerKeys keys = net::loadServerKeys(keysDirectory);
+  const bool ipc = listen.rfind("ipc://", 0) == 0;
+  inproc_ = listen.rfind("inproc://", 0) == 0;
+  if (!keysDirectory.empty() || (!ipc && !inproc_)) {
+    const std::string directory = keysDirectory.empty() ? net::ensureDefaultKeys() : keysDirectory;
+    const net::ServerKeys keys = net::loadServerKeys(directory);
     zap_ = std::make_unique<net::ZapAuthenticator>(context, keys);   // bound before the router binds
     net::applyServerKeys(router, keys);
-    spdlog::info("CURVE on: coordinator key {}, {} client keys accepted from {}", keys.server.publicKey,
-                 keys.authorizedClients.size(), keys.authorizedFile);
+    size_t counts[3] = {0, 0, 0};
+    for (const auto& [key, role] : keys.authorized) ++counts[int(role)];
+    spdlog::info("CURVE on{}: coordinator key {}; admits {} client, {} worker and {} operator keys from {}",
+                 keysDirectory.empty() ? " (no --keys: this user's keys)" : "", keys.server.publicKey,
+                 counts[int(net::Role::Client)], counts[int(net::Role::Worker)], counts[int(net::Role::Operator)],
+                 directory);
+  } else if (ipc) {
+    zap_ = std::make_unique<net::ZapAuthenticator>(context, ::geteuid());
+    // Without a ZAP domain libzmq skips the handler for the NULL mechanism.
+    router.set(zmq::sockopt::zap_domain, "portico");
+    spdlog::info("no --keys on ipc://: only uid {} and root may connect", ::geteuid());
   }
   connections_ = std::make_unique<net::ConnectionLog>(context, router, "coordinator");
+}
+
+std::optional<net::Role> RouterSecurity::roleOf(zmq::message_t& frame) const {
+  if (inproc_) return net::Role::Operator;
+  const char* userId = zmq_msg_gets(frame.handle(), "User-Id");
+  if (!userId) return std::nullopt;
+  return net::roleNamed(userId);
 }
 
 }  // namespace portico

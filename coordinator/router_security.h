@@ -1,15 +1,25 @@
-// What stands between the coordinator's ROUTER socket and the network:
-// loopback only unless CURVE keys are given (then a ZAP handler admits the
-// listed client keys), a frame size limit sized to legitimate messages, and
-// a log of the connections libzmq dropped on its own.
+// What stands between the coordinator's ROUTER socket and its peers: who
+// may connect, in which role (common/net/role.h), a frame size limit sized
+// to legitimate messages, and a log of the connections libzmq dropped on
+// its own. Three ways in:
+//   --keys DIR     CURVE; a ZAP handler admits the keys of DIR's
+//                  {client,worker,operator}.public, each in its role;
+//   ipc:// alone   a ZAP handler admits the coordinator's own user and root
+//                  (peer credentials of the Unix socket), as operators;
+//   tcp:// alone   (loopback only) CURVE with the per-user keys of
+//                  net::defaultKeysDirectory(), generated on first use: the
+//                  same user's workers and clients find them, other users
+//                  cannot read them.
 #pragma once
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <zmq.hpp>
 
 #include "common/net/connection_log.h"
+#include "common/net/role.h"
 #include "common/net/zap_authenticator.h"
 
 namespace portico {
@@ -18,18 +28,26 @@ namespace portico {
 // may be reachable from other machines and no keys are given.
 void requireKeysBeyondLoopback(const std::string& listen, const std::string& keysDirectory);
 
+// tcp://localhost:PORT as libzmq binds it (it reads "localhost" as an
+// interface name): tcp://127.0.0.1:PORT. Other endpoints are returned as given.
+std::string bindableEndpoint(const std::string& listen);
+
 class RouterSecurity {
  public:
-  // Configures `router` before it binds. Throws std::runtime_error naming
-  // the file when a key file is bad.
-  RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& keysDirectory,
-                 uint64_t maxFrameBytes);
+  // Configures `router` before it binds to `listen`. Throws
+  // std::runtime_error naming the file when a key file is bad.
+  RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& listen,
+                 const std::string& keysDirectory, uint64_t maxFrameBytes);
+  // The role of the peer that sent `frame`, from what the ZAP handler
+  // admitted it as; none when it was admitted without one.
+  std::optional<net::Role> roleOf(zmq::message_t& frame) const;
   // Call from the serving loop: logs connections libzmq closed or refused.
   void logConnectionEvents() { connections_->drain(); }
 
  private:
   std::unique_ptr<net::ZapAuthenticator> zap_;
   std::unique_ptr<net::ConnectionLog> connections_;
+  bool inproc_ = false;   // the same process: every peer is an operator
 };
 
 }  // namespace portico

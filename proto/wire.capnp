@@ -216,6 +216,20 @@ struct CancelRequest {
   job @0 :UInt64;
 }
 
+# A finished job's image, encoded as its output's extension says (.png,
+# .exr, ...), for the client to write itself (`portico fetch-image`).
+struct FetchImage {
+  job @0 :UInt64;
+}
+
+struct ImageReply {
+  job @0 :UInt64;
+  output @1 :Text;          # the path the job was submitted with (its extension decides the format)
+  image @2 :Data;           # the encoded file
+  statistics @3 :Text;      # what the coordinator writes beside the image as OUTPUT.json
+  error @4 :Text;           # non-empty: no image (the job is not done, or it cannot be encoded)
+}
+
 struct Envelope {
   union {
     hello @0 :Hello;
@@ -237,5 +251,7 @@ struct Envelope {
     goodbye @16 :Void;       # a worker leaving cleanly
     fetchFile @17 :FetchFile;
     fileChunk @18 :FileChunk;
+    fetchImage @19 :FetchImage;
+    image @20 :ImageReply;
   }
 }

@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   app.add_option("--liveness-ms", options.livenessMs)->capture_default_str();
   app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease");
   app.add_option("--keys", options.keysDirectory,
-                 "CURVE keys directory (`portico keys generate`), as the coordinator's: coordinator.public, client.secret")
+                 "CURVE keys directory (`portico keys generate`): coordinator.public, worker.secret (default on tcp://: "
+                 "the per-user keys, ~/.config/portico/keys or $PORTICO_KEYS, when they exist)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--cache-dir", options.cacheDirectory,
                  "fetch scene stores from the coordinator into this disk cache (no shared file system needed)");

@@ -82,7 +82,8 @@ WorkerSession::WorkerSession(WorkerOptions options)
       leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   if (leaseDone_ < 0) throw std::runtime_error("cannot create an eventfd");
   // Read now: a bad key file stops the worker at start, not at its first connection.
-  if (!options_.keysDirectory.empty()) keys_ = net::loadClientKeys(options_.keysDirectory);
+  if (const std::string keys = net::keysForEndpoint(options_.keysDirectory, options_.connect); !keys.empty())
+    keys_ = net::loadClientKeys(keys, net::Role::Worker);
   if (!options_.cacheDirectory.empty()) mirror_ = std::make_unique<StoreMirror>(options_.cacheDirectory);
   spdlog::debug("accelerator cost model (for --accel auto): {}", chooser_.model().origin);
 }
@@ -202,6 +203,7 @@ int WorkerSession::run() {
       lease.reset();
     };
     bool reconnect = false;
+    bool rejoin = false;   // the coordinator restarted and does not know this worker
     const auto sendFailure = [&](uint64_t leaseId, const std::string& why,
                                  std::optional<uint32_t> failedCell = std::nullopt) {
       capnp::MallocMessageBuilder message;
@@ -330,6 +332,10 @@ int WorkerSession::run() {
                 break;
               }
               case wire::Envelope::ERROR:
+                if (welcomed && std::string_view(envelope.getError().cStr()) == net::kUnknownWorkerError) {
+                  rejoin = true;
+                  break;
+                }
                 spdlog::error("coordinator refused: {}", envelope.getError().cStr());
                 if (!welcomed) return 2;
                 break;
@@ -399,7 +405,17 @@ int WorkerSession::run() {
         sendSimple(socket, [](wire::Envelope::Builder e) { e.setHeartbeat(); });
         lastSent = now;
       }
-      if (now - lastHeard > options_.livenessMs) {
+      if (rejoin) {
+        spdlog::info("the coordinator at {} restarted: joining it again", options_.connect);
+        // Its leases were requeued when it restarted: drop them here too.
+        {
+          std::lock_guard lock(chain_.mutex);
+          chain_.queued.clear();
+          chain_.abandon = true;
+        }
+        if (tracing.valid()) tracing.wait();
+        reconnect = true;
+      } else if (now - lastHeard > options_.livenessMs) {
         if (welcomed)
           spdlog::warn("coordinator silent for {} ms; reconnecting in {} ms", now - lastHeard, backoffMs);
         else   // a refused CURVE handshake looks exactly like this

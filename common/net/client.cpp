@@ -9,30 +9,43 @@
 namespace portico::net {
 
 CoordinatorClient::CoordinatorClient(const std::string& endpoint, const std::string& keysDirectory,
-                                     std::chrono::milliseconds timeout)
+                                     std::chrono::milliseconds timeout, Role role)
     : endpoint_(endpoint), timeout_(timeout), context_(1), socket_(context_, zmq::socket_type::dealer) {
   socket_.set(zmq::sockopt::linger, 200);
   socket_.set(zmq::sockopt::maxmsgsize, int64_t(kMaxFrameBytes));
-  if (!keysDirectory.empty()) applyClientKeys(socket_, loadClientKeys(keysDirectory));
+  if (const std::string keys = keysForEndpoint(keysDirectory, endpoint); !keys.empty())
+    applyClientKeys(socket_, loadClientKeys(keys, role));
   socket_.connect(endpoint);
 }
 
-std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder& message) {
+std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder& message, bool resend) {
+  // A late answer to an earlier, resent request is not this one's.
+  for (zmq::message_t stale; socket_.recv(stale, zmq::recv_flags::dontwait);) {
+  }
+  const zmq::message_t frame = encode(message);
   // A DEALER whose handshake was refused has no peer left, and a blocking
   // send would wait forever: fail at once instead.
-  if (!socket_.send(encode(message), zmq::send_flags::dontwait))
+  const auto sendOnce = [&] { return socket_.send(zmq::buffer(frame.data(), frame.size()), zmq::send_flags::dontwait); };
+  if (!sendOnce() && !resend)
     throw std::runtime_error(
         fmt::format("cannot send to {}: the coordinator refused this connection (wrong --keys?)", endpoint_));
+  constexpr auto kResendInterval = std::chrono::seconds(2);
   const auto deadline = std::chrono::steady_clock::now() + timeout_;
+  auto nextResend = std::chrono::steady_clock::now() + kResendInterval;
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto now = std::chrono::steady_clock::now();
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - now);
     // A refused CURVE handshake is silent by design (no oracle for key
     // guessing): from here it looks like a coordinator that is down.
     if (left.count() <= 0)
       throw std::runtime_error(fmt::format("no answer from {} within {:g} s: wrong --keys, or coordinator down",
                                            endpoint_, timeout_.count() / 1000.0));
+    if (resend && now >= nextResend) {
+      (void)sendOnce();
+      nextResend = now + kResendInterval;
+    }
     zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 1, left);
+    zmq::poll(items, 1, resend ? std::min(left, std::chrono::milliseconds(250)) : left);
     if (!(items[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t frame;
     if (!socket_.recv(frame, zmq::recv_flags::dontwait)) continue;
@@ -57,7 +70,7 @@ uint64_t CoordinatorClient::submit(capnp::MallocMessageBuilder& submitEnvelope) 
 std::string CoordinatorClient::statusJson(uint64_t job) {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initStatus().setJob(job);
-  auto reply = request(message);
+  auto reply = request(message, true);
   if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
     throw std::runtime_error("coordinator sent an unexpected reply to Status");
   return reply->envelope().getStatusReply().getJson();
@@ -70,6 +83,17 @@ std::string CoordinatorClient::cancel(uint64_t job) {
   if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
     throw std::runtime_error("coordinator sent an unexpected reply to Cancel");
   return reply->envelope().getStatusReply().getJson();
+}
+
+std::unique_ptr<Decoded> CoordinatorClient::fetchImage(uint64_t job) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initFetchImage().setJob(job);
+  auto reply = request(message, true);
+  if (reply->envelope().which() != wire::Envelope::IMAGE)
+    throw std::runtime_error("coordinator sent an unexpected reply to FetchImage");
+  if (reply->envelope().getImage().getError().size())
+    throw std::runtime_error(fmt::format("coordinator at {}: {}", endpoint_, reply->envelope().getImage().getError().cStr()));
+  return reply;
 }
 
 void CoordinatorClient::shutdown() {

@@ -1,7 +1,9 @@
 // A client of the coordinator (the `portico` command, tests): one DEALER
 // socket, one request at a time, each answered within a timeout. With CURVE
 // keys (`--keys DIR`) a client with a wrong key is never answered: the
-// timeout is how it finds out.
+// timeout is how it finds out. Requests that change nothing (status, an
+// image) are sent again every couple of seconds until answered, so one lost
+// with a coordinator that restarted is not waited for in vain.
 #pragma once
 
 #include <capnp/message.h>
@@ -12,22 +14,28 @@
 #include <zmq.hpp>
 
 #include "common/net/message.h"
+#include "common/net/role.h"
 
 namespace portico::net {
 
 class CoordinatorClient {
  public:
-  // keysDirectory: where `portico keys generate` wrote the keys ("" for none).
+  // keysDirectory: where `portico keys generate` wrote the keys ("": none
+  // on ipc://, the per-user keys on tcp:// when they exist); `role`: whose
+  // secret key of it to present.
   explicit CoordinatorClient(const std::string& endpoint, const std::string& keysDirectory = "",
-                             std::chrono::milliseconds timeout = std::chrono::seconds(30));
+                             std::chrono::milliseconds timeout = std::chrono::seconds(30), Role role = Role::Client);
   // Sends the request and returns the reply; throws std::runtime_error on
-  // timeout (naming the endpoint) or when the coordinator answers with an error.
-  std::unique_ptr<Decoded> request(capnp::MallocMessageBuilder& message);
+  // timeout (naming the endpoint) or when the coordinator answers with an
+  // error. `resend`: a request that may be answered twice (it changes nothing).
+  std::unique_ptr<Decoded> request(capnp::MallocMessageBuilder& message, bool resend = false);
 
   uint64_t submit(capnp::MallocMessageBuilder& submitEnvelope);
   std::string statusJson(uint64_t job);   // job 0: all jobs
   std::string cancel(uint64_t job);
-  void shutdown();
+  // A done job's encoded image; throws naming the job when it has none.
+  std::unique_ptr<Decoded> fetchImage(uint64_t job);
+  void shutdown();   // needs the operator role
 
  private:
   std::string endpoint_;

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -21,8 +22,9 @@ namespace {
 constexpr size_t kZ85KeyLength = 40;
 const char* const kCoordinatorPublic = "coordinator.public";
 const char* const kCoordinatorSecret = "coordinator.secret";
-const char* const kClientPublic = "client.public";
-const char* const kClientSecret = "client.secret";
+
+std::string publicFile(std::string_view pair) { return fmt::format("{}.public", pair); }
+std::string secretFile(std::string_view pair) { return fmt::format("{}.secret", pair); }
 
 bool isZ85Key(const std::string& text) {
   if (text.size() != kZ85KeyLength) return false;
@@ -94,26 +96,40 @@ void writeKeyFile(const fs::path& path, const std::string& comment, const std::s
 
 }  // namespace
 
-void generateKeys(const std::string& directory) {
+std::vector<std::string> generateKeys(const std::string& directory) {
   const fs::path dir(directory);
-  fs::create_directories(dir);
-  for (const char* name : {kCoordinatorPublic, kCoordinatorSecret, kClientPublic, kClientSecret})
-    if (fs::exists(dir / name))
-      throw std::runtime_error(
-          fmt::format("key file {}: already exists (keys are never overwritten; remove it first)", (dir / name).string()));
-  char serverPublic[kZ85KeyLength + 1], serverSecret[kZ85KeyLength + 1];
-  char clientPublic[kZ85KeyLength + 1], clientSecret[kZ85KeyLength + 1];
-  if (zmq_curve_keypair(serverPublic, serverSecret) != 0 || zmq_curve_keypair(clientPublic, clientSecret) != 0)
-    throw std::runtime_error(fmt::format("cannot generate CURVE keys: {} (libzmq built without CURVE?)",
-                                         zmq_strerror(zmq_errno())));
-  writeKeyFile(dir / kCoordinatorSecret, "portico coordinator secret key (CURVE, Z85): keep it on the coordinator",
-               serverSecret, 0600);
-  writeKeyFile(dir / kCoordinatorPublic, "portico coordinator public key (CURVE, Z85): give it to workers and clients",
-               serverPublic, 0644);
-  writeKeyFile(dir / kClientSecret, "portico client secret key (CURVE, Z85): workers and clients use it",
-               clientSecret, 0600);
-  writeKeyFile(dir / kClientPublic,
-               "client public keys the coordinator accepts (CURVE, Z85), one a line", clientPublic, 0644);
+  if (!fs::exists(dir)) {
+    fs::create_directories(dir);
+    fs::permissions(dir, fs::perms::owner_all);   // secrets inside: others may not even list them
+  }
+  struct Pair {
+    std::string name, holder;
+  };
+  std::vector<Pair> pairs{{"coordinator", "keep it on the coordinator"}};
+  for (Role role : kAllRoles) pairs.push_back({std::string(roleName(role)), fmt::format("{}s use it", roleName(role))});
+  std::vector<std::string> written;
+  for (const Pair& pair : pairs) {
+    const bool hasPublic = fs::exists(dir / publicFile(pair.name)), hasSecret = fs::exists(dir / secretFile(pair.name));
+    if (hasPublic && hasSecret) continue;   // kept: keys are never overwritten
+    if (hasPublic != hasSecret)
+      throw std::runtime_error(fmt::format("key file {}: exists without its other half {} (keys are never overwritten; "
+                                           "remove it first)",
+                                           (dir / (hasPublic ? publicFile(pair.name) : secretFile(pair.name))).string(),
+                                           hasPublic ? secretFile(pair.name) : publicFile(pair.name)));
+    char publicKey[kZ85KeyLength + 1], secretKey[kZ85KeyLength + 1];
+    if (zmq_curve_keypair(publicKey, secretKey) != 0)
+      throw std::runtime_error(fmt::format("cannot generate CURVE keys: {} (libzmq built without CURVE?)",
+                                           zmq_strerror(zmq_errno())));
+    const bool coordinator = pair.name == "coordinator";
+    writeKeyFile(dir / secretFile(pair.name),
+                 fmt::format("portico {} secret key (CURVE, Z85): {}", pair.name, pair.holder), secretKey, 0600);
+    writeKeyFile(dir / publicFile(pair.name),
+                 coordinator ? "portico coordinator public key (CURVE, Z85): give it to workers, clients and operators"
+                             : fmt::format("{} public keys the coordinator admits (CURVE, Z85), one a line", pair.name),
+                 publicKey, 0644);
+    written.push_back(pair.name);
+  }
+  return written;
 }
 
 ServerKeys loadServerKeys(const std::string& directory) {
@@ -125,17 +141,83 @@ ServerKeys loadServerKeys(const std::string& directory) {
   if (fs::exists(dir / kCoordinatorPublic) && readOneKey(dir / kCoordinatorPublic) != keys.server.publicKey)
     throw std::runtime_error(fmt::format("key file {}: is not the public half of {}",
                                          (dir / kCoordinatorPublic).string(), (dir / kCoordinatorSecret).string()));
-  keys.authorizedFile = (dir / kClientPublic).string();
-  keys.authorizedClients = readKeys(dir / kClientPublic);
+  keys.directory = dir.string();
+  for (Role role : kAllRoles) {
+    const fs::path file = dir / publicFile(roleName(role));
+    if (!fs::exists(file)) {
+      spdlog::warn("key file {}: missing, so no {} is admitted (`portico keys generate {}` adds it)", file.string(),
+                   roleName(role), dir.string());
+      continue;
+    }
+    for (const std::string& key : readKeys(file)) {
+      // One key, one role: a key listed twice would leave its rights to file order.
+      const auto [it, added] = keys.authorized.emplace(key, role);
+      if (!added && it->second != role)
+        throw std::runtime_error(fmt::format("key file {}: key {} is also listed in {}: give each role its own key pair",
+                                             file.string(), key, publicFile(roleName(it->second))));
+    }
+  }
+  if (keys.authorized.empty())
+    throw std::runtime_error(fmt::format("key directory {}: admits no key (no client.public, worker.public or "
+                                         "operator.public)",
+                                         dir.string()));
   return keys;
 }
 
-ClientKeys loadClientKeys(const std::string& directory) {
+ClientKeys loadClientKeys(const std::string& directory, Role role) {
   const fs::path dir(directory);
   ClientKeys keys;
   keys.serverPublicKey = readOneKey(dir / kCoordinatorPublic);
-  keys.client = readPair(dir / kClientSecret);
+  keys.client = readPair(dir / secretFile(roleName(role)));
   return keys;
+}
+
+std::string defaultKeysDirectory() {
+  if (const char* given = std::getenv("PORTICO_KEYS"); given && *given) return given;
+  if (const char* config = std::getenv("XDG_CONFIG_HOME"); config && *config)
+    return (fs::path(config) / "portico" / "keys").string();
+  if (const char* home = std::getenv("HOME"); home && *home)
+    return (fs::path(home) / ".config" / "portico" / "keys").string();
+  return "";
+}
+
+std::string ensureDefaultKeys() {
+  const std::string directory = defaultKeysDirectory();
+  if (directory.empty())
+    throw std::runtime_error("without --keys a coordinator on tcp:// uses per-user keys, but neither PORTICO_KEYS, "
+                             "XDG_CONFIG_HOME nor HOME is set: give --keys DIR, or listen on ipc://");
+  const fs::path dir(directory);
+  if (fs::exists(dir / kCoordinatorSecret)) return directory;
+  // Written whole in a private temporary directory and renamed into place:
+  // a coordinator starting at the same moment either renames first or
+  // finds the finished directory.
+  fs::create_directories(dir.parent_path());
+  std::string pattern = (dir.parent_path() / ".keys-XXXXXX").string();
+  if (!::mkdtemp(pattern.data()))
+    throw std::runtime_error(fmt::format("cannot create a directory beside {}: {}", directory, std::strerror(errno)));
+  try {
+    generateKeys(pattern);
+  } catch (...) {
+    fs::remove_all(pattern);
+    throw;
+  }
+  if (::rename(pattern.c_str(), dir.c_str()) != 0) {
+    const int error = errno;
+    fs::remove_all(pattern);
+    if (!fs::exists(dir / kCoordinatorSecret))
+      throw std::runtime_error(fmt::format("cannot create the key directory {}: {}", directory, std::strerror(error)));
+  } else {
+    spdlog::info("wrote per-user CURVE keys to {} (mode 0700)", directory);
+  }
+  return directory;
+}
+
+std::string keysForEndpoint(const std::string& given, const std::string& endpoint) {
+  if (!given.empty() || endpoint.rfind("tcp://", 0) != 0) return given;
+  const std::string directory = defaultKeysDirectory();
+  std::error_code error;
+  if (!directory.empty() && fs::exists(fs::path(directory) / kCoordinatorPublic, error)) return directory;
+  return "";
 }
 
 void applyServerKeys(zmq::socket_t& socket, const ServerKeys& keys) {

@@ -28,6 +28,10 @@ namespace portico::net {
 // maxCoordinatorFrameBytes.
 constexpr size_t kMaxFrameBytes = size_t(512) << 20;
 
+// The coordinator's Error to a worker it does not know (it restarted since
+// the worker's Hello): the worker says Hello again at once.
+inline constexpr const char* kUnknownWorkerError = "unknown worker: say Hello first";
+
 // The largest frame a coordinator accepts (ZMQ_MAXMSGSIZE): a worker's Result
 // for a lease of `leaseRays` rays, with room for the fan-out of final
 // gathering, shadow rays and photon deposits (docs/architecture.md, "Message limits").

@@ -5,6 +5,8 @@
 
 #include <zmq_addon.hpp>
 
+#include <charconv>
+
 namespace portico::net {
 
 namespace {
@@ -13,10 +15,16 @@ const char* const kZapEndpoint = "inproc://zeromq.zap.01";
 std::string text(const zmq::message_t& frame) { return std::string(static_cast<const char*>(frame.data()), frame.size()); }
 }  // namespace
 
-ZapAuthenticator::ZapAuthenticator(zmq::context_t& context, const ServerKeys& keys)
-    : socket_(context, zmq::socket_type::rep),
-      authorized_(keys.authorizedClients.begin(), keys.authorizedClients.end()),
-      authorizedFile_(keys.authorizedFile) {
+ZapAuthenticator::ZapAuthenticator(zmq::context_t& context, const ServerKeys& keys) : ZapAuthenticator(context) {
+  authorized_ = keys.authorized;
+  keysDirectory_ = keys.directory;
+}
+
+ZapAuthenticator::ZapAuthenticator(zmq::context_t& context, uid_t owner) : ZapAuthenticator(context) {
+  owner_ = owner;
+}
+
+ZapAuthenticator::ZapAuthenticator(zmq::context_t& context) : socket_(context, zmq::socket_type::rep) {
   socket_.set(zmq::sockopt::linger, 0);
   // Bound here, on the caller's thread, so the handler exists before the
   // caller binds its server socket; the thread then owns the socket.
@@ -55,17 +63,23 @@ void ZapAuthenticator::answer(const std::vector<zmq::message_t>& request) {
     spdlog::warn("authentication handler: dropped a malformed ZAP request of {} frames", request.size());
   } else {
     const std::string address = text(request[3]), mechanism = text(request[5]);
-    if (mechanism != "CURVE" || request.size() < 7) {
-      logRefusal(mechanism, address, fmt::format("mechanism {} (the coordinator requires CURVE)", mechanism));
+    std::string why, throttleKey = mechanism;
+    std::optional<Role> role;
+    if (mechanism == "CURVE" && request.size() >= 7 && !owner_) {
+      throttleKey = z85FromBinaryKey(request[6].data(), request[6].size());
+      role = admitCurve(throttleKey, why);
+    } else if (mechanism == "NULL" && owner_) {
+      throttleKey = address;
+      role = admitByUid(address, why);
     } else {
-      const std::string key = z85FromBinaryKey(request[6].data(), request[6].size());
-      if (authorized_.count(key)) {
-        status = "200";
-        statusText = "OK";
-        userId = key;
-      } else {
-        logRefusal(key, address, fmt::format("key {} is not in {}", key, authorizedFile_));
-      }
+      why = fmt::format("mechanism {} (the coordinator requires {})", mechanism, owner_ ? "NULL on ipc://" : "CURVE");
+    }
+    if (role) {
+      status = "200";
+      statusText = "OK";
+      userId = std::string(roleName(*role));
+    } else {
+      logRefusal(throttleKey, address, why);
     }
   }
   const std::string requestId = request.size() > 1 ? text(request[1]) : std::string();
@@ -73,6 +87,35 @@ void ZapAuthenticator::answer(const std::vector<zmq::message_t>& request) {
                                        zmq::buffer(status),  zmq::buffer(statusText),
                                        zmq::buffer(userId),  zmq::const_buffer()};
   (void)zmq::send_multipart(socket_, reply);
+}
+
+std::optional<Role> ZapAuthenticator::admitCurve(const std::string& key, std::string& why) const {
+  if (auto it = authorized_.find(key); it != authorized_.end()) return it->second;
+  why = fmt::format("key {} is in none of {}/{{client,worker,operator}}.public", key, keysDirectory_);
+  return std::nullopt;
+}
+
+std::optional<Role> ZapAuthenticator::admitByUid(const std::string& address, std::string& why) const {
+  // An ipc peer's address ends in ":uid:gid:pid" (libzmq, SO_PEERCRED).
+  const size_t pidColon = address.rfind(':');
+  const size_t gidColon = pidColon == std::string::npos || pidColon == 0 ? std::string::npos : address.rfind(':', pidColon - 1);
+  const size_t uidColon = gidColon == std::string::npos || gidColon == 0 ? std::string::npos : address.rfind(':', gidColon - 1);
+  if (uidColon == std::string::npos) {
+    why = "its credentials are unknown (not an ipc:// peer)";
+    return std::nullopt;
+  }
+  uid_t uid = 0;
+  const char* first = address.data() + uidColon + 1;
+  const auto [end, error] = std::from_chars(first, address.data() + gidColon, uid);
+  if (error != std::errc() || end != address.data() + gidColon) {
+    why = "its credentials are unreadable";
+    return std::nullopt;
+  }
+  if (uid == *owner_ || uid == 0) return Role::Operator;
+  why = fmt::format("uid {} is not this coordinator's user (uid {}): without --keys it serves only its own user "
+                    "and root",
+                    uid, *owner_);
+  return std::nullopt;
 }
 
 void ZapAuthenticator::logRefusal(const std::string& key, const std::string& address, const std::string& why) {

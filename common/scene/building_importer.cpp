@@ -154,6 +154,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
       scene.lights.push_back(ImportedLight{entry.label(), object.cell, *shape, entry.emission});
     }
     scene.objects.push_back(std::move(object));
+    if (options.onMeshRead) options.onMeshRead(scene.objects.size(), building.objects.size());
   }
 
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct ImportOptions {
   uint32_t gridResolution = 0;
   // The entry of the building.json's "cameras" to use, by "name"; empty: the first.
   std::string camera;
+  // Called after each object's mesh file is read (objects read, objects in
+  // all): reading tens of thousands of mesh files takes a minute.
+  std::function<void(size_t read, size_t objects)> onMeshRead;
 };
 
 // The largest gridResolution accepted (16.7 million cells).

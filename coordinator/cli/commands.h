@@ -105,8 +105,11 @@ int runSubmit(const ConnectOptions& connect, const RenderOptions& render);
 int runStatus(const ConnectOptions& connect, uint64_t job, bool json);
 int runWait(const ConnectOptions& connect, uint64_t job, bool quiet);
 int runCancel(const ConnectOptions& connect, uint64_t job);
+// `fetch-image JOB [-o FILE]`: the client writes the image (default: the job's output path).
+int runFetchImage(const ConnectOptions& connect, uint64_t job, const std::string& output);
+int runShutdown(const ConnectOptions& connect);
 
-// `keys generate DIR`: a CURVE key pair for the coordinator and one for its clients (keys_command.cpp).
+// `keys generate DIR`: a CURVE key pair for the coordinator and one per role (keys_command.cpp).
 int runKeysGenerate(const std::string& directory);
 
 }  // namespace portico::cli

@@ -3,11 +3,15 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <thread>
 
 #include "common/net/client.h"
+#include "common/util/output_path.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/progress.h"
 
@@ -50,15 +54,29 @@ void addConnectOptions(CLI::App& command, ConnectOptions& o) {
 }
 
 namespace {
-net::CoordinatorClient connectTo(const ConnectOptions& o) {
+net::CoordinatorClient connectTo(const ConnectOptions& o, net::Role role = net::Role::Client) {
   return net::CoordinatorClient(o.endpoint, o.keys,
-                                std::chrono::milliseconds(static_cast<int64_t>(o.timeoutSeconds * 1000)));
+                                std::chrono::milliseconds(static_cast<int64_t>(o.timeoutSeconds * 1000)), role);
+}
+
+// Written beside its name and renamed, as the coordinator writes images.
+void writeWhole(const std::string& path, const void* data, size_t size) {
+  const std::string temporary = path + ".part";
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    out.write(static_cast<const char*>(data), std::streamsize(size));
+    out.close();
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write: {}", temporary, std::strerror(errno)));
+  }
+  std::filesystem::rename(temporary, path);
 }
 }  // namespace
 
 void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
   spec.setStore(std::filesystem::absolute(o.store).lexically_normal().string());
+  // As the user who asks: the coordinator checks it again as itself.
+  checkOutputPath(o.output);
   spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
   spec.setAccel(o.accel);
   spec.setPhotons(o.photons);
@@ -103,7 +121,8 @@ int runWait(const ConnectOptions& connect, uint64_t job, bool quiet) {
     const std::string state = status.value("state", "");
     if (state == "done" || state == "failed" || state == "cancelled") {
       display.finish(status);
-      return state == "done" ? 0 : 1;
+      // Done, but its image could not be written: the status says how to get it.
+      return state == "done" && status.value("error", "").empty() ? 0 : 1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(250));
   }
@@ -113,6 +132,39 @@ int runCancel(const ConnectOptions& connect, uint64_t job) {
   net::CoordinatorClient client = connectTo(connect);
   const auto status = nlohmann::json::parse(client.cancel(job));
   std::cout << fmt::format("job {}: {}\n", job, status.value("state", "?"));
+  return 0;
+}
+
+int runFetchImage(const ConnectOptions& connect, uint64_t job, const std::string& output) {
+  net::CoordinatorClient client = connectTo(connect);
+  auto reply = client.fetchImage(job);
+  auto image = reply->envelope().getImage();
+  const std::string path = output.empty() ? std::string(image.getOutput().cStr()) : output;
+  // The format follows the job's output; another extension would mislabel the bytes.
+  const auto extension = [](const std::string& p) { return std::filesystem::path(p).extension().string(); };
+  if (extension(path) != extension(image.getOutput().cStr()))
+    throw std::invalid_argument(fmt::format("{}: job {}'s image is a {} file (its output was {})", path, job,
+                                            extension(image.getOutput().cStr()), image.getOutput().cStr()));
+  checkOutputPath(path);
+  writeWhole(path, image.getImage().begin(), image.getImage().size());
+  const std::string statistics = image.getStatistics();
+  writeWhole(path + ".json", statistics.data(), statistics.size());
+  std::cout << fmt::format("job {}: wrote {} ({} bytes) and {}.json\n", job, path, image.getImage().size(), path);
+  return 0;
+}
+
+int runShutdown(const ConnectOptions& connect) {
+  // A coordinator that stops answers nothing; one that refuses answers an
+  // Error (which request() throws): wait briefly for the latter.
+  net::CoordinatorClient client(connect.endpoint, connect.keys, std::chrono::seconds(2), net::Role::Operator);
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().setShutdown();
+  try {
+    client.request(message);
+  } catch (const std::exception& e) {
+    if (std::string(e.what()).find("no answer from") == std::string::npos) throw;
+  }
+  std::cout << "shutdown sent to " << connect.endpoint << "\n";
   return 0;
 }
 

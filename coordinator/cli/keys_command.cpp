@@ -1,5 +1,5 @@
-// `portico keys generate DIR`: the CURVE keys a coordinator needs to listen
-// beyond loopback, and the pair its workers and clients present.
+// `portico keys generate DIR`: the CURVE keys of a coordinator and of the
+// three roles that reach it (client, worker, operator), each its own pair.
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -11,13 +11,18 @@
 namespace portico::cli {
 
 int runKeysGenerate(const std::string& directory) {
-  net::generateKeys(directory);
+  const std::vector<std::string> written = net::generateKeys(directory);
   const std::string dir = std::filesystem::absolute(directory).lexically_normal().string();
+  std::string pairs;
+  for (const std::string& name : written) pairs += (pairs.empty() ? "" : ", ") + name;
   std::cout << fmt::format(
-      "wrote {0}/coordinator.public, coordinator.secret, client.public, client.secret\n"
-      "coordinator: portico-coordinator --keys {0} (needs coordinator.secret, client.public)\n"
-      "workers and clients: --keys {0} (need coordinator.public, client.secret)\n",
-      dir);
+      "{1} in {0}\n"
+      "coordinator: portico-coordinator --keys DIR (needs coordinator.secret and client.public, worker.public, "
+      "operator.public)\n"
+      "workers:     portico-worker --keys DIR (need coordinator.public, worker.secret)\n"
+      "clients:     portico submit|status|wait|cancel|fetch-image --keys DIR (need coordinator.public, client.secret)\n"
+      "operators:   portico shutdown --keys DIR (needs coordinator.public, operator.secret)\n",
+      dir, written.empty() ? std::string("every key pair was already there") : "wrote the key pairs " + pairs);
   return 0;
 }
 

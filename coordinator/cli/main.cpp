@@ -79,13 +79,23 @@ int main(int argc, char** argv) {
   auto* cancel = app.add_subcommand("cancel", "cancel a job");
   addConnectOptions(*cancel, connect);
   cancel->add_option("JOB", job, "job id")->required();
+  std::string imagePath;
+  auto* fetchImage = app.add_subcommand(
+      "fetch-image", "write a done job's image (and its .json statistics) as this user, e.g. where the coordinator could not");
+  addConnectOptions(*fetchImage, connect);
+  fetchImage->add_option("JOB", job, "job id")->required();
+  fetchImage->add_option("-o,--output", imagePath, "where to write it (default: the job's own output path)");
+  auto* shutdown = app.add_subcommand("shutdown", "stop a running coordinator (needs the operator key: --keys DIR "
+                                                  "with operator.secret, or its own user on ipc://)");
+  addConnectOptions(*shutdown, connect);
 
   std::string keysDirectory;
   auto* keys = app.add_subcommand("keys", "ZeroMQ CURVE keys for services listening beyond loopback");
   keys->require_subcommand(1);
   auto* keysGenerate = keys->add_subcommand(
-      "generate", "write coordinator.{public,secret} and client.{public,secret} (Z85; secrets mode 0600) into DIR");
-  keysGenerate->add_option("DIR", keysDirectory, "directory to write the four key files into")->required();
+      "generate", "write the key pairs DIR lacks: coordinator, client, worker and operator .{public,secret} (Z85; "
+                  "secrets mode 0600; existing keys are kept)");
+  keysGenerate->add_option("DIR", keysDirectory, "directory to write the key files into")->required();
 
   BenchAccelOptions benchAccel;
   auto* bench = app.add_subcommand("bench", "measure portico's parts");
@@ -196,6 +206,8 @@ int main(int argc, char** argv) {
     if (*status) return runStatus(connect, job, json);
     if (*wait) return runWait(connect, job, quiet);
     if (*cancel) return runCancel(connect, job);
+    if (*fetchImage) return runFetchImage(connect, job, imagePath);
+    if (*shutdown) return runShutdown(connect);
     if (*keysGenerate) return runKeysGenerate(keysDirectory);
     if (*benchAccelCommand) return runBenchAccel(benchAccel);
     if (*benchPipelineCommand) return runBenchPipeline(benchPipeline);

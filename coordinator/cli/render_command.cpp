@@ -1,6 +1,7 @@
-// `portico render`: everything on this machine. Starts a coordinator on a
-// free loopback port with a private jobs.db, N workers, submits the job,
-// shows progress, and stops the services when the job ends.
+// `portico render`: everything on this machine. Starts a coordinator on an
+// ipc:// socket in a private directory (mode 0700: no other user can reach
+// it) with a private jobs.db, N workers, submits the job, shows progress,
+// and stops the services when the job ends or on Ctrl-C.
 #include <capnp/message.h>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -53,7 +54,9 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
   // --keys goes to every child, and to this process's own client.
   std::vector<std::string> keys;
   if (!local.keys.empty()) keys = {"--keys", std::filesystem::absolute(local.keys).string()};
-  std::vector<std::string> coordinatorArgv{findProgram("portico-coordinator"), "--listen", "tcp://127.0.0.1:*", "--db",
+  // mkdtemp made the directory 0700: the socket in it is this user's alone.
+  const std::string listen = "ipc://" + (work / "coordinator.sock").string();
+  std::vector<std::string> coordinatorArgv{findProgram("portico-coordinator"), "--listen", listen, "--db",
                                            (work / "jobs.db").string(), "--endpoint-file", endpointFile,
                                            "--log-level", local.logLevel};
   coordinatorArgv.insert(coordinatorArgv.end(), keys.begin(), keys.end());
@@ -76,7 +79,12 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
   std::string state;
   nlohmann::json status;
   while (!interrupted) {
-    status = nlohmann::json::parse(client.statusJson(job));
+    try {
+      status = nlohmann::json::parse(client.statusJson(job));
+    } catch (const zmq::error_t& e) {
+      if (e.num() == EINTR) continue;   // Ctrl-C: the loop condition decides
+      throw;
+    }
     display.update(status);
     state = status.value("state", "");
     if (state == "done" || state == "failed" || state == "cancelled") break;
@@ -95,14 +103,19 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
   }
   if (interrupted) {
-    client.cancel(job);
+    // A terminal's Ctrl-C reached the services too, and the coordinator may
+    // be gone already: a short try, then stop them whatever it answered.
+    try {
+      net::CoordinatorClient(endpoint, local.keys, std::chrono::seconds(1)).cancel(job);
+    } catch (const std::exception&) {
+    }
     state = "cancelled";
     status["error"] = "interrupted";
   }
   display.finish(status);
-  for (ChildProcess& w : workers) w.stop();
-  client.shutdown();
-  coordinator.stop();
+  for (ChildProcess& w : workers) w.kill(SIGTERM);
+  for (ChildProcess& w : workers) w.stop(std::chrono::seconds(2));
+  coordinator.stop(std::chrono::seconds(5));
   const bool ok = state == "done";
   if (ok && !local.keepLogs)
     std::filesystem::remove_all(work);

@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -37,8 +38,26 @@ int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, 
   return runSceneInfo(store, false);
 }
 
+namespace {
+constexpr size_t kObjectsWorthProgress = 1000;
+}  // namespace
+
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store) {
-  importBuilding(inputs, store, options);
+  // Progress on stderr, once a second, for imports of many objects (a
+  // mesh file costs a few milliseconds to read).
+  ImportOptions withProgress = options;
+  const auto started = std::chrono::steady_clock::now();
+  auto lastShown = started;
+  withProgress.onMeshRead = [&](size_t read, size_t objects) {
+    const auto now = std::chrono::steady_clock::now();
+    if (objects < kObjectsWorthProgress || (now - lastShown < std::chrono::seconds(1) && read != objects && read != 1))
+      return;
+    lastShown = now;
+    std::cerr << fmt::format("reading mesh files: {} of {} objects ({:.0f} %, {:.1f} s)\n", read, objects,
+                             100.0 * double(read) / double(objects),
+                             std::chrono::duration<double>(now - started).count());
+  };
+  importBuilding(inputs, store, withProgress);
   return runSceneInfo(store, false);
 }
 

@@ -27,7 +27,7 @@ cpu() {   # CPU ticks (user + system) of the given processes, all threads
 
 for run in $(seq "$runs"); do
   work=$(mktemp -d /tmp/portico-phase-cpu-XXXXXX)
-  "${COORDINATOR:-$bin/portico-coordinator}" --listen "tcp://127.0.0.1:*" --db "$work/jobs.db" --endpoint-file "$work/endpoint" \
+  "${COORDINATOR:-$bin/portico-coordinator}" --listen "ipc://$work/coordinator.sock" --db "$work/jobs.db" --endpoint-file "$work/endpoint" \
     --log-level info > "$work/coordinator.log" 2>&1 &
   coordinator=$!
   for _ in $(seq 200); do [[ -s "$work/endpoint" ]] && break; sleep 0.05; done

@@ -206,7 +206,7 @@ check(not any("persistentVolumeClaim" in v for v in volumes(worker).values()),
       "workers mount the claim: with --cache-dir they fetch cells from the coordinator")
 
 # CURVE keys: --keys is the mount of the Secret portico-keys, read-only, in both.
-for d, c, needed in ((coordinator, cc, None), (worker, wc, {"coordinator.public", "client.secret"})):
+for d, c, needed in ((coordinator, cc, None), (worker, wc, {"coordinator.public", "worker.secret"})):
     name = d["metadata"]["name"]
     keys = argument(c, "--keys")
     mount = mounts(c).get(keys)
@@ -214,7 +214,7 @@ for d, c, needed in ((coordinator, cc, None), (worker, wc, {"coordinator.public"
         secret = volumes(d)[mount["name"]].get("secret", {})
         check(secret.get("secretName") == "portico-keys", f"{name}: --keys is not the Secret portico-keys")
         check(mount.get("readOnly") is True, f"{name}: the keys are not mounted read-only")
-        if needed:   # a worker gets only the keys a client needs, not the coordinator's secret
+        if needed:   # a worker gets only its own key, no coordinator, client or operator secret
             items = {i["key"] for i in secret.get("items", [])}
             check(items == needed, f"{name}: Secret items {items} != {needed}")
 

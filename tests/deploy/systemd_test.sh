@@ -12,6 +12,11 @@ source_dir=$(cd "$2" && pwd)
 source "$source_dir/tests/deploy/lib.sh"
 units="$source_dir/deploy/systemd"
 
+# A coordinator holds a descriptor per connection: the default limit of 1024 is too few.
+for unit in portico-coordinator.service portico-worker@.service; do
+  grep -q '^LimitNOFILE=[0-9]' "$units/$unit" || fail "$unit: no LimitNOFILE= (the default 1024 descriptors are too few)"
+done
+
 if ! command -v systemd-analyze > /dev/null; then
   echo "SKIP: systemd-analyze is not installed (Debian package systemd); the units are not verified"
   exit $DEPLOY_SKIP

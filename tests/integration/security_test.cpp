@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "common/net/client.h"
+#include "common/net/curve_keys.h"
 #include "common/net/message.h"
 #include "tests/integration/service_harness.h"
 
@@ -36,6 +37,16 @@ class Security : public ::testing::Test {
     fs::create_directories(wrongKeys_);
     fs::copy_file(keys_ / "coordinator.public", wrongKeys_ / "coordinator.public");
     fs::copy_file(dir_ / "other" / "client.secret", wrongKeys_ / "client.secret");
+    fs::copy_file(dir_ / "other" / "worker.secret", wrongKeys_ / "worker.secret");
+  }
+  // A key directory that presents `role`'s secret as `as`'s: what the holder
+  // of one role's secret can try with the programs of another role.
+  static fs::path keysPresenting(const fs::path& dir, const std::string& role, const std::string& as) {
+    const fs::path stolen = dir / ("keys-" + role + "-as-" + as);
+    fs::create_directories(stolen);
+    fs::copy_file(keys_ / "coordinator.public", stolen / "coordinator.public", fs::copy_options::overwrite_existing);
+    fs::copy_file(keys_ / (role + ".secret"), stolen / (as + ".secret"), fs::copy_options::overwrite_existing);
+    return stolen;
   }
   static fs::path dir_, store_, keys_, wrongKeys_;
 };
@@ -71,11 +82,13 @@ TEST_F(Security, WorkersWithAWrongKeyOrNoKeyAreRefusedAndOneWithTheRightKeyFinis
   EXPECT_EQ(status["leases"].get<int64_t>(), 0) << status.dump(2);
   EXPECT_EQ(status["workers"].size(), 0u) << status.dump(2);
   const std::string coordinatorLog = readFile(dir / "coordinator.log");
-  EXPECT_NE(coordinatorLog.find("is not in " + (keys_ / "client.public").string()), std::string::npos)
-      << coordinatorLog;
-  // The keyless worker: whichever side notices the mismatch first decides the line.
+  const std::string refusedKey = "is in none of " + keys_.string() + "/{client,worker,operator}.public";
+  EXPECT_NE(coordinatorLog.find(refusedKey), std::string::npos) << coordinatorLog;
+  // The worker without --keys: it has no keys (whichever side notices the
+  // mismatch first decides the line), or presents this user's own keys.
   EXPECT_TRUE(coordinatorLog.find("security mechanism mismatch") != std::string::npos ||
-              coordinatorLog.find("a peer with --keys on one side only") != std::string::npos)
+              coordinatorLog.find("a peer with --keys on one side only") != std::string::npos ||
+              countOccurrences(coordinatorLog, refusedKey) >= 2)
       << coordinatorLog;
   EXPECT_NE(readFile(dir / "worker-0.log").find("wrong --keys, or coordinator down"), std::string::npos)
       << readFile(dir / "worker-0.log");
@@ -122,6 +135,68 @@ TEST_F(Security, AClientWithAWrongKeyGetsNoAnswerAndSaysSoClearly) {
       << readFile(dir / "bad.log");
 }
 
+// Each key pair gets its role's rights only: a worker's secret neither
+// submits nor shuts down, a client's neither leases nor shuts down; each
+// refusal is answered with the reason and logged, and nothing is done. The
+// operator's key shuts the coordinator down.
+TEST_F(Security, EachKeyGetsOnlyItsRolesRights) {
+  const fs::path dir = dir_ / "roles";
+  ClusterOptions options;
+  options.coordinatorExtra = {"--keys", keys_.string()};
+  options.clientKeys = keys_.string();
+  LocalCluster cluster(dir, 0, {}, options);
+  const auto portico = [&](const std::string& name, const std::vector<std::string>& args, int* code) {
+    std::vector<std::string> argv{kBin + "portico"};
+    argv.insert(argv.end(), args.begin(), args.end());
+    captureOutput(argv, dir, name, code);
+    return readFile(dir / (name + ".log"));
+  };
+  int code = -1;
+  std::string log = portico("worker-submits",
+                            {"submit", "--coordinator", cluster.endpoint(), "--timeout", "10", "--keys",
+                             keysPresenting(dir, "worker", "client").string(), store_.string(), "-o",
+                             (dir / "stolen.png").string()},
+                            &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(log.find("Submit refused: a worker may not send it (it needs a client or operator key)"), std::string::npos)
+      << log;
+  log = portico("worker-shuts-down",
+                {"shutdown", "--coordinator", cluster.endpoint(), "--keys",
+                 keysPresenting(dir, "worker", "operator").string()},
+                &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(log.find("Shutdown refused: a worker may not send it (it needs an operator key)"), std::string::npos) << log;
+  log = portico("client-shuts-down",
+                {"shutdown", "--coordinator", cluster.endpoint(), "--keys",
+                 keysPresenting(dir, "client", "operator").string()},
+                &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(log.find("Shutdown refused: a client may not send it"), std::string::npos) << log;
+  {
+    ChildProcess thief({kBin + "portico-worker", "--connect", cluster.endpoint(), "--name", "thief", "--keys",
+                        keysPresenting(dir, "client", "worker").string()},
+                       (dir / "thief.log").string());
+    for (int i = 0; i < 100 && thief.running(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    EXPECT_FALSE(thief.running()) << readFile(dir / "thief.log");
+    EXPECT_EQ(thief.exitCode(), 2) << readFile(dir / "thief.log");
+  }
+  EXPECT_NE(readFile(dir / "thief.log").find("Hello refused: a client may not send it"), std::string::npos)
+      << readFile(dir / "thief.log");
+  const auto status = cluster.status(0);   // still serving, nothing submitted, no worker joined
+  EXPECT_EQ(status["jobs"].size(), 0u) << status.dump(2);
+  EXPECT_EQ(status["workers"].size(), 0u) << status.dump(2);
+  const std::string coordinatorLog = readFile(dir / "coordinator.log");
+  for (const char* refusal : {"Submit refused: a worker", "Shutdown refused: a worker", "Shutdown refused: a client",
+                              "Hello refused: a client"})
+    EXPECT_NE(coordinatorLog.find(refusal), std::string::npos) << refusal << "\n" << coordinatorLog;
+  EXPECT_EQ(coordinatorLog.find("shutdown requested"), std::string::npos) << coordinatorLog;
+
+  portico("operator-shuts-down", {"shutdown", "--coordinator", cluster.endpoint(), "--keys", keys_.string()}, &code);
+  EXPECT_EQ(code, 0) << readFile(dir / "operator-shuts-down.log");
+  EXPECT_TRUE(waitForLog(dir / "coordinator.log", "coordinator stopping", std::chrono::seconds(10)))
+      << readFile(dir / "coordinator.log");
+}
+
 TEST_F(Security, TheCoordinatorListensBeyondLoopbackOnlyWithKeys) {
   const fs::path dir = dir_ / "listen";
   fs::create_directories(dir);
@@ -156,6 +231,9 @@ TEST_F(Security, GarbageTruncatedOversizedAndWrongVersionFramesAreDroppedAndAJob
   zmq::context_t context(1);
   zmq::socket_t rogue(context, zmq::socket_type::dealer);
   rogue.set(zmq::sockopt::linger, 0);
+  // The coordinator's own user, with the operator's key (a peer that may
+  // send every kind of message): what is dropped is dropped for its content.
+  net::applyClientKeys(rogue, net::loadClientKeys(net::keysForEndpoint("", cluster.endpoint()), net::Role::Operator));
   rogue.connect(cluster.endpoint());
 
   // Oversized: libzmq drops it unread and closes the connection (the rogue reconnects).

@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <cstring>
 
 #include "common/image/image_writer.h"
@@ -29,7 +30,11 @@
 namespace portico::harness {
 
 namespace fs = std::filesystem;
-inline const std::string kBin = std::string(PORTICO_BINARY_DIR) + "/bin/";
+// The programs under test: this build's, or PORTICO_TEST_BIN's (e.g. another
+// checkout's build/bin/, to see a test fail on the code it guards against).
+inline const std::string kBin =
+    std::getenv("PORTICO_TEST_BIN") ? std::string(std::getenv("PORTICO_TEST_BIN")) + "/"
+                                    : std::string(PORTICO_BINARY_DIR) + "/bin/";
 
 inline fs::path makeTempDirectory(const std::string& name) {
   fs::path dir = fs::temp_directory_path() / ("portico-test-" + name + "-" + std::to_string(getpid()));
@@ -157,6 +162,8 @@ class LocalCluster {
     }
     if (endpoint_.empty()) throw std::runtime_error("coordinator did not start: " + readFile(dir_ / "coordinator.log"));
   }
+  // SIGSTOP: it accepts requests and answers none (until killed).
+  void pauseCoordinator() { coordinator_->kill(SIGSTOP); }
   // kill -9: no chance to write anything down.
   void killCoordinator() {
     coordinator_->kill(SIGKILL);

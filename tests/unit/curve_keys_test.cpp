@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <vector>
 
 namespace portico {
 namespace {
@@ -33,25 +35,63 @@ class CurveKeys : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(CurveKeys, GeneratedKeysLoadOnBothSidesAndSecretsArePrivate) {
-  net::generateKeys(dir_.string());
+TEST_F(CurveKeys, EachRoleGetsItsOwnPairAndSecretsArePrivate) {
+  EXPECT_EQ(net::generateKeys(dir_.string()), (std::vector<std::string>{"coordinator", "client", "worker", "operator"}));
   const net::ServerKeys server = net::loadServerKeys(dir_.string());
-  const net::ClientKeys client = net::loadClientKeys(dir_.string());
-  EXPECT_EQ(client.serverPublicKey, server.server.publicKey);
-  ASSERT_EQ(server.authorizedClients.size(), 1u);
-  EXPECT_EQ(server.authorizedClients[0], client.client.publicKey);
-  EXPECT_EQ(client.client.secretKey.size(), 40u);
-  for (const char* secret : {"coordinator.secret", "client.secret"}) {
+  ASSERT_EQ(server.authorized.size(), 3u);
+  std::set<std::string> publicKeys;
+  for (net::Role role : net::kAllRoles) {
+    const net::ClientKeys client = net::loadClientKeys(dir_.string(), role);
+    EXPECT_EQ(client.serverPublicKey, server.server.publicKey);
+    ASSERT_TRUE(server.authorized.count(client.client.publicKey)) << net::roleName(role);
+    EXPECT_EQ(server.authorized.at(client.client.publicKey), role);
+    EXPECT_EQ(client.client.secretKey.size(), 40u);
+    publicKeys.insert(client.client.publicKey);
+  }
+  EXPECT_EQ(publicKeys.size(), 3u);
+  for (const char* secret : {"coordinator.secret", "client.secret", "worker.secret", "operator.secret"}) {
     struct stat info {};
     ASSERT_EQ(::stat((dir_ / secret).c_str(), &info), 0);
     EXPECT_EQ(info.st_mode & 0777, 0600u) << secret;
   }
+  struct stat info {};
+  ASSERT_EQ(::stat(dir_.c_str(), &info), 0);
+  EXPECT_EQ(info.st_mode & 0777, 0700u);
 }
 
-TEST_F(CurveKeys, GenerateNeverOverwritesAKey) {
+TEST_F(CurveKeys, GenerateNeverOverwritesAKeyAndAddsTheMissingPairs) {
   net::generateKeys(dir_.string());
+  const std::string before = net::loadClientKeys(dir_.string(), net::Role::Client).client.secretKey;
+  // A directory of an older portico: the coordinator and client pairs only.
+  for (const char* file : {"worker.public", "worker.secret", "operator.public", "operator.secret"}) fs::remove(dir_ / file);
+  EXPECT_EQ(net::generateKeys(dir_.string()), (std::vector<std::string>{"worker", "operator"}));
+  EXPECT_EQ(net::loadClientKeys(dir_.string(), net::Role::Client).client.secretKey, before);
+  EXPECT_TRUE(net::generateKeys(dir_.string()).empty());
+  fs::remove(dir_ / "worker.secret");
   const std::string error = errorOf([&] { net::generateKeys(dir_.string()); });
-  EXPECT_NE(error.find("already exists"), std::string::npos) << error;
+  EXPECT_NE(error.find("worker.public: exists without its other half worker.secret"), std::string::npos) << error;
+}
+
+TEST_F(CurveKeys, AKeyListedInTwoRolesIsRefused) {
+  net::generateKeys(dir_.string());
+  std::ofstream(dir_ / "worker.public", std::ios::app) << net::loadClientKeys(dir_.string(), net::Role::Client).client.publicKey << "\n";
+  const std::string error = errorOf([&] { net::loadServerKeys(dir_.string()); });
+  EXPECT_NE(error.find("is also listed in client.public"), std::string::npos) << error;
+}
+
+TEST_F(CurveKeys, DefaultKeysAreGeneratedOnceAndFoundOnlyForTcp) {
+  const fs::path home = dir_ / "home";
+  ::setenv("PORTICO_KEYS", (home / "keys").c_str(), 1);
+  EXPECT_EQ(net::keysForEndpoint("", "tcp://127.0.0.1:5555"), "");   // none yet
+  const std::string made = net::ensureDefaultKeys();
+  EXPECT_EQ(made, (home / "keys").string());
+  const std::string secret = net::loadClientKeys(made, net::Role::Worker).client.secretKey;
+  EXPECT_EQ(net::ensureDefaultKeys(), made);
+  EXPECT_EQ(net::loadClientKeys(made, net::Role::Worker).client.secretKey, secret);   // not regenerated
+  EXPECT_EQ(net::keysForEndpoint("", "tcp://127.0.0.1:5555"), made);
+  EXPECT_EQ(net::keysForEndpoint("", "ipc:///run/portico.sock"), "");
+  EXPECT_EQ(net::keysForEndpoint("/etc/keys", "tcp://127.0.0.1:5555"), "/etc/keys");
+  ::unsetenv("PORTICO_KEYS");
 }
 
 TEST_F(CurveKeys, SeveralAuthorizedClientKeysAndCommentsAreRead) {
@@ -60,14 +100,14 @@ TEST_F(CurveKeys, SeveralAuthorizedClientKeysAndCommentsAreRead) {
   net::generateKeys(other.string());
   {
     std::ofstream out(dir_ / "client.public", std::ios::app);
-    out << "\n# a second worker pool\n  " << net::loadClientKeys(other.string()).client.publicKey << "  \n";
+    out << "\n# a second worker pool\n  " << net::loadClientKeys(other.string(), net::Role::Client).client.publicKey << "  \n";
   }
-  EXPECT_EQ(net::loadServerKeys(dir_.string()).authorizedClients.size(), 2u);
+  EXPECT_EQ(net::loadServerKeys(dir_.string()).authorized.size(), 4u);   // 2 clients, a worker, an operator
 }
 
 TEST_F(CurveKeys, AMissingFileIsNamedWithTheCommandThatWritesIt) {
   fs::create_directories(dir_);
-  const std::string error = errorOf([&] { net::loadClientKeys(dir_.string()); });
+  const std::string error = errorOf([&] { net::loadClientKeys(dir_.string(), net::Role::Client); });
   EXPECT_NE(error.find((dir_ / "coordinator.public").string() + ": cannot open"), std::string::npos) << error;
   EXPECT_NE(error.find("portico keys generate"), std::string::npos) << error;
 }
@@ -77,7 +117,7 @@ TEST_F(CurveKeys, BadZ85IsRefusedNamingTheFileAndLine) {
   // 40 characters, but '"' is not in the Z85 alphabet; then a key of the wrong length.
   for (const std::string& bad : {std::string(39, 'a') + "\"", std::string("abc")}) {
     std::ofstream(dir_ / "client.secret", std::ios::trunc) << "# comment\n" << bad << "\n";
-    const std::string error = errorOf([&] { net::loadClientKeys(dir_.string()); });
+    const std::string error = errorOf([&] { net::loadClientKeys(dir_.string(), net::Role::Client); });
     EXPECT_NE(error.find((dir_ / "client.secret").string() + ": line 2 is not a 40-character Z85 CURVE key"),
               std::string::npos)
         << error;
@@ -88,9 +128,9 @@ TEST_F(CurveKeys, EmptyFilesAndTwoSecretsAreRefused) {
   net::generateKeys(dir_.string());
   std::ofstream(dir_ / "client.public", std::ios::trunc) << "# nobody\n";
   EXPECT_NE(errorOf([&] { net::loadServerKeys(dir_.string()); }).find("holds no key"), std::string::npos);
-  const std::string secret = net::loadClientKeys(dir_.string()).client.secretKey;
+  const std::string secret = net::loadClientKeys(dir_.string(), net::Role::Client).client.secretKey;
   std::ofstream(dir_ / "client.secret", std::ios::app) << secret << "\n";
-  EXPECT_NE(errorOf([&] { net::loadClientKeys(dir_.string()); }).find("holds 2 keys, expected one"), std::string::npos);
+  EXPECT_NE(errorOf([&] { net::loadClientKeys(dir_.string(), net::Role::Client); }).find("holds 2 keys, expected one"), std::string::npos);
 }
 
 TEST_F(CurveKeys, ACoordinatorPublicKeyThatDoesNotMatchItsSecretIsRefused) {

@@ -1,0 +1,42 @@
+#include "common/util/output_path.h"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <filesystem>
+#include <stdexcept>
+
+namespace portico {
+
+namespace {
+// What common/image/image_writer.h writes: linear formats and 8-bit ones.
+constexpr std::array<std::string_view, 7> kImageExtensions{".png", ".exr", ".hdr", ".tif", ".tiff", ".jpg", ".jpeg"};
+}  // namespace
+
+void checkOutputPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path output(path);
+  std::string extension = output.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::error_code error;
+  if (fs::is_directory(output, error))
+    throw std::invalid_argument(fmt::format("output {}: is a directory (give a file name ending in .png or .exr)", path));
+  if (std::find(kImageExtensions.begin(), kImageExtensions.end(), extension) == kImageExtensions.end())
+    throw std::invalid_argument(fmt::format("output {}: {} (use .png, .exr, .hdr, .tif or .jpg)", path,
+                                            extension.empty() ? std::string("has no image extension")
+                                                              : fmt::format("unknown image extension {}", extension)));
+  const fs::path parent = output.has_parent_path() ? output.parent_path() : fs::path(".");
+  if (!fs::is_directory(parent, error))
+    throw std::invalid_argument(fmt::format("output {}: directory {} does not exist (create it first)", path,
+                                            parent.string()));
+  // The image is written beside its name and renamed: the directory must be writable.
+  if (::faccessat(AT_FDCWD, parent.c_str(), W_OK | X_OK, AT_EACCESS) != 0)
+    throw std::invalid_argument(fmt::format("output {}: directory {} is not writable by uid {}", path, parent.string(),
+                                            ::geteuid()));
+}
+
+}  // namespace portico
