@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <stdexcept>
 
 #include "common/net/curve_keys.h"
@@ -32,7 +33,12 @@ std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder&
       throw std::runtime_error(fmt::format("no answer from {} within {:g} s: wrong --keys, or coordinator down",
                                            endpoint_, timeout_.count() / 1000.0));
     zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 1, left);
+    try {
+      zmq::poll(items, 1, left);
+    } catch (const zmq::error_t& e) {
+      if (e.num() != EINTR) throw;
+      continue;   // a signal (Ctrl-C): the answer still comes; the caller decides what the signal means
+    }
     if (!(items[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t frame;
     if (!socket_.recv(frame, zmq::recv_flags::dontwait)) continue;
