@@ -181,10 +181,16 @@ void Coordinator::runRound() {
   if (resultsArrived) inRound([&] { dispatch(); });
 
   size_t handled = 0;
+  bool requeued = false;
   const bool committed = inRound([&] {
-    if (requeueOwed_) requeueUntracedLeases();   // what a failed round's undo could not write
     for (; handled < arrived.size(); ++handled)
       handle(arrived[handled].identity, *arrived[handled].message, arrived[handled].bytes);
+    // What a failed round's undo could not write. After the messages: the
+    // leases whose Results just arrived are no longer counted as traced.
+    if (requeueOwed_) {
+      requeueUntracedLeases();
+      requeued = true;
+    }
     security_->logConnectionEvents();
     const int64_t now = nowMs();
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
@@ -198,6 +204,7 @@ void Coordinator::runRound() {
     }
     dispatch();
   });
+  if (committed && requeued) requeueOwed_ = false;
   // A write the disk refused undid the round at message `handled` (its work
   // requeued): the messages after it are handled one by one, so that status
   // requests, heartbeats and file fetches are answered even on a full disk.

@@ -255,6 +255,8 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
     const std::string requeued = "lease " + std::to_string(assign->envelope().getAssign().getLease()) + " (";
     for (int i = 0; i < 100 && readFile(dir / "coordinator.log").find(requeued) == std::string::npos; ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    // And once the cell's back-off (0.5 s, then 1 s) has passed: it gets the same cell.
+    std::this_thread::sleep_for(std::chrono::milliseconds((500 << doomed) + 200));
   }
   const auto status = cluster.wait(job);
   ASSERT_EQ(attempts, (std::vector<uint32_t>{1, 2, 3})) << readFile(dir / "coordinator.log");
@@ -273,30 +275,32 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
 // fail at the third loss as "lost 3 times".
 TEST_F(Resilience, ThreeOutsideKillsOfHealthyWorkersDoNotFailTheJob) {
   const fs::path dir = dir_ / "outside-kills";
-  LocalCluster cluster(dir, 0);
+  ClusterOptions options;
+  options.coordinatorExtra = {"--log-level", "debug"};   // each lease is logged as it is sent
+  LocalCluster cluster(dir, 0, {}, options);
   const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-  const auto holdsLeases = [&](const std::string& name) {
-    for (const auto& worker : cluster.status(job)["workers"])
-      if (worker.value("name", "") == name && worker.value("leases", 0) > 0) return true;
-    return false;
-  };
   for (size_t k = 0; k < 3; ++k) {
-    cluster.addWorker({});
     const std::string name = "w" + std::to_string(k);
-    ASSERT_TRUE(waitUntil([&] { return holdsLeases(name); }, std::chrono::seconds(20)))
+    cluster.addWorker({});
+    // Killed the moment its first lease is sent: it dies holding it.
+    ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("-> " + name + ":") != std::string::npos; },
+                          std::chrono::seconds(20)))
         << readFile(dir / "coordinator.log");
     cluster.worker(k).kill(SIGKILL);
     cluster.worker(k).wait();
-    // The next worker joins once this one is given up (its leases requeued).
     ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("worker " + name + " presumed dead") !=
                                        std::string::npos; },
                           std::chrono::seconds(20)))
         << readFile(dir / "coordinator.log");
+    // The next worker comes once the lost cells' back-off (0.5 s, 1 s) has
+    // passed, so that it is given the same cells, on their next attempt.
+    std::this_thread::sleep_for(std::chrono::milliseconds((500 << k) + 200));
   }
   cluster.addWorker({});
   const auto status = cluster.wait(job);
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
   expectSameAsReference(dir / "image.exr");
+  EXPECT_NE(readFile(dir / "coordinator.log").find("attempt 3"), std::string::npos) << readFile(dir / "coordinator.log");
 }
 
 // The other side: a cell that crashes every worker tracing it. Each worker
@@ -312,8 +316,15 @@ TEST_F(Resilience, ACellThatCrashesItsWorkersFailsTheJobAfterThreeReportedCrashe
     ASSERT_TRUE(waitUntil([&] { return !cluster.worker(k).running(); }, std::chrono::seconds(20)))
         << readFile(dir / ("worker-" + std::to_string(k) + ".log"));
     EXPECT_EQ(cluster.worker(k).exitCode(), 128 + SIGSEGV);
-    // The cell's back-off (0.5 s, then 1 s) passes: the next worker gets it again.
-    std::this_thread::sleep_for(std::chrono::milliseconds(1200 << k));
+    // Its other leases are lost with it; once it is given up, the next
+    // worker comes after the cell's back-off (doubling with the crash and
+    // the loss of each round: 1 s, then 4 s), so that it gets the same cell.
+    if (k == 2) break;
+    const std::string name = "w" + std::to_string(k);
+    ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("worker " + name + " presumed dead") !=
+                                       std::string::npos; },
+                          std::chrono::seconds(20)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000 << (2 * k)));
   }
   const auto status = cluster.wait(job);
   EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2) << readFile(dir / "coordinator.log");
