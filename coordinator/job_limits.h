@@ -10,7 +10,7 @@
 
 namespace portico::limits {
 
-// Photons of a job: 500 000 emission batches of 20 000 at most.
+// Photons of a job (queued as at most ~50 000 emission batches: job_planner.h).
 constexpr uint64_t kMaxPhotons = 10'000'000'000;
 constexpr uint32_t kMaxSpp = 65536;
 // Rays spawned per camera hit: each multiplies a camera sample's work.

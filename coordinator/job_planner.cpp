@@ -88,12 +88,17 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
   const auto& lights = scene.lights();
   const std::vector<uint64_t> share = photonSharesOfLights(lights, spec.getPhotons());
 
+  // Past a billion photons the batches grow, so that a job is at most
+  // ~kMostEmitBatches rows (queued in about a second): a photon's path
+  // depends on its id alone, so how they are cut into batches changes no bit.
+  const uint64_t perBatch =
+      std::max<uint64_t>(kPhotonsPerEmitBatch, (spec.getPhotons() + kMostEmitBatches - 1) / kMostEmitBatches);
   uint64_t nextPath = 0;
   for (size_t i = 0; i < lights.size(); ++i) {
-    for (uint64_t first = 0; first < share[i]; first += kPhotonsPerEmitBatch) {
+    for (uint64_t first = 0; first < share[i]; first += perBatch) {
       if (stop && stop->load(std::memory_order_relaxed))
         throw std::runtime_error("the coordinator is stopping: job not queued");
-      const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(kPhotonsPerEmitBatch, share[i] - first));
+      const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(perBatch, share[i] - first));
       capnp::MallocMessageBuilder message;
       auto emit = message.initRoot<wire::RayBatch>().initEmit();
       emit.setLight(static_cast<uint32_t>(i));

@@ -16,6 +16,7 @@ namespace portico {
 // Photons handed to one emission batch, camera samples to one camera batch:
 // each about a tenth to a half of a second of tracing on one core.
 constexpr uint32_t kPhotonsPerEmitBatch = 20000;
+constexpr uint64_t kMostEmitBatches = 50000;   // a billion photons; beyond, batches grow
 constexpr uint32_t kSamplesPerCameraBatch = 16384;
 
 // Checks a spec against its scene, filling defaults (image size from the
