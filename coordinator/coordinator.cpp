@@ -300,7 +300,7 @@ bool Coordinator::isDiskTrouble(const std::exception& e) {
 }
 
 // A full disk fails every round that writes: without a pause the
-// coordinator leased, failed and logged twenty times a second. Leasing
+// coordinator would lease, fail and log twenty times a second. Leasing
 // waits 0.25 s, then twice as long after each failed round (at most 8 s);
 // one line every 10 s counts the rounds undone meanwhile. Nothing is lost:
 // an undone round's leases and Results go back to the queue, to be traced

@@ -84,7 +84,7 @@ TEST_F(Bounds, TheClientRefusesNumbersOutOfRangeBeforeConnecting) {
 }
 
 // A hand-made Submit beyond the bounds is refused by the coordinator, which
-// still answers at once (2^64-1 photons used to keep it queueing forever).
+// still answers at once (2^64-1 photons would keep it queueing forever).
 TEST_F(Bounds, TheCoordinatorRefusesAHandMadeSpecBeyondTheBoundsAndGoesOnAnswering) {
   const fs::path dir = dir_ / "coordinator";
   LocalCluster cluster(dir, 0);
@@ -147,8 +147,8 @@ TEST_F(Bounds, DuplicatePortalsAreRefusedAtImport) {
 }
 
 // Emission of 1e14 W/m^2/sr: its pixels are beyond the fixed-point film's
-// range (2.7e11). The job fails with a message saying so; it used to finish
-// with wrapped, negative pixels and 0 non-finite contributions.
+// range (2.7e11). The job fails with a message saying so, rather than
+// finish with wrapped, negative pixels.
 TEST_F(Bounds, ALightBrightEnoughToOverflowTheFilmFailsTheJobSayingSo) {
   const fs::path dir = dir_ / "bright";
   ASSERT_EQ(importEditedTwoRooms(dir,

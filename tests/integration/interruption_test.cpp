@@ -45,8 +45,8 @@ class Interruption : public ::testing::Test {
 };
 fs::path Interruption::dir_, Interruption::store_;
 
-// `portico cancel` used to mark the job cancelled while its worker traced
-// on for as long as the lease lasted.
+// Without the Cancel to its worker, `portico cancel` would mark the job
+// cancelled while the worker traced on for as long as the lease lasted.
 TEST_F(Interruption, CancellingAJobStopsItsRunningLeaseWithinASecond) {
   const fs::path dir = dir_ / "cancel";
   LocalCluster cluster(dir, 1);

@@ -46,7 +46,7 @@ class JobDatabase : public ::testing::Test {
 };
 fs::path JobDatabase::dir_, JobDatabase::store_;
 
-// Before: the coordinator started with no jobs and deleted the batch files.
+// Starting would forget the job and delete its batch files.
 TEST_F(JobDatabase, AJobsDbThatLostItsWalOrWasTruncatedIsRefusedAndNothingIsDeleted) {
   for (const std::string loss : {"wal deleted", "truncated to 0"}) {
     SCOPED_TRACE(loss);
@@ -67,7 +67,7 @@ TEST_F(JobDatabase, AJobsDbThatLostItsWalOrWasTruncatedIsRefusedAndNothingIsDele
   }
 }
 
-// Before: every failure to open jobs.db was "in use by another process".
+// Only a lock is "in use by another process"; every other failure says its own cause.
 TEST_F(JobDatabase, AJobsDbThatCannotBeUsedIsReportedWithItsRealCause) {
   const fs::path garbage = dir_ / "garbage";
   fs::create_directories(garbage);

@@ -271,8 +271,8 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
 // Healthy workers killed from outside (SIGKILL, as the OOM killer or a
 // preempted node does) while holding leases, three times in a row: a lost
 // worker is not a cell that kills its workers. The job waits out a back-off
-// between the retries and finishes with the reference's bits; it used to
-// fail at the third loss as "lost 3 times".
+// between the retries and finishes with the reference's bits, where one
+// limit for both kinds of failure would fail it at the third loss.
 TEST_F(Resilience, ThreeOutsideKillsOfHealthyWorkersDoNotFailTheJob) {
   const fs::path dir = dir_ / "outside-kills";
   ClusterOptions options;
@@ -337,7 +337,7 @@ TEST_F(Resilience, ACellThatCrashesItsWorkersFailsTheJobAfterThreeReportedCrashe
 // leases fail, but the coordinator cannot read the store either, so the
 // failures are the store's, not the cells': nothing is counted, the cells
 // wait with back-off, and once the store is back the job finishes with the
-// reference's bits. Three failures milliseconds apart used to fail it.
+// reference's bits, instead of failing after three failures milliseconds apart.
 TEST_F(Resilience, AStoreThatVanishesForAWhileDoesNotFailTheJob) {
   const fs::path dir = dir_ / "store-away";
   const fs::path store = dir / "store", away = dir / "store.away";
@@ -363,8 +363,8 @@ TEST_F(Resilience, AStoreThatVanishesForAWhileDoesNotFailTheJob) {
 // SQLITE_FULL on the WAL); the coordinator undoes each failed round,
 // pauses leasing with back-off and logs a line now and then, counts no
 // failure against any cell, and resumes by itself when space is freed: the
-// image has the reference's bits. It used to log ~20 lines a second, count
-// the failures against the cells and stall until restarted. The tmpfs is
+// image has the reference's bits: no twenty lines a second, no failure
+// counted against a cell, no stall until a restart. The tmpfs is
 // mounted in a mount namespace of this test process alone, so it goes with
 // the process; skipped where mounting is not allowed.
 TEST_F(Resilience, AFullDiskPausesTheJobWhichResumesByItselfWithTheSameBits) {

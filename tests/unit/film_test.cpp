@@ -33,9 +33,9 @@ TEST(Film, NonFiniteAndNegativeContributionsAddNothing) {
   EXPECT_NEAR(fromFixed(toFixed(0.25f)), 0.25f, 1e-7f);
 }
 
-// Sums used to wrap past 2^63 into negative pixels (a contribution of 1e14
-// did it alone). A contribution or a sum beyond the film's range is
-// refused, and nothing of it is added.
+// An int64 sum wraps past 2^63 into a negative pixel (a contribution of
+// 1e14 alone gets there): a contribution or a sum beyond the film's range
+// is refused instead, and nothing of it is added.
 TEST(Film, ASumBeyondTheFilmsRangeIsRefusedNeverWrapped) {
   FilmAccumulator film;
   EXPECT_FALSE(film.add(0, Vec3(1e14f, 1, 1)));
