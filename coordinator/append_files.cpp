@@ -15,6 +15,14 @@
 
 namespace portico {
 
+namespace {
+// Full, over quota, or failing: space or the device may come back.
+[[noreturn]] void throwWriteError(int code, const std::string& what) {
+  if (code == ENOSPC || code == EDQUOT || code == EIO) throw DiskWriteError(what);
+  throw std::runtime_error(what);
+}
+}  // namespace
+
 AppendFiles::AppendFiles(std::filesystem::path directory, Naming naming, std::string what,
                          std::function<int64_t(Key)> committedEnd)
     : directory_(std::move(directory)), naming_(naming), what_(std::move(what)), committedEnd_(std::move(committedEnd)) {}
@@ -50,10 +58,11 @@ AppendFiles::OpenFile& AppendFiles::open(Key key) {
   if (auto it = files_.find(key); it != files_.end()) return it->second;
   std::error_code error;
   std::filesystem::create_directories(directory_, error);
-  if (error) throw std::runtime_error(fmt::format("{}: cannot be created ({})", directory_.string(), error.message()));
+  if (error)
+    throwWriteError(error.value(), fmt::format("{}: cannot be created ({})", directory_.string(), error.message()));
   const std::string path = pathOf(key).string();
   const int descriptor = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (descriptor < 0) throw std::runtime_error(fmt::format("{}: cannot be opened ({})", path, std::strerror(errno)));
+  if (descriptor < 0) throwWriteError(errno, fmt::format("{}: cannot be opened ({})", path, std::strerror(errno)));
   // Bytes past the last recorded batch belong to Results that never
   // committed: drop them, and write from there.
   const int64_t end = committedEnd_(key);
@@ -91,9 +100,11 @@ FileExtent AppendFiles::append(Key key, std::string_view bytes) {
     const ssize_t n = ::pwrite(file.descriptor, bytes.data() + written, bytes.size() - written,
                                off_t(extent.offset + int64_t(written)));
     if (n < 0 && errno == EINTR) continue;
-    if (n <= 0)
-      throw std::runtime_error(fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(),
-                                           bytes.size(), extent.offset, n < 0 ? std::strerror(errno) : "no progress"));
+    if (n <= 0) {
+      const int code = n < 0 ? errno : ENOSPC;   // no progress: nothing more fits
+      throwWriteError(code, fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(),
+                                        bytes.size(), extent.offset, std::strerror(code)));
+    }
     written += size_t(n);
   }
   // Advanced whether or not the caller's transaction commits: a rolled-back

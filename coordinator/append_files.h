@@ -48,6 +48,12 @@ struct DamagedFileError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A write the disk refused for now (full, over quota, failing): the caller
+// retries later rather than blame what it was writing.
+struct DiskWriteError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 class AppendFiles {
  public:
   // A file: the job's, and which of its segments (always 0 when unsegmented).
@@ -63,8 +69,8 @@ class AppendFiles {
   AppendFiles(const AppendFiles&) = delete;
   AppendFiles& operator=(const AppendFiles&) = delete;
 
-  // Writes the batch at the end of the file; throws std::runtime_error
-  // naming the file when the write fails.
+  // Writes the batch at the end of the file; throws DiskWriteError naming
+  // the file when the disk is full or failing, std::runtime_error otherwise.
   FileExtent append(Key key, std::string_view bytes);
   // The batch at `extent`; throws DamagedFileError naming the file when it
   // is missing, short, or fails its CRC.

@@ -4,7 +4,12 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <set>
 
@@ -180,8 +185,17 @@ void Coordinator::runRound() {
   }
   if (resultsArrived) inRound([&] { dispatch(); });
 
-  inRound([&] {
-    for (const Incoming& in : arrived) handle(in.identity, *in.message, in.bytes, in.role);
+  size_t handled = 0;
+  bool requeued = false;
+  const bool committed = inRound([&] {
+    for (; handled < arrived.size(); ++handled)
+      handle(arrived[handled].identity, *arrived[handled].message, arrived[handled].bytes, arrived[handled].role);
+    // What a failed round's undo could not write. After the messages: the
+    // leases whose Results just arrived are no longer counted as traced.
+    if (requeueOwed_) {
+      requeueUntracedLeases();
+      requeued = true;
+    }
     security_->logConnectionEvents();
     const int64_t now = nowMs();
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
@@ -195,9 +209,16 @@ void Coordinator::runRound() {
     }
     dispatch();
   });
+  if (committed && requeued) requeueOwed_ = false;
+  // A write the disk refused undid the round at message `handled` (its work
+  // requeued): the messages after it are handled one by one, so that status
+  // requests, heartbeats and file fetches are answered even on a full disk.
+  if (!committed)
+    for (size_t i = handled + 1; i < arrived.size(); ++i)
+      handle(arrived[i].identity, *arrived[i].message, arrived[i].bytes, arrived[i].role);
 }
 
-void Coordinator::inRound(const std::function<void()>& work) {
+bool Coordinator::inRound(const std::function<void()>& work) {
   inRound_ = true;
   outbox_.clear();
   roundLeases_.clear();
@@ -211,14 +232,24 @@ void Coordinator::inRound(const std::function<void()>& work) {
     round.commit();
     committed = true;
   } catch (const std::exception& e) {
-    spdlog::error("could not commit what the coordinator just did ({}): its leases are taken back and its "
-                  "results requeued",
-                  e.what());
+    if (isDiskTrouble(e))
+      noteDiskTrouble(e.what());
+    else
+      spdlog::error("could not commit what the coordinator just did ({}): its leases are taken back and its "
+                    "results requeued",
+                    e.what());
   }
   inRound_ = false;
   if (!committed) {
     undoRound();
-    return;
+    return false;
+  }
+  if (diskBackoffMs_ > 0 && !roundResults_.empty()) {
+    spdlog::info("jobs.db and its files can be written again ({} rounds undone in all); leasing resumes",
+                 diskFailures_);
+    diskBackoffMs_ = 0;
+    diskFailures_ = 0;
+    diskPausedUntilMs_ = 0;
   }
   for (Outgoing& out : outbox_) transmit(out.identity, out.frame);
   outbox_.clear();
@@ -227,6 +258,7 @@ void Coordinator::inRound(const std::function<void()>& work) {
   } catch (const std::exception& e) {
     spdlog::warn("could not delete consumed batch files ({}); trying again after the next commit", e.what());
   }
+  return true;
 }
 
 // The round's transaction rolled back (a full disk): jobs.db is as it was
@@ -245,19 +277,49 @@ void Coordinator::undoRound() {
     if (auto worker = workers_.find(identity); worker != workers_.end()) worker->second.leases.erase(lease);
   try {
     sql::Transaction tx(store_.database());
-    for (const LeaseRecord& lease : store_.openLeases()) {
-      auto worker = workers_.find(lease.worker);
-      if (worker == workers_.end() || !worker->second.leases.count(lease.id)) store_.requeueLease(lease.id);
-    }
+    requeueUntracedLeases();
     tx.commit();
+    requeueOwed_ = false;
   } catch (const std::exception& e) {
-    spdlog::error("could not requeue the leases lost with it either ({}); they are requeued when this "
-                  "coordinator restarts",
-                  e.what());
+    // A full disk refuses this too: the next round that commits does it.
+    requeueOwed_ = true;
+    if (!isDiskTrouble(e))
+      spdlog::error("could not requeue the leases lost with it either ({}); the next round tries again", e.what());
   }
   for (Outgoing& out : outbox_)
     if (!out.refersToRound) transmit(out.identity, out.frame);
   outbox_.clear();
+}
+
+void Coordinator::requeueUntracedLeases() {
+  for (const LeaseRecord& lease : store_.openLeases()) {
+    auto worker = workers_.find(lease.worker);
+    if (worker == workers_.end() || !worker->second.leases.count(lease.id)) store_.requeueLease(lease.id);
+  }
+}
+
+bool Coordinator::isDiskTrouble(const std::exception& e) {
+  if (dynamic_cast<const DiskWriteError*>(&e)) return true;
+  const auto* sqlite = dynamic_cast<const sql::Error*>(&e);
+  return sqlite && sqlite->diskTrouble();
+}
+
+// A full disk fails every round that writes: without a pause the
+// coordinator would lease, fail and log twenty times a second. Leasing
+// waits 0.25 s, then twice as long after each failed round (at most 8 s);
+// one line every 10 s counts the rounds undone meanwhile. Nothing is lost:
+// an undone round's leases and Results go back to the queue, to be traced
+// again with the same bits, and none counts against a cell.
+void Coordinator::noteDiskTrouble(const std::string& what) {
+  diskBackoffMs_ = std::clamp<int64_t>(diskBackoffMs_ * 2, 250, 8000);
+  diskPausedUntilMs_ = nowMs() + diskBackoffMs_;
+  ++diskFailures_;
+  if (diskFailures_ == 1 || nowMs() - diskLoggedMs_ >= 10000) {
+    diskLoggedMs_ = nowMs();
+    spdlog::error("cannot write jobs.db or its files ({}); nothing is lost: the round is undone, its work "
+                  "requeued; leasing resumes in {:.2f} s ({} rounds undone so far)",
+                  what, diskBackoffMs_ / 1000.0, diskFailures_);
+  }
 }
 
 void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes,
@@ -307,6 +369,12 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
   } catch (const kj::Exception& e) {
     spdlog::warn("dropped a malformed message from {}: {}", shortId(identity), e.getDescription().cStr());
   } catch (const std::exception& e) {
+    if (isDiskTrouble(e)) {
+      if (inRound_) throw;   // the whole round is undone (inRound), its work requeued
+      ++diskFailures_;       // a message handled after such a round: counted, logged with them
+      requeueOwed_ = true;   // a lease it let go of may still be open in jobs.db
+      return;
+    }
     spdlog::warn("dropped a message from {}: {}", shortId(identity), e.what());
   }
 }
@@ -382,6 +450,7 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
 }
 
 void Coordinator::dispatch() {
+  if (nowMs() < diskPausedUntilMs_) return;   // the disk refused the last round's writes
   for (auto& [identity, worker] : workers_) {
     for (size_t k = 0; k < WorkerInfo::kMostLeasesInFlight && worker.wantsLease(); ++k) {
       const Assignment assigned = assignWork(worker);
@@ -392,7 +461,15 @@ void Coordinator::dispatch() {
 }
 
 Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
-  const auto candidates = store_.pendingCells(kLeaseCandidates);
+  auto candidates = store_.pendingCells(kLeaseCandidates);
+  // Cells whose last lease failed or was lost wait their back-off out.
+  if (!retries_.empty()) {
+    const int64_t now = nowMs();
+    std::erase_if(candidates, [&](const PendingCell& c) {
+      const auto retry = retries_.find({c.job, c.cell});
+      return retry != retries_.end() && retry->second.notBeforeMs > now;
+    });
+  }
   if (candidates.empty()) return Assignment::NothingLeft;
   JobContext* job;
   try {
@@ -504,6 +581,9 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     sql::Transaction tx(store_.database());
     store_.completeLease(leaseId);
     if (active) {
+      for (auto counter : result.getCounters())
+        if (std::string_view(counter.getName().cStr()) == kFilmOutOfRangeCounter && counter.getValue() != 0)
+          throw FilmRangeError();
       const size_t cellCount = context->scene->cells().size();
       for (auto crossing : result.getCrossings()) {
         if (crossing.getCell() >= cellCount)
@@ -530,7 +610,8 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;
         for (auto pixel : result.getFilm())
-          sums[pixel.getPixel()] += FixedRgb{pixel.getR(), pixel.getG(), pixel.getB()};
+          if (!sums[pixel.getPixel()].addWithinRange(FixedRgb{pixel.getR(), pixel.getG(), pixel.getB()}))
+            throw FilmRangeError();
         auto spec = context->reader();
         store_.addFilm(lease->job, sums, uint64_t(spec.getWidth()) * spec.getHeight());
       }
@@ -538,7 +619,14 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
       store_.addCounter(lease->job, "leases.completed", 1);
     }
     tx.commit();
+  } catch (const FilmRangeError& e) {
+    // Deterministic: every retry would overflow the same pixel.
+    failJob(lease->job, fmt::format("cell {}: {}", lease->cell, e.what()));
+    return;
   } catch (const std::exception& e) {
+    // A full disk is not the cell's fault: the round is undone and the
+    // lease requeued (inRound).
+    if (isDiskTrouble(e)) throw;
     // Nothing of a malformed result was kept (the transaction rolled back);
     // its batches go back to the queue, and a cell that keeps producing
     // bad results fails its job like any failing cell.
@@ -546,6 +634,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     recordCellFailure(*lease, fmt::format("cell {}: {}", lease->cell, e.what()));
     return;
   }
+  retries_.erase({lease->job, lease->cell});
   if (active) advanceIfPhaseDone(lease->job);
 }
 
@@ -566,6 +655,21 @@ void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader f
 void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string& message,
                                     std::optional<uint32_t> failedCell) {
   const uint32_t cell = failedCell.value_or(lease.cell);
+  delayRetry(lease.job, cell);
+  // A store the coordinator cannot read either (unmounted, moved away) is
+  // not the cell's fault: the lease waits, uncounted, for it to come back.
+  if (const auto unreadable = storeUnreadable(lease.job, cell)) {
+    {
+      sql::Transaction tx(store_.database());
+      store_.requeueLease(lease.id);
+      tx.commit();
+    }
+    if (auto leftOut = storeLog_.admit(fmt::format("{}", lease.job)))
+      spdlog::warn("job {}: lease {} failed ({}) while its store cannot be read ({}): requeued, not counted "
+                   "against cell {}{}",
+                   lease.job, lease.id, message, *unreadable, cell, leftOutSuffix(*leftOut));
+    return;
+  }
   // A cell that failed is not carried in other cells' leases again: its
   // retries are its own, and its failures do not fail innocent leases.
   failedCells_.insert({lease.job, cell});
@@ -582,6 +686,45 @@ void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string&
   // (a corrupt cell file) would fail forever: give up after a few attempts.
   if (failures >= options_.maxCellFailures)
     failJob(lease.job, fmt::format("{} (failed {} times)", message, failures));
+}
+
+// 0.5 s after the first failure or loss, doubling to at most 30 s: three
+// failures of a cell are never milliseconds apart, and a worker lost to
+// something passing (a store remounted, memory short) finds it passed.
+void Coordinator::delayRetry(uint64_t job, uint32_t cell) {
+  Retry& retry = retries_[{job, cell}];
+  retry.count = std::min(retry.count + 1, 16);
+  retry.notBeforeMs = nowMs() + std::min<int64_t>(int64_t(500) << (retry.count - 1), 30000);
+}
+
+std::optional<std::string> Coordinator::storeUnreadable(uint64_t job, uint32_t cell) {
+  std::string directory;
+  try {
+    const JobContext& ctx = context(job);
+    directory = ctx.scene->directory();
+    for (const std::string& path : {directory + "/scene.db", ctx.scene->cellPath(cell)})
+      if (::access(path.c_str(), R_OK) != 0) return fmt::format("{}: {}", path, std::strerror(errno));
+  } catch (const std::exception& e) {
+    return std::string(e.what());
+  }
+  return std::nullopt;
+}
+
+// A job that ended (cancelled, failed) has its leases dropped; the workers
+// tracing them stop between two batches instead of finishing work whose
+// Results would be dropped, and their slots are free at once.
+void Coordinator::recallLeasesOf(uint64_t job) {
+  std::set<std::string> holders;
+  for (const LeaseRecord& lease : store_.openLeases()) {
+    if (lease.job != job) continue;
+    holders.insert(lease.worker);
+    if (auto worker = workers_.find(lease.worker); worker != workers_.end()) worker->second.leases.erase(lease.id);
+  }
+  for (const std::string& identity : holders) {
+    capnp::MallocMessageBuilder message;
+    message.initRoot<wire::Envelope>().initCancel().setJob(job);
+    send(identity, message);
+  }
 }
 
 void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request) {
@@ -689,7 +832,7 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     {
       sql::Transaction tx(store_.database());
       job = store_.createJob(packed, wallMs());
-      queuePhotonEmission(store_, job, builder.asReader(), *scene);
+      queuePhotonEmission(store_, job, builder.asReader(), *scene, &stopping_);
       tx.commit();
     }
     JobContext context{std::move(spec), std::move(scene)};
@@ -738,6 +881,7 @@ void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Rea
     return;
   }
   if (isActive(job->state)) {
+    recallLeasesOf(job->id);
     sql::Transaction tx(store_.database());
     store_.dropJobWork(job->id);
     store_.setJobState(job->id, JobState::Cancelled, wallMs(), "cancelled by the user");
@@ -761,11 +905,15 @@ void Coordinator::releaseWorker(const std::string& identity, const std::string& 
     }
     spdlog::warn("lease {} (job {} cell {}, attempt {}) requeued: worker {} {}", lease.id, lease.job, lease.cell,
                  lease.attempt, it->second.name, reason);
-    // A cell whose work has been lost with its worker this many times is
-    // likely what kills them (a crash in its geometry, memory it exhausts):
-    // stop rather than feed it workers forever.
-    if (lease.attempt >= uint32_t(options_.maxCellFailures))
-      failJob(lease.job, fmt::format("cell {}: its lease was lost {} times, each time with its worker (last: {} {})",
+    // Workers die of other things than their cell (a kill from outside,
+    // the OOM killer, a node taken back), which a lost lease cannot tell
+    // apart: the cell waits a while, longer each time, and only a cell
+    // lost --max-lost-leases times is taken for what kills its workers (a
+    // crash in its geometry, memory it exhausts) and fails its job.
+    delayRetry(lease.job, lease.cell);
+    if (lease.attempt >= uint32_t(options_.maxLostLeases))
+      failJob(lease.job, fmt::format("cell {}: its lease was lost {} times, each time with its worker (last: {} {}); "
+                                     "a cell that kills its workers? (--max-lost-leases)",
                                      lease.cell, lease.attempt, it->second.name, reason));
   }
   spdlog::info("worker {} {}", it->second.name, reason);
@@ -860,6 +1008,7 @@ void Coordinator::restartPhotonPass(uint64_t jobId, const std::string& reason) {
 void Coordinator::failJob(uint64_t jobId, const std::string& error) {
   // The first reason stands: a job fails once.
   if (auto job = store_.job(jobId); !job || !isActive(job->state)) return;
+  recallLeasesOf(jobId);
   sql::Transaction tx(store_.database());
   store_.dropJobWork(jobId);
   store_.setJobState(jobId, JobState::Failed, wallMs(), error);

@@ -31,7 +31,11 @@ struct CoordinatorOptions {
   int heartbeatMs = 1000;
   int livenessMs = 10000;          // silence after which a worker is presumed dead
   int64_t maxLeaseWork = 50000;    // most rays per lease; each worker's leases are sized to ~1 s of its measured speed
-  int64_t maxCellFailures = 3;     // failed leases of one cell before its job fails
+  int64_t maxCellFailures = 3;     // failures workers report for one cell before its job fails
+  // Leases of one cell lost with their worker (killed from outside, out of
+  // memory, a node gone: nothing reported) before its job fails. Healthy
+  // workers are lost too, so it is higher than maxCellFailures.
+  int64_t maxLostLeases = 10;
   std::string keysDirectory;       // CURVE keys (`portico keys generate`); required beyond loopback
   // Fault injection for recovery tests: every Nth transaction of the main
   // loop (Coordinator::inRound) that applies Results fails to commit (0: never).
@@ -82,6 +86,20 @@ class Coordinator {
   // `failedCell`: which of the lease's cells failed (default: its own).
   void recordCellFailure(const LeaseRecord& lease, const std::string& message,
                          std::optional<uint32_t> failedCell = std::nullopt);
+  // A failed or lost lease's cell waits before it is leased again, longer
+  // each time (retryDelayMs); a Result of the cell clears it.
+  void delayRetry(uint64_t job, uint32_t cell);
+  // Whether the coordinator can read the job's store itself: when it
+  // cannot, a failure to read it is the store's (unmounted, moved), not the cell's.
+  std::optional<std::string> storeUnreadable(uint64_t job, uint32_t cell);
+  // The workers tracing leases of a job that ended stop them (Cancel).
+  void recallLeasesOf(uint64_t job);
+  // A transaction failed for want of disk (full, failing): leasing pauses,
+  // with back-off, and the log says so once in a while, not every round.
+  static bool isDiskTrouble(const std::exception& e);
+  void noteDiskTrouble(const std::string& what);
+  // Leases jobs.db holds open that no worker is tracing go back to the queue.
+  void requeueUntracedLeases();
   void advanceIfPhaseDone(uint64_t job);
   void finishJob(uint64_t job);
   void failJob(uint64_t job, const std::string& error);
@@ -98,7 +116,8 @@ class Coordinator {
   // transaction, committed before anything is sent (runRound in coordinator.cpp).
   void runRound();
   // Runs `work` in one transaction; sends what it sent once that commits.
-  void inRound(const std::function<void()>& work);
+  // False: the round was undone (undoRound).
+  bool inRound(const std::function<void()>& work);
   void undoRound();
 
   CoordinatorOptions options_;
@@ -114,6 +133,20 @@ class Coordinator {
   int64_t lastHeartbeatMs_ = 0;
   std::set<std::pair<uint64_t, uint32_t>> failedCells_;   // (job, cell) that failed a lease
   LogThrottle refusals_;   // messages refused for their sender's role: a line a minute per peer and type
+  struct Retry {
+    int count = 0;              // failures and losses since the cell's last Result
+    int64_t notBeforeMs = 0;    // steady clock
+  };
+  std::map<std::pair<uint64_t, uint32_t>, Retry> retries_;   // (job, cell)
+  // Disk trouble: no leasing before diskPausedUntilMs_ (steady clock); the
+  // pause doubles with each failed round; requeueUntracedLeases is owed
+  // when undoRound could not do it.
+  int64_t diskPausedUntilMs_ = 0;
+  int64_t diskBackoffMs_ = 0;
+  int64_t diskFailures_ = 0;          // failed rounds since the last line logged about them
+  int64_t diskLoggedMs_ = 0;
+  bool requeueOwed_ = false;
+  LogThrottle storeLog_{std::chrono::seconds(10)};
   // The round in progress (inRound): its replies, and the leases it opened
   // (worker identity, lease), for undoing the coordinator's memory if its
   // commit fails; the leases whose Results it applied, which decide where

@@ -11,9 +11,31 @@
 #include "common/accel/accelerator.h"
 #include "common/net/message.h"
 #include "common/transport/photon_shares.h"
+#include "common/scene/portal_geometry.h"
 #include "common/transport/sampling.h"
+#include "coordinator/job_limits.h"
 
 namespace portico {
+
+namespace {
+template <typename T>
+void requireAtMost(const char* what, T value, T most) {
+  if (value > most) throw std::invalid_argument(fmt::format("{} {} is too large: at most {}", what, value, most));
+}
+
+// Every portal is tested by every ray in its cells: a cell with too many
+// (a door repeated a million times) makes leases that never end. Counting
+// is linear and needs a counter per cell; duplicates are found at import
+// and by `scene info` (common/scene/scene_validation.h).
+void checkPortalsPerCell(const SceneStore& scene) {
+  std::vector<uint32_t> perCell(scene.cells().size(), 0);
+  for (const Portal& portal : scene.portals())
+    for (uint32_t cell : {portal.cellA, portal.cellB})
+      if (cell < perCell.size() && ++perCell[cell] > kMaxPortalsPerCell)
+        throw std::invalid_argument(fmt::format("scene {}: cell {} has more than {} portals (duplicates?)",
+                                                scene.directory(), cell, kMaxPortalsPerCell));
+}
+}  // namespace
 
 void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
   if (scene.lights().empty()) throw std::invalid_argument(fmt::format("scene {} has no lights", scene.directory()));
@@ -21,33 +43,62 @@ void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
     spec.setWidth(scene.camera().width);
     spec.setHeight(scene.camera().height);
   }
-  if (uint64_t(spec.getWidth()) * spec.getHeight() > (uint64_t(1) << 28))
-    throw std::invalid_argument(fmt::format("image {}x{} is too large", spec.getWidth(), spec.getHeight()));
-  if (spec.getSpp() == 0 || spec.getSpp() > 1u << 16)
-    throw std::invalid_argument(fmt::format("spp {} must be between 1 and 65536", spec.getSpp()));
+  requireAtMost("image width", spec.getWidth(), limits::kMaxImageSide);
+  requireAtMost("image height", spec.getHeight(), limits::kMaxImageSide);
+  if (uint64_t(spec.getWidth()) * spec.getHeight() > limits::kMaxImagePixels)
+    throw std::invalid_argument(fmt::format("image {}x{} is too large: at most {} pixels", spec.getWidth(),
+                                            spec.getHeight(), limits::kMaxImagePixels));
+  if (spec.getSpp() == 0 || spec.getSpp() > limits::kMaxSpp)
+    throw std::invalid_argument(fmt::format("spp {} must be between 1 and {}", spec.getSpp(), limits::kMaxSpp));
+  if (uint64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() > limits::kMaxCameraSamples)
+    throw std::invalid_argument(fmt::format("{}x{} pixels at {} spp is too many camera samples: at most {}",
+                                            spec.getWidth(), spec.getHeight(), spec.getSpp(),
+                                            limits::kMaxCameraSamples));
   if (spec.getPhotons() == 0 && spec.getAov() == wire::Aov::RADIANCE)
     throw std::invalid_argument("photons must be at least 1");
+  requireAtMost("photons", spec.getPhotons(), limits::kMaxPhotons);
+  requireAtMost("gather rays", spec.getGather(), limits::kMaxGather);
+  requireAtMost("light samples", spec.getLightSamples(), limits::kMaxLightSamples);
   if (spec.getPhotonK() == 0) spec.setPhotonK(64);
-  if (!(spec.getPhotonRadius() > 0) || !std::isfinite(spec.getPhotonRadius()))
-    throw std::invalid_argument(fmt::format("photon radius {} must be a positive number", spec.getPhotonRadius()));
+  requireAtMost("photon k", spec.getPhotonK(), limits::kMaxPhotonK);
+  if (!(spec.getPhotonRadius() > 0) || !(spec.getPhotonRadius() <= limits::kMaxPhotonRadius))
+    throw std::invalid_argument(fmt::format("photon radius {} must be a number above 0 and at most {} m",
+                                            spec.getPhotonRadius(), limits::kMaxPhotonRadius));
+  if (spec.getLightHops() < -2 || spec.getLightHops() > limits::kMaxLightHops)
+    throw std::invalid_argument(fmt::format("light hops {} must be -2 (automatic), -1 (every light) or 0 to {}",
+                                            spec.getLightHops(), limits::kMaxLightHops));
+  // 0 stands for the default (1); anything else must be a usable multiplier.
+  if (spec.getExposure() != 0 &&
+      !(spec.getExposure() >= limits::kMinExposure && spec.getExposure() <= limits::kMaxExposure))
+    throw std::invalid_argument(fmt::format("exposure {} must be a number from {:g} to {:g}", spec.getExposure(),
+                                            limits::kMinExposure, limits::kMaxExposure));
   // A bad --accel is refused here, naming the problem, rather than failing
   // every cell's lease in the workers.
   if (spec.getAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getAccel().cStr()));
   if (scene.camera().cell >= scene.cells().size())
     throw std::invalid_argument(fmt::format("scene {}: the camera's cell {} does not exist", scene.directory(),
                                             scene.camera().cell));
+  checkPortalsPerCell(scene);
 }
 
-void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, const SceneStore& scene) {
+void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, const SceneStore& scene,
+                         const std::atomic<bool>* stop) {
   // The cell and portal pictures need no light: the photon phase is empty.
   if (spec.getAov() != wire::Aov::RADIANCE) return;
   const auto& lights = scene.lights();
   const std::vector<uint64_t> share = photonSharesOfLights(lights, spec.getPhotons());
 
+  // Past a billion photons the batches grow, so that a job is at most
+  // ~kMostEmitBatches rows (queued in about a second): a photon's path
+  // depends on its id alone, so how they are cut into batches changes no bit.
+  const uint64_t perBatch =
+      std::max<uint64_t>(kPhotonsPerEmitBatch, (spec.getPhotons() + kMostEmitBatches - 1) / kMostEmitBatches);
   uint64_t nextPath = 0;
   for (size_t i = 0; i < lights.size(); ++i) {
-    for (uint64_t first = 0; first < share[i]; first += kPhotonsPerEmitBatch) {
-      const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(kPhotonsPerEmitBatch, share[i] - first));
+    for (uint64_t first = 0; first < share[i]; first += perBatch) {
+      if (stop && stop->load(std::memory_order_relaxed))
+        throw std::runtime_error("the coordinator is stopping: job not queued");
+      const uint32_t count = static_cast<uint32_t>(std::min<uint64_t>(perBatch, share[i] - first));
       capnp::MallocMessageBuilder message;
       auto emit = message.initRoot<wire::RayBatch>().initEmit();
       emit.setLight(static_cast<uint32_t>(i));

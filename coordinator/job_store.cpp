@@ -4,6 +4,7 @@
 #include "common/util/crc32c.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <sqlite3.h>
 #include <zlib.h>
@@ -63,15 +64,20 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
     db_.exec("PRAGMA journal_mode = WAL");
     db_.exec("BEGIN IMMEDIATE");
     db_.exec("COMMIT");
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: in use by another process (is another coordinator running on it?): {}",
-                                         path, e.what()));
+  } catch (const sql::Error& e) {
+    // Only a lock says "another process"; anything else (not a database, a
+    // directory, no permission, a full disk) is said as it is.
+    if (e.code == SQLITE_BUSY || e.code == SQLITE_LOCKED)
+      throw std::runtime_error(fmt::format(
+          "{}: in use by another process (is another coordinator running on it?): {}", path, e.what()));
+    throw std::runtime_error(fmt::format("{}: cannot be used as the job database: {}", path, e.what()));
   }
   sqlite3_busy_timeout(db_.handle(), sql::Database::kBusyTimeoutMs);
   // NORMAL is durable across process crashes in WAL mode (only an OS crash
   // can lose the last commits), which is the failure portico guards against.
   db_.exec("PRAGMA synchronous = NORMAL");
   db_.exec("PRAGMA foreign_keys = ON");
+  refuseFilesOfUnknownJobs(path);
   migrate();
   sqlite3_rollback_hook(
       db_.handle(), [](void* store) { static_cast<JobStore*>(store)->unleasedValid_ = false; }, this);
@@ -80,6 +86,46 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
   // Files left by an earlier run: those no row refers to go.
   for (const AppendFiles::Key& file : batches_.filesOnDisk()) reclaimCandidates_.insert(file);
   reclaimBatchFiles();
+}
+
+// Files of jobs that jobs.db does not hold mean, in general, that jobs.db
+// lost its last commits (its -wal file deleted, the file truncated or
+// replaced by an older copy). Starting anyway would forget those jobs and
+// delete their files; refusing keeps everything for the operator to
+// restore. One case is innocent: a coordinator killed while it queued new
+// jobs leaves the first ray segment of each (written before the
+// transaction that would have created them), for the ids after the last
+// job: those are deleted at start as before.
+void JobStore::refuseFilesOfUnknownJobs(const std::string& path) {
+  const std::vector<AppendFiles::Key> photonFiles = photons_.filesOnDisk(), batchFiles = batches_.filesOnDisk();
+  if (photonFiles.empty() && batchFiles.empty()) return;
+  const bool schema = db_.userVersion() > 0;   // an empty (new or truncated) file has no tables
+  std::set<uint64_t> known;
+  if (schema) {
+    auto& s = db_.prepare("SELECT id FROM jobs");
+    while (s.step()) known.insert(uint64_t(s.columnInt(0)));
+    s.reset();
+  }
+  const uint64_t lastKnown = known.empty() ? 0 : *known.rbegin();
+  std::set<uint64_t> unknown;
+  bool lost = !schema;
+  for (const AppendFiles::Key& file : photonFiles)
+    if (!known.count(file.first)) unknown.insert(file.first), lost = true;   // photons come from committed Results
+  for (const AppendFiles::Key& file : batchFiles)
+    if (!known.count(file.first)) unknown.insert(file.first), lost = lost || file.second > 0;
+  // A killed submit leaves the ids right after the last job, without gaps.
+  uint64_t expected = lastKnown + 1;
+  for (uint64_t job : unknown) lost = lost || job != expected++;
+  if (unknown.empty() || !lost) return;
+  const size_t shown = std::min<size_t>(unknown.size(), 10);
+  throw std::runtime_error(fmt::format(
+      "{} holds {} jobs, but {}-photons/ and {}-batches/ hold files of {} jobs it does not have (job {}{}): jobs.db "
+      "lost its last commits (its -wal file deleted, the file truncated or replaced by an older copy). Nothing was "
+      "changed or deleted. Restore jobs.db together with its jobs.db-wal from the same backup; or, to drop those "
+      "jobs' photons and queued rays for good, move {}-photons/ and {}-batches/ away and start again",
+      path, known.size(), path, path, unknown.size(),
+      fmt::join(std::vector<uint64_t>(unknown.begin(), std::next(unknown.begin(), std::ptrdiff_t(shown))), ", "),
+      unknown.size() > shown ? ", ..." : "", path, path));
 }
 
 void JobStore::loadUnleasedWork() {
@@ -675,7 +721,8 @@ void JobStore::addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb
       std::memcpy(chunk.data(), blob.data(), std::min(blob.size(), chunk.size() * sizeof(FixedRgb)));
     }
     read.reset();
-    for (const auto& [offset, rgb] : entries) chunk[offset] += rgb;
+    for (const auto& [offset, rgb] : entries)
+      if (!chunk[offset].addWithinRange(rgb)) throw FilmRangeError();
     write.bind(1, int64_t(job)).bind(2, int64_t(index)).bindBlob(3, chunk.data(), chunk.size() * sizeof(FixedRgb));
     write.run();
   }

@@ -144,10 +144,12 @@ class JobStore {
   void reclaimBatchFiles();
 
   static constexpr uint32_t kFilmChunkPixels = 4096;
+  // Throws FilmRangeError (film.h) when a pixel's sum would leave the film's range.
   void addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb>& sums, uint64_t pixelCount);
   std::vector<FixedRgb> film(uint64_t job, uint64_t pixelCount);
 
  private:
+  void refuseFilesOfUnknownJobs(const std::string& path);
   void migrate();
   void loadUnleasedWork();
   int64_t takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches, uint32_t& attempt);

@@ -4,6 +4,7 @@
 
 #include <csignal>
 
+#include "common/util/cli_bounds.h"
 #include "common/util/heap_reuse.h"
 #include "coordinator/coordinator.h"
 
@@ -23,12 +24,24 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--db", options.database, "job database (SQLite, created if missing)")->capture_default_str();
   app.add_option("--endpoint-file", options.endpointFile, "write the bound endpoint to this file");
-  app.add_option("--heartbeat-ms", options.heartbeatMs, "heartbeat interval")->capture_default_str();
+  app.add_option("--heartbeat-ms", options.heartbeatMs, "heartbeat interval")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 600000));
   app.add_option("--liveness-ms", options.livenessMs, "silence after which a worker is presumed dead")
-      ->capture_default_str();
-  app.add_option("--lease-rays", options.maxLeaseWork, "rays per lease")->capture_default_str();
-  app.add_option("--max-cell-failures", options.maxCellFailures, "failed leases of one cell before its job fails")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 86400000));
+  // The frame limit grows with it (2 KiB per ray): 10^6 rays is 2 GiB.
+  app.add_option("--lease-rays", options.maxLeaseWork, "rays per lease")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 1000000));
+  app.add_option("--max-cell-failures", options.maxCellFailures,
+                 "failures a worker reports for one cell before its job fails")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 1000));
+  app.add_option("--max-lost-leases", options.maxLostLeases,
+                 "times one cell's lease may be lost with its worker (killed, out of memory, gone) before its job fails")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 1000));
   app.add_option("--keys", options.keysDirectory,
                  "CURVE keys directory (`portico keys generate`): encrypt, and admit only the keys of "
                  "{client,worker,operator}.public, each in its role; required beyond loopback. Without it, "

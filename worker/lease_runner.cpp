@@ -78,7 +78,7 @@ LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneS
 // lease's work. Returns the rays forwarded.
 int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std::string& store,
                            const std::string& accel, uint64_t job, bool renderPhase, const JobParameters& parameters,
-                           int64_t limit, KernelOutputs& out) {
+                           int64_t limit, KernelOutputs& out, const std::atomic<bool>* stop) {
   int64_t forwarded = 0;
   for (bool progress = true; progress && forwarded < limit;) {
     progress = false;
@@ -93,6 +93,7 @@ int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std:
       const std::vector<RayState> rays = std::move(it->second);
       it = out.crossings.erase(it);   // tracing may add crossings to other cells; this one stays valid
       CellKernel kernel(scene, *held->tracer, parameters, photons);
+      kernel.setStopFlag(stop);
       for (const RayState& ray : rays) kernel.trace(ray, out);
       forwarded += int64_t(rays.size());
       progress = true;
@@ -104,7 +105,8 @@ int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std:
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::string> photonRecords,
-                                                      const std::string& storeDirectory, int64_t forwardRays) {
+                                                      const std::string& storeDirectory, int64_t forwardRays,
+                                                      const std::atomic<bool>* stop) {
   const auto started = std::chrono::steady_clock::now();
   auto spec = assign.getSpec();
   const std::string& store = storeDirectory;
@@ -170,6 +172,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
     throw std::runtime_error("a render lease with more cells");
   {
     CellKernel kernel(scene, *cell.tracer, parameters, indirect);
+    kernel.setStopFlag(stop);
     traceBatches(kernel, cellId, assign.getBatches());
   }
   for (auto more : assign.getMoreCells()) {
@@ -183,7 +186,10 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
       LoadedCell& moreCell = accel == "auto" ? autoCell(cache, chooser, scene, moreId, work, false)
                                              : cache.cell(store, moreId, accel);
       CellKernel kernel(scene, *moreCell.tracer, parameters, nullptr);
+      kernel.setStopFlag(stop);
       traceBatches(kernel, moreId, more.getBatches());
+    } catch (const TracingStopped&) {
+      throw;
     } catch (const std::exception& e) {
       throw MoreCellError(moreId, e.what());
     } catch (const kj::Exception& e) {
@@ -196,7 +202,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   chooser.learn(renderPhase, assign.getLeaseWork(), out.counters.raySegments);
   const int64_t forwarded =
       forwardRays > 0 ? forwardToHeldCells(cache, scene, store, accel, assign.getJob(), renderPhase, parameters,
-                                           std::max(forwardRays, assign.getLeaseWork()), out)
+                                           std::max(forwardRays, assign.getLeaseWork()), out, stop)
                       : 0;
 
   auto message = std::make_unique<capnp::MallocMessageBuilder>();

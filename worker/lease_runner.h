@@ -4,6 +4,7 @@
 
 #include <capnp/message.h>
 
+#include <atomic>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -34,10 +35,13 @@ struct MoreCellError : std::runtime_error {
 // The scene is read from `storeDirectory` (the job's store, or the worker's
 // local copy of it). Crossings into cells the cache already holds are traced
 // in the lease too, up to max(forwardRays, the lease's own work) rays (0:
-// none); see forwardToHeldCells in lease_runner.cpp.
+// none); see forwardToHeldCells in lease_runner.cpp. Throws TracingStopped
+// (cell_kernel.h) soon after `stop` is set: its job was cancelled, or the
+// worker is stopping; nothing is reported for such a lease.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::string> photonRecords,
-                                                      const std::string& storeDirectory, int64_t forwardRays);
+                                                      const std::string& storeDirectory, int64_t forwardRays,
+                                                      const std::atomic<bool>* stop = nullptr);
 
 }  // namespace portico

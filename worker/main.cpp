@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/accel/embree_accelerator.h"
+#include "common/util/cli_bounds.h"
 #include "common/util/heap_reuse.h"
 #include "common/util/size_parse.h"
 #include "worker/worker_session.h"
@@ -30,12 +31,19 @@ int main(int argc, char** argv) {
   options.name = std::string(host) + ":" + std::to_string(getpid());
   app.add_option("--connect", options.connect, "coordinator endpoint")->capture_default_str();
   app.add_option("--memory", memory, "cache budget for cells, accelerators and photon maps (e.g. 512MiB, 4GiB)")
-      ->capture_default_str();
-  app.add_option("--threads", options.threads, "tracing threads")->capture_default_str();
+      ->capture_default_str()
+      ->check(portico::cli::byteSize());
+  app.add_option("--threads", options.threads, "tracing threads")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 1024));
   app.add_option("--name", options.name, "name shown in status");
-  app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str();
-  app.add_option("--liveness-ms", options.livenessMs)->capture_default_str();
-  app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease");
+  app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 600000));
+  app.add_option("--liveness-ms", options.livenessMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 86400000));
+  app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease")
+      ->check(portico::cli::wholeNumber(0, INT32_MAX));
+  app.add_option("--crash-in-lease", options.crashInLease,
+                 "fault injection: crash (SIGSEGV) tracing the Nth lease, as a cell that crashes its worker would")
+      ->check(portico::cli::wholeNumber(0, INT32_MAX));
   app.add_option("--keys", options.keysDirectory,
                  "CURVE keys directory (`portico keys generate`): coordinator.public, worker.secret (default on tcp://: "
                  "the per-user keys, ~/.config/portico/keys or $PORTICO_KEYS, when they exist)")
@@ -48,7 +56,8 @@ int main(int argc, char** argv) {
   app.add_option("--forward-rays", options.forwardRays,
                  "most rays a lease traces in neighbour cells this worker already holds, instead of handing them "
                  "back (at least the lease's own work; 0: hand every crossing back)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(0, INT64_MAX));
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

@@ -5,6 +5,8 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <csignal>
+#include <cstring>
 #include <deque>
 #include <fstream>
 #include <mutex>
@@ -18,6 +20,7 @@
 #include <unistd.h>
 
 #include "common/net/message.h"
+#include "worker/crash_report.h"
 #include "worker/lease_runner.h"
 
 namespace portico {
@@ -81,6 +84,7 @@ WorkerSession::WorkerSession(WorkerOptions options)
       chooser_(options_.calibrationPath.empty() ? CostModel::loadDefault() : CostModel::load(options_.calibrationPath)),
       leaseDone_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   if (leaseDone_ < 0) throw std::runtime_error("cannot create an eventfd");
+  crash_report::install(leaseDone_);
   // Read now: a bad key file stops the worker at start, not at its first connection.
   if (const std::string keys = net::keysForEndpoint(options_.keysDirectory, options_.connect); !keys.empty())
     keys_ = net::loadClientKeys(keys, net::Role::Worker);
@@ -97,7 +101,9 @@ FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::option
     done.lease = assign.getLease();
     const std::string store = assign.getSpec().getStore();
     done.message = runLease(cache_, chooser_, assign, std::move(photonRecords),
-                            mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays);
+                            mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays, &stopLease_);
+  } catch (const TracingStopped&) {
+    done.stopped = true;
   } catch (const MoreCellError& e) {
     done.error = e.what();
     done.failedCell = e.cell;
@@ -130,8 +136,17 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
   // Denormals cost ~100x per operation and never matter to a picture.
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
+  crash_report::enterTracingThread();
   std::unique_ptr<net::Decoded> assign = std::move(first);
   while (assign) {
+    {
+      std::lock_guard lock(chain_.mutex);
+      chain_.runningJob = assign->envelope().getAssign().getJob();
+      chain_.runningLease = assign->envelope().getAssign().getLease();
+      stopLease_ = chain_.abandon || stopping_ || chain_.cancelledJobs.count(chain_.runningJob) != 0;
+    }
+    // Fault injection: the cell crashes the worker (reported, then fatal).
+    if (options_.crashInLease > 0 && ++leasesStarted_ == options_.crashInLease) ::raise(SIGSEGV);
     FinishedLease done = traceLease(*assign, std::move(photonRecords));
     photonRecords.reset();
     assign.reset();
@@ -143,6 +158,9 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
     {
       std::lock_guard lock(chain_.mutex);
       chain_.finished.push_back(std::move(done));
+      std::erase_if(chain_.queued, [&](const std::unique_ptr<net::Decoded>& queued) {
+        return chain_.cancelledJobs.count(queued->envelope().getAssign().getJob()) != 0;
+      });
       if (!chain_.queued.empty() && !chain_.abandon && readyToTrace(*chain_.queued.front())) {
         assign = std::move(chain_.queued.front());
         chain_.queued.pop_front();
@@ -189,6 +207,7 @@ int WorkerSession::run() {
       chain_.queued.clear();
       chain_.finished.clear();
       chain_.abandon = false;
+      chain_.cancelledJobs.clear();
     }
     constexpr size_t kMostQueued = 12;   // more than the coordinator sends (kMostLeasesInFlight): refuse beyond it
     const auto startTracing = [&](std::optional<std::string> photonRecords) {
@@ -273,6 +292,20 @@ int WorkerSession::run() {
         uint64_t count;
         (void)!::read(leaseDone_, &count, sizeof count);
       }
+      if (const int signal = crash_report::pendingSignal()) {
+        // The tracing thread crashed in its lease: the cell's doing, said
+        // before dying, so that the coordinator counts it against the cell.
+        uint64_t crashedLease;
+        {
+          std::lock_guard lock(chain_.mutex);
+          crashedLease = chain_.runningLease;
+        }
+        const std::string why = fmt::format("the worker crashed tracing it ({})", strsignal(signal));
+        spdlog::error("lease {}: {}; exiting", crashedLease, why);
+        sendFailure(crashedLease, why);
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));   // libzmq's I/O thread sends it
+        crash_report::dieOf(signal);
+      }
       const int64_t now = steadyMs();
       if (items[0].revents & ZMQ_POLLIN) {
         zmq::message_t frame;
@@ -339,7 +372,22 @@ int WorkerSession::run() {
                 spdlog::error("coordinator refused: {}", envelope.getError().cStr());
                 if (!welcomed) return 2;
                 break;
-              case wire::Envelope::SHUTDOWN: stopping_ = true; break;
+              case wire::Envelope::CANCEL: {
+                // The job was cancelled or failed: its leases here are
+                // dropped, the one being traced stops between two pieces
+                // of work, and nothing is reported for any of them.
+                const uint64_t job = envelope.getCancel().getJob();
+                if (lease && lease->assign->envelope().getAssign().getJob() == job) lease.reset();
+                std::lock_guard lock(chain_.mutex);
+                chain_.cancelledJobs.insert(job);
+                std::erase_if(chain_.queued, [&](const std::unique_ptr<net::Decoded>& queued) {
+                  return queued->envelope().getAssign().getJob() == job;
+                });
+                if (chain_.running && chain_.runningJob == job) stopLease_ = true;
+                spdlog::info("job {} ended: its leases here are dropped", job);
+                break;
+              }
+              case wire::Envelope::SHUTDOWN: stop(); break;
               default: spdlog::warn("ignored message type {}", int(envelope.which()));
             }
           } catch (const kj::Exception& e) {
@@ -359,6 +407,10 @@ int WorkerSession::run() {
         tracingNow = chain_.running;
       }
       for (FinishedLease& done : finished) {
+        if (done.stopped) {
+          spdlog::info("lease {} stopped midway", done.lease);
+          continue;
+        }
         try {
           if (!done.error.empty()) throw std::runtime_error(done.error);
           if (options_.crashAfterLeases > 0 && leasesDone + 1 >= options_.crashAfterLeases) {
@@ -426,6 +478,7 @@ int WorkerSession::run() {
           std::lock_guard lock(chain_.mutex);
           chain_.queued.clear();
           chain_.abandon = true;
+          stopLease_ = true;
         }
         if (tracing.valid()) tracing.wait();
         std::this_thread::sleep_for(std::chrono::milliseconds(backoffMs));
@@ -438,6 +491,7 @@ int WorkerSession::run() {
         std::lock_guard lock(chain_.mutex);
         chain_.queued.clear();
         chain_.abandon = true;
+        stopLease_ = true;
       }
       if (tracing.valid()) tracing.wait();
       sendSimple(socket, [](wire::Envelope::Builder e) { e.setGoodbye(); });

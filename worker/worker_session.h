@@ -13,6 +13,7 @@
 #include <future>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,9 @@ struct WorkerOptions {
   // Fault injection for recovery tests: exit abruptly, without reporting it,
   // when the Nth lease is finished (0: never).
   int crashAfterLeases = 0;
+  // Fault injection: a fatal signal (SIGSEGV) on the tracing thread as the
+  // Nth lease starts, as a cell that crashes the worker (0: never).
+  int crashInLease = 0;
   std::string keysDirectory;   // CURVE keys ("" for none)
   // Fetch scene stores from the coordinator into this directory instead of
   // reading them where the job says ("" : read them in place).
@@ -54,6 +58,7 @@ struct FinishedLease {
   std::unique_ptr<capnp::MallocMessageBuilder> message;
   std::string error;
   std::optional<uint32_t> failedCell;   // one of the lease's more cells, if that is what failed
+  bool stopped = false;                 // given up midway (job cancelled, worker stopping): nothing to report
 };
 
 class WorkerSession {
@@ -62,7 +67,12 @@ class WorkerSession {
   ~WorkerSession();
   // Serves until stop(), a Shutdown message, or a refused Hello. Returns the exit code.
   int run();
-  void stop() { stopping_ = true; }
+  // Safe in a signal handler: the lease being traced stops too, between two
+  // small pieces of work, so the worker leaves within about a second.
+  void stop() {
+    stopping_ = true;
+    stopLease_ = true;
+  }
 
  private:
   FinishedLease traceLease(const net::Decoded& assign, std::optional<std::string> photonRecords);
@@ -83,8 +93,15 @@ class WorkerSession {
     std::deque<FinishedLease> finished;                 // traced, not yet reported
     bool running = false;                               // a chain is tracing (it alone uses the cache)
     bool abandon = false;                               // reconnecting or leaving: take no more
+    uint64_t runningJob = 0;                            // the job of the lease being traced
+    uint64_t runningLease = 0;                          // and the lease
+    std::set<uint64_t> cancelledJobs;                   // told by the coordinator (Cancel)
   } chain_;
   std::atomic<bool> stopping_{false};
+  // The lease being traced gives up (runLease's stop): its job was
+  // cancelled, or the worker is leaving or reconnecting.
+  std::atomic<bool> stopLease_{false};
+  int leasesStarted_ = 0;   // by the tracing thread (--crash-in-lease)
 };
 
 }  // namespace portico

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <stdexcept>
 
 #include "common/net/curve_keys.h"
@@ -45,7 +46,12 @@ std::unique_ptr<Decoded> CoordinatorClient::request(capnp::MallocMessageBuilder&
       nextResend = now + kResendInterval;
     }
     zmq::pollitem_t items[] = {{socket_.handle(), 0, ZMQ_POLLIN, 0}};
-    zmq::poll(items, 1, resend ? std::min(left, std::chrono::milliseconds(250)) : left);
+    try {
+      zmq::poll(items, 1, resend ? std::min(left, std::chrono::milliseconds(250)) : left);
+    } catch (const zmq::error_t& e) {
+      if (e.num() != EINTR) throw;
+      continue;   // a signal (Ctrl-C): the answer still comes; the caller decides what the signal means
+    }
     if (!(items[0].revents & ZMQ_POLLIN)) continue;
     zmq::message_t frame;
     if (!socket_.recv(frame, zmq::recv_flags::dontwait)) continue;

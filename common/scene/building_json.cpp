@@ -20,6 +20,8 @@
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
+#include <tuple>
+#include <vector>
 
 #include "common/scene/portal_geometry.h"
 
@@ -266,6 +268,9 @@ std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
   if (!list.is_array()) reader.fail("\"portals\" must be an array");
   if (!list.empty() && !cells) reader.fail("\"portals\" needs \"cells\" to join");
   std::vector<BuildingPortal> portals;
+  // Where each (pair of cells, polygon) was first given, and portals per cell.
+  std::map<std::tuple<std::string, std::string, std::vector<float>>, size_t> firstGiven;
+  std::map<std::string, uint32_t> perCell;
   for (size_t i = 0; i < list.size(); ++i) {
     const json& entry = list[i];
     const std::string what = fmt::format("portals[{}]", i);
@@ -292,6 +297,14 @@ std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
     for (const std::string& name : {portal.cellA, portal.cellB})
       if (std::string problem = portalBoundaryProblem(findCell(cells, name)->bounds, portal.polygon); !problem.empty())
         reader.fail(fmt::format("{}: polygon is not on the boundary of cell '{}': {}", label, name, problem));
+    std::vector<float> corners;
+    for (const Vec3& p : portal.polygon) corners.insert(corners.end(), {p.x, p.y, p.z});
+    const auto [first, fresh] = firstGiven.emplace(
+        std::make_tuple(std::min(portal.cellA, portal.cellB), std::max(portal.cellA, portal.cellB), corners), i);
+    if (!fresh) reader.fail(fmt::format("{}: duplicates portals[{}]", label, first->second));
+    for (const std::string& name : {portal.cellA, portal.cellB})
+      if (++perCell[name] > kMaxPortalsPerCell)
+        reader.fail(fmt::format("{}: cell '{}' has more than {} portals", label, name, kMaxPortalsPerCell));
     portals.push_back(std::move(portal));
   }
   return portals;

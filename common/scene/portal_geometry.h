@@ -2,12 +2,18 @@
 // the scene store writer and the store validation (`portico scene info`).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "common/math.h"
 
 namespace portico {
+
+// Portals of one cell at most: every ray tests its cell's portals, so a cell
+// with a million of them (one door repeated) makes leases that never end.
+// A voxel cell has 6; a hall with a door every metre of a 500 m perimeter, 500.
+constexpr uint32_t kMaxPortalsPerCell = 4096;
 
 // Newell's normal of a polygon: robust for any planar polygon (its length is
 // twice the area), zero for a degenerate one.

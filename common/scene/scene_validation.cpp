@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <exception>
 #include <iterator>
+#include <functional>
 #include <memory>
+#include <tuple>
 #include <utility>
 
 #include "common/scene/cell_geometry.h"
@@ -27,6 +29,7 @@ class Validator {
   std::vector<std::string> run() {
     checkCells();
     checkPortals();
+    checkPortalsPerCell();
     checkLights();
     checkCamera();
     for (const CellInfo& cell : store_.cells()) checkCellFile(cell);
@@ -81,6 +84,38 @@ class Validator {
       for (uint32_t cell : {portal.cellA, portal.cellB})
         if (std::string off = portalBoundaryProblem(store_.cells()[cell].bounds, portal.polygon); !off.empty())
           problem("{}: polygon is not on the boundary of {}: {}", what, cellName(cell), off);
+    }
+  }
+
+  // Too many portals on a cell, or one given twice (same cells, same
+  // polygon): either makes every ray in the cell test them all.
+  void checkPortalsPerCell() {
+    for (uint32_t cell = 0; cell < portalsByCell_.size(); ++cell) {
+      std::vector<uint32_t> ids = portalsByCell_[cell];
+      if (ids.size() > kMaxPortalsPerCell)
+        problem("{}: has {} portals, more than {}", cellName(cell), ids.size(), kMaxPortalsPerCell);
+      // Portals of this cell ordered by (their cells, their polygon's points).
+      const auto order = [&](uint32_t a, uint32_t b) {
+        const Portal& p = store_.portals()[a];
+        const Portal& q = store_.portals()[b];
+        const auto cells = [](const Portal& x) { return std::make_pair(std::min(x.cellA, x.cellB), std::max(x.cellA, x.cellB)); };
+        if (cells(p) != cells(q)) return cells(p) < cells(q);
+        return std::lexicographical_compare(p.polygon.begin(), p.polygon.end(), q.polygon.begin(), q.polygon.end(),
+                                            [](const Vec3& u, const Vec3& v) {
+                                              return std::tie(u.x, u.y, u.z) < std::tie(v.x, v.y, v.z);
+                                            });
+      };
+      std::sort(ids.begin(), ids.end(), order);
+      // Reported from the lower cell of each pair, the first in full, then counted.
+      size_t duplicates = 0;
+      for (size_t i = 1; i < ids.size(); ++i) {
+        const Portal& portal = store_.portals()[ids[i]];
+        if (cell != std::min(portal.cellA, portal.cellB) || order(ids[i - 1], ids[i])) continue;
+        if (duplicates++ == 0)
+          problem("portal {}: duplicates portal {} (between {} and {})", ids[i], ids[i - 1], cellName(portal.cellA),
+                  cellName(portal.cellB));
+      }
+      if (duplicates > 1) problem("{}: {} more duplicate portals", cellName(cell), duplicates - 1);
     }
   }
 

@@ -33,6 +33,7 @@ void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t coun
   const Vec3 power = light.power() / float(photonsOfLight);
   const uint64_t seed = parameters_.seed;
   for (uint64_t path = firstPath; path < firstPath + count; ++path) {
+    checkStop();
     const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
     const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
     const Vec3 point = light.corner + light.edge1 * u + light.edge2 * v;
@@ -65,6 +66,7 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
       std::swap(rows[s - 1], rows[std::min(s - 1, static_cast<uint32_t>(u * s))]);
     }
     for (uint32_t sample = 0; sample < spp; ++sample) {
+      checkStop();
       RayState ray;
       ray.kind = RayKind::Camera;
       ray.pathId = uint64_t(pixel) * spp + sample;
@@ -83,6 +85,7 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
 }
 
 void CellKernel::trace(const RayState& ray, KernelOutputs& out) {
+  checkStop();
   if (!isValid(ray)) {
     ++out.counters.raysInvalid;
     return;
@@ -336,7 +339,7 @@ void CellKernel::addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& 
     ++out.counters.nonFiniteContributions;
     return;
   }
-  out.film.add(pixel, radiance);
+  if (!out.film.add(pixel, radiance)) ++out.counters.filmOutOfRange;
 }
 
 void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {

@@ -3,9 +3,11 @@
 // crosses a portal, and collect deposits, crossings and film contributions.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <vector>
 
 #include "common/scene/scene_store.h"
@@ -19,6 +21,12 @@
 #include "common/transport/trace_counters.h"
 
 namespace portico {
+
+// Tracing given up midway: the kernel's stop flag was set (the lease's job
+// was cancelled, or the worker is stopping).
+struct TracingStopped : std::runtime_error {
+  TracingStopped() : std::runtime_error("tracing stopped") {}
+};
 
 // JobSpec.lightHops meaning "choose from the store": 2 for room cells, all
 // lights for voxel cells (scene import --grid).
@@ -63,8 +71,16 @@ class CellKernel {
   void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
   // Runs a ray, and the shadow rays it spawns here, to its end in this cell or a crossing.
   void trace(const RayState& ray, KernelOutputs& out);
+  // Checked before each photon, camera sample and traced ray (a camera
+  // sample's gather rays take milliseconds): once set, tracing throws
+  // TracingStopped. Each ray's output depends on the ray alone, so where
+  // the checks fall changes no bit of what is traced.
+  void setStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
 
  private:
+  void checkStop() const {
+    if (stop_ && stop_->load(std::memory_order_relaxed)) throw TracingStopped();
+  }
   void tracePhoton(RayState photon, KernelOutputs& out);
   void traceCameraRay(const RayState& ray, KernelOutputs& out);
   void traceShadowRay(const RayState& ray, KernelOutputs& out);
@@ -83,6 +99,7 @@ class CellKernel {
   const PhotonMap* photons_;
   LightSampler lightSampler_;
   std::optional<CameraModel> camera_;
+  const std::atomic<bool>* stop_ = nullptr;
 };
 
 }  // namespace portico

@@ -18,6 +18,9 @@ inline constexpr std::string_view kLeaseTimeCounter = "time.lease_us";
 inline constexpr std::string_view kLoadTimeCounter = "time.load_us";
 inline constexpr std::string_view kTrianglesLoadedCounter = "cells.triangles_loaded";
 
+// Contributions a lease could not add to its film (film.h): any fails the job.
+inline constexpr std::string_view kFilmOutOfRangeCounter = "film.out_of_range";
+
 struct TraceCounters {
   int64_t photonsEmitted = 0;
   int64_t photonDeposits = 0;
@@ -35,6 +38,7 @@ struct TraceCounters {
   int64_t raySegments = 0;        // rays traced through one cell (all kinds)
   int64_t raysInvalid = 0;        // malformed rays received and dropped
   int64_t nonFiniteContributions = 0;
+  int64_t filmOutOfRange = 0;     // contributions refused: a pixel's sum would leave the film's range
 
   // Stable names used on the wire, in jobs.db and in the statistics JSON.
   std::vector<std::pair<std::string_view, int64_t>> named() const {
@@ -45,7 +49,8 @@ struct TraceCounters {
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},
-            {"rays.invalid", raysInvalid},         {"film.non_finite", nonFiniteContributions}};
+            {"rays.invalid", raysInvalid},         {"film.non_finite", nonFiniteContributions},
+            {kFilmOutOfRangeCounter, filmOutOfRange}};
   }
 };
 

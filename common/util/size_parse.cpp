@@ -26,6 +26,9 @@ uint64_t parseByteSize(const std::string& text) {
   else if (unit == "t" || unit == "tb" || unit == "tib") scale = 1024.0 * 1024 * 1024 * 1024;
   else throw std::invalid_argument(fmt::format("size '{}': unknown unit '{}' (use KiB, MiB, GiB)", text, unit));
   if (!(value > 0) || !std::isfinite(value)) throw std::invalid_argument(fmt::format("size '{}' must be positive", text));
+  // Beyond 2^64 the conversion is undefined (1e30 came out as 0 bytes).
+  if (value * scale > double(kMaxByteSize))
+    throw std::invalid_argument(fmt::format("size '{}' is too large: at most 1 PiB", text));
   return static_cast<uint64_t>(value * scale);
 }
 

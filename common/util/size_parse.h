@@ -5,6 +5,8 @@
 #include <string>
 
 namespace portico {
+// The largest size accepted: 1 PiB, beyond any machine's memory or disk.
+constexpr uint64_t kMaxByteSize = uint64_t(1) << 50;
 // Throws std::invalid_argument naming the text.
 uint64_t parseByteSize(const std::string& text);
 }  // namespace portico

@@ -2,15 +2,28 @@
 
 #include <fmt/format.h>
 
+#include <cstring>
 #include <stdexcept>
 
 namespace portico::sql {
 
 namespace {
+// What the operating system said, when SQLite's error came from a system
+// call ("unable to open database file" alone does not say why). Other
+// errors leave an older, unrelated errno behind: not shown.
+std::string systemCause(sqlite3* db, int code) {
+  const int primary = code & 0xff;
+  if (primary != SQLITE_CANTOPEN && primary != SQLITE_IOERR && primary != SQLITE_FULL && primary != SQLITE_READONLY)
+    return {};
+  const int error = db ? sqlite3_system_errno(db) : 0;
+  return error ? fmt::format(" ({})", std::strerror(error)) : std::string();
+}
+
 [[noreturn]] void throwError(sqlite3* db, int code, std::string_view context) {
   const int extended = db ? sqlite3_extended_errcode(db) : code;
-  throw std::runtime_error(fmt::format("sqlite: {}: {} (code {}, extended {})", context,
-                                       db ? sqlite3_errmsg(db) : sqlite3_errstr(code), code, extended));
+  throw Error(fmt::format("sqlite: {}: {}{} (code {}, extended {})", context,
+                          db ? sqlite3_errmsg(db) : sqlite3_errstr(code), systemCause(db, code), code, extended),
+              code & 0xff, extended);
 }
 }  // namespace
 
@@ -80,10 +93,11 @@ Database::Database(const std::string& path, Mode mode) : path_(path) {
                                            : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   const int rc = sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr);
   if (rc != SQLITE_OK) {
-    std::string message = db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc);
+    const std::string message = (db_ ? sqlite3_errmsg(db_) : sqlite3_errstr(rc)) + systemCause(db_, rc);
+    const int extended = db_ ? sqlite3_extended_errcode(db_) : rc;
     sqlite3_close(db_);
     db_ = nullptr;
-    throw std::runtime_error(fmt::format("sqlite: cannot open {}: {}", path, message));
+    throw Error(fmt::format("sqlite: cannot open {}: {}", path, message), rc & 0xff, extended);
   }
   sqlite3_extended_result_codes(db_, 1);
   sqlite3_busy_timeout(db_, kBusyTimeoutMs);
@@ -99,10 +113,11 @@ void Database::exec(std::string_view sql) {
   const std::string text(sql);
   const int rc = sqlite3_exec(db_, text.c_str(), nullptr, nullptr, &error);
   if (rc != SQLITE_OK) {
-    std::string message = error ? error : sqlite3_errstr(rc);
+    std::string message = (error ? error : sqlite3_errstr(rc)) + systemCause(db_, rc);
     sqlite3_free(error);
-    throw std::runtime_error(fmt::format("sqlite: {} in {}: {} (extended code {})", text.substr(0, 80), path_,
-                                         message, sqlite3_extended_errcode(db_)));
+    const int extended = sqlite3_extended_errcode(db_);
+    throw Error(fmt::format("sqlite: {} in {}: {} (extended code {})", text.substr(0, 80), path_, message, extended),
+                rc & 0xff, extended);
   }
 }
 

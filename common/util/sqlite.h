@@ -10,11 +10,23 @@
 #include <functional>
 #include <memory>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <unordered_map>
 
 namespace portico::sql {
+
+// An SQLite failure, with its codes: callers tell a full or failing disk
+// (SQLITE_FULL, SQLITE_IOERR: worth retrying) from everything else.
+struct Error : std::runtime_error {
+  Error(const std::string& what, int code, int extendedCode)
+      : std::runtime_error(what), code(code), extendedCode(extendedCode) {}
+  int code;           // primary result code (SQLITE_FULL, ...)
+  int extendedCode;   // SQLITE_IOERR_WRITE, ...
+  // The disk, not the data: full, or failing to read or write.
+  bool diskTrouble() const { return code == SQLITE_FULL || code == SQLITE_IOERR; }
+};
 
 class Statement {
  public:

@@ -11,7 +11,9 @@
 #include <thread>
 
 #include "common/net/client.h"
+#include "common/util/cli_bounds.h"
 #include "common/util/output_path.h"
+#include "coordinator/job_limits.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/progress.h"
 
@@ -23,20 +25,36 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--accel", o.accel,
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
-  command.add_option("--photons", o.photons, "photons emitted in all")->capture_default_str();
-  command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str();
+  // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
+  // wrong value is refused here, in one line, before anything starts.
+  command.add_option("--photons", o.photons, "photons emitted in all")
+      ->capture_default_str()
+      ->check(wholeNumber(1, limits::kMaxPhotons));
+  command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str()->check(wholeNumber(1, limits::kMaxSpp));
   command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
-      ->capture_default_str();
-  command.add_option("--seed", o.seed, "random seed")->capture_default_str();
-  command.add_option("--width", o.width, "image width (default: the camera's)");
-  command.add_option("--height", o.height, "image height (default: the camera's)");
-  command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")->capture_default_str();
+      ->capture_default_str()
+      ->check(wholeNumber(0, limits::kMaxGather));
+  command.add_option("--seed", o.seed, "random seed")->capture_default_str()->check(wholeNumber(0, UINT64_MAX));
+  command.add_option("--width", o.width, "image width (default: the camera's)")
+      ->check(wholeNumber(1, limits::kMaxImageSide));
+  command.add_option("--height", o.height, "image height (default: the camera's)")
+      ->check(wholeNumber(1, limits::kMaxImageSide));
+  command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")
+      ->capture_default_str()
+      ->check(wholeNumber(0, limits::kMaxLightSamples));
   command.add_option("--light-hops", o.lightHops,
                      "sample the lights of cells within this many portals of a shading point (-1: every light; "
-                     "default: 2 with room cells, every light with --grid voxel cells)");
-  command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
-  command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
-  command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
+                     "default: 2 with room cells, every light with --grid voxel cells)")
+      ->check(wholeNumber(-1, limits::kMaxLightHops));
+  command.add_option("--photon-k", o.photonK, "photons per density estimate")
+      ->capture_default_str()
+      ->check(wholeNumber(1, limits::kMaxPhotonK));
+  command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")
+      ->capture_default_str()
+      ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
+  command.add_option("--exposure", o.exposure, "PNG exposure")
+      ->capture_default_str()
+      ->check(realNumber(limits::kMinExposure, limits::kMaxExposure));
   command.add_option("--aov", o.aov,
                      "what the image shows: radiance; cells (false colour of each pixel's cell); "
                      "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
@@ -50,7 +68,7 @@ void addConnectOptions(CLI::App& command, ConnectOptions& o) {
       ->check(CLI::ExistingDirectory);
   command.add_option("--timeout", o.timeoutSeconds, "seconds to wait for each answer")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(realNumber(0.001, 1e6));
 }
 
 namespace {

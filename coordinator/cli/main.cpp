@@ -8,6 +8,7 @@
 #include "coordinator/cli/bench_calibrate.h"
 #include "coordinator/cli/bench_paper.h"
 #include "coordinator/cli/commands.h"
+#include "common/util/cli_bounds.h"
 
 int main(int argc, char** argv) {
   using namespace portico::cli;
@@ -55,8 +56,10 @@ int main(int argc, char** argv) {
   LocalRunOptions local;
   auto* renderCommand = app.add_subcommand("render", "render locally: starts a coordinator and workers");
   addRenderOptions(*renderCommand, render);
-  renderCommand->add_option("--workers", local.workers, "local worker processes")->capture_default_str();
-  renderCommand->add_option("--memory", local.memory, "cache budget per worker")->capture_default_str();
+  renderCommand->add_option("--workers", local.workers, "local worker processes")
+      ->capture_default_str()
+      ->check(wholeNumber(1, 256));
+  renderCommand->add_option("--memory", local.memory, "cache budget per worker")->capture_default_str()->check(byteSize());
   renderCommand->add_flag("--keep-logs", local.keepLogs, "keep the services' logs and jobs.db");
   renderCommand->add_option("--log-level", local.logLevel, "services' log level")->capture_default_str();
   renderCommand->add_option("--keys", local.keys, "CURVE keys directory for the local services (`portico keys generate`)")

@@ -6,7 +6,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <sched.h>
+#include <sys/mount.h>
+
 #include <csignal>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <random>
@@ -197,13 +201,14 @@ TEST_F(Resilience, AJobBegunWithAnOlderPhotonRecordRunsItsPhotonPassAgainWithThe
 }
 
 // A cell whose work dies with every worker that takes it (here: workers
-// that take a lease and vanish, as one that crashes on the cell's geometry
-// would) is retried with rising attempt numbers, then fails its job with a
-// message naming the cell: no endless retry.
+// that take a lease and vanish without a word, as one killed by the memory
+// the cell exhausts would) is retried with rising attempt numbers, then
+// fails its job with a message naming the cell: no endless retry. The limit
+// is --max-lost-leases (10 by default: healthy workers are lost too), here 3.
 TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
   const fs::path dir = dir_ / "lost-leases";
   ClusterOptions options;
-  options.coordinatorExtra = {"--max-cell-failures", "3"};   // liveness: the harness's 2 s
+  options.coordinatorExtra = {"--max-lost-leases", "3"};   // liveness: the harness's 2 s
   LocalCluster cluster(dir, 0, {}, options);
   const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
   zmq::context_t context(1);
@@ -250,6 +255,8 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
     const std::string requeued = "lease " + std::to_string(assign->envelope().getAssign().getLease()) + " (";
     for (int i = 0; i < 100 && readFile(dir / "coordinator.log").find(requeued) == std::string::npos; ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    // And once the cell's back-off (0.5 s, then 1 s) has passed: it gets the same cell.
+    std::this_thread::sleep_for(std::chrono::milliseconds((500 << doomed) + 200));
   }
   const auto status = cluster.wait(job);
   ASSERT_EQ(attempts, (std::vector<uint32_t>{1, 2, 3})) << readFile(dir / "coordinator.log");
@@ -259,6 +266,142 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
   const std::string error = status.value("error", "");
   EXPECT_NE(error.find("cell " + std::to_string(cells[0]) + ":"), std::string::npos) << error;
   EXPECT_NE(error.find("lost 3 times"), std::string::npos) << error;
+}
+
+// Healthy workers killed from outside (SIGKILL, as the OOM killer or a
+// preempted node does) while holding leases, three times in a row: a lost
+// worker is not a cell that kills its workers. The job waits out a back-off
+// between the retries and finishes with the reference's bits, where one
+// limit for both kinds of failure would fail it at the third loss.
+TEST_F(Resilience, ThreeOutsideKillsOfHealthyWorkersDoNotFailTheJob) {
+  const fs::path dir = dir_ / "outside-kills";
+  ClusterOptions options;
+  options.coordinatorExtra = {"--log-level", "debug"};   // each lease is logged as it is sent
+  LocalCluster cluster(dir, 0, {}, options);
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  for (size_t k = 0; k < 3; ++k) {
+    const std::string name = "w" + std::to_string(k);
+    cluster.addWorker({});
+    // Killed the moment its first lease is sent: it dies holding it.
+    ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("-> " + name + ":") != std::string::npos; },
+                          std::chrono::seconds(20)))
+        << readFile(dir / "coordinator.log");
+    cluster.worker(k).kill(SIGKILL);
+    cluster.worker(k).wait();
+    ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("worker " + name + " presumed dead") !=
+                                       std::string::npos; },
+                          std::chrono::seconds(20)))
+        << readFile(dir / "coordinator.log");
+    // The next worker comes once the lost cells' back-off (0.5 s, 1 s) has
+    // passed, so that it is given the same cells, on their next attempt.
+    std::this_thread::sleep_for(std::chrono::milliseconds((500 << k) + 200));
+  }
+  cluster.addWorker({});
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  expectSameAsReference(dir / "image.exr");
+  EXPECT_NE(readFile(dir / "coordinator.log").find("attempt 3"), std::string::npos) << readFile(dir / "coordinator.log");
+}
+
+// The other side: a cell that crashes every worker tracing it. Each worker
+// reports the crash before it dies (a Failure), which counts against the
+// cell, so the job fails after --max-cell-failures (3) crashes, naming the
+// cell and the crash, without waiting for ten lost leases.
+TEST_F(Resilience, ACellThatCrashesItsWorkersFailsTheJobAfterThreeReportedCrashes) {
+  const fs::path dir = dir_ / "crashing-cell";
+  LocalCluster cluster(dir, 0);
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  for (size_t k = 0; k < 3; ++k) {
+    cluster.addWorker({"--crash-in-lease", "1"});
+    ASSERT_TRUE(waitUntil([&] { return !cluster.worker(k).running(); }, std::chrono::seconds(20)))
+        << readFile(dir / ("worker-" + std::to_string(k) + ".log"));
+    EXPECT_EQ(cluster.worker(k).exitCode(), 128 + SIGSEGV);
+    // Its other leases are lost with it; once it is given up, the next
+    // worker comes after the cell's back-off (doubling with the crash and
+    // the loss of each round: 1 s, then 4 s), so that it gets the same cell.
+    if (k == 2) break;
+    const std::string name = "w" + std::to_string(k);
+    ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("worker " + name + " presumed dead") !=
+                                       std::string::npos; },
+                          std::chrono::seconds(20)));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000 << (2 * k)));
+  }
+  const auto status = cluster.wait(job);
+  EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2) << readFile(dir / "coordinator.log");
+  const std::string error = status.value("error", "");
+  EXPECT_NE(error.find("the worker crashed tracing it"), std::string::npos) << error;
+  EXPECT_NE(error.find("(failed 3 times)"), std::string::npos) << error;
+}
+
+// The scene store moved away for a while (an unmounted share): the workers'
+// leases fail, but the coordinator cannot read the store either, so the
+// failures are the store's, not the cells': nothing is counted, the cells
+// wait with back-off, and once the store is back the job finishes with the
+// reference's bits, instead of failing after three failures milliseconds apart.
+TEST_F(Resilience, AStoreThatVanishesForAWhileDoesNotFailTheJob) {
+  const fs::path dir = dir_ / "store-away";
+  const fs::path store = dir / "store", away = dir / "store.away";
+  fs::create_directories(dir);
+  fs::copy(store_, store, fs::copy_options::recursive);
+  LocalCluster cluster(dir, 0);
+  const uint64_t job = cluster.submit(store, dir / "image.exr", kPhotons, 1);
+  fs::rename(store, away);
+  cluster.addWorker({});
+  ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("not counted") != std::string::npos; },
+                        std::chrono::seconds(20)))
+      << readFile(dir / "coordinator.log");
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(cluster.status(job).value("state", ""), "photons") << readFile(dir / "coordinator.log");
+  fs::rename(away, store);
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  expectSameAsReference(dir / "image.exr");
+}
+
+// A real full disk: jobs.db and its files on a 32 MiB tmpfs, filled while
+// a job runs. Writes fail (ENOSPC on the photon and batch files,
+// SQLITE_FULL on the WAL); the coordinator undoes each failed round,
+// pauses leasing with back-off and logs a line now and then, counts no
+// failure against any cell, and resumes by itself when space is freed: the
+// image has the reference's bits: no twenty lines a second, no failure
+// counted against a cell, no stall until a restart. The tmpfs is
+// mounted in a mount namespace of this test process alone, so it goes with
+// the process; skipped where mounting is not allowed.
+TEST_F(Resilience, AFullDiskPausesTheJobWhichResumesByItselfWithTheSameBits) {
+  const fs::path dir = dir_ / "full-disk";
+  fs::create_directories(dir);
+  if (::unshare(CLONE_NEWNS) != 0 || ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
+      ::mount("portico-test", dir.c_str(), "tmpfs", 0, "size=32m") != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here (needs root in a mount namespace): " << std::strerror(errno);
+  LocalCluster cluster(dir, 0);
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  // Fill the disk, then free a little: small commits fit, a Result's photons do not.
+  const fs::path filler = dir / "filler";
+  {
+    std::ofstream out(filler, std::ios::binary);
+    const std::string chunk(1 << 20, '\0');
+    while (out.write(chunk.data(), std::streamsize(chunk.size()))) {
+    }
+  }
+  fs::resize_file(filler, fs::file_size(filler) - (256 << 10));
+  cluster.addWorker({});
+  cluster.addWorker({});
+  ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find("cannot write jobs.db") != std::string::npos; },
+                        std::chrono::seconds(20)))
+      << readFile(dir / "coordinator.log");
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  const auto during = cluster.status(job);
+  EXPECT_EQ(during.value("state", ""), "photons") << during.dump(2);
+  const std::string log = readFile(dir / "coordinator.log");
+  size_t lines = 0;
+  for (size_t at = log.find("[error]"); at != std::string::npos; at = log.find("[error]", at + 1)) ++lines;
+  EXPECT_LE(lines, 3u) << log;
+  EXPECT_EQ(log.find("rejected the result"), std::string::npos) << log;   // no cell failure counted
+  fs::remove(filler);
+  const auto status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "coordinator.log");
+  expectSameAsReference(dir / "image.exr");
+  EXPECT_NE(readFile(dir / "coordinator.log").find("can be written again"), std::string::npos);
 }
 
 // A worker in its own mount namespace, where an empty tmpfs hides the scene

@@ -65,6 +65,16 @@ inline std::string captureOutput(const std::vector<std::string>& argv, const fs:
   return readFile(out);
 }
 
+// Polls until `condition` holds or `limit` passes; returns whether it held.
+inline bool waitUntil(const std::function<bool()>& condition, std::chrono::milliseconds limit) {
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  while (!condition()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
 // Every photon emitted is absorbed or escapes; nothing left queued.
 inline void expectConservation(const nlohmann::json& stats) {
   const auto& photons = stats["photons"];
@@ -145,6 +155,7 @@ class LocalCluster {
     workers_.emplace_back(wrap ? wrap(argv) : argv, (dir_ / ("worker-" + index + ".log")).string());
   }
   ChildProcess& worker(size_t i) { return workers_.at(i); }
+  ChildProcess& coordinator() { return *coordinator_; }
 
   // (Re)starts the coordinator on `listen` with the cluster's jobs.db.
   void startCoordinator(const std::string& listen) {
@@ -170,7 +181,9 @@ class LocalCluster {
     coordinator_->wait();
   }
 
-  uint64_t submit(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp) {
+  // `adjust` changes the test spec before it is sent (more gather rays, ...).
+  uint64_t submit(const fs::path& store, const fs::path& output, uint64_t photons, uint32_t spp,
+                  const std::function<void(wire::JobSpec::Builder)>& adjust = nullptr) {
     net::CoordinatorClient client(endpoint_, options_.clientKeys);
     capnp::MallocMessageBuilder message;
     auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
@@ -187,6 +200,7 @@ class LocalCluster {
     spec.setPhotonRadius(0.5f);
     spec.setExposure(1);
     spec.setGather(2);   // final gathering: gather rays cross portals too
+    if (adjust) adjust(spec);
     return client.submit(message);
   }
 

@@ -554,24 +554,53 @@ TEST_F(JobStoreTest, ConsumedBatchSegmentsAndAnEndedJobsFilesAreDeleted) {
 }
 
 TEST_F(JobStoreTest, BatchFilesNoRowRefersToAreDeletedAtStart) {
-  std::filesystem::path kept, orphan;
+  std::filesystem::path kept, orphan, consumed;
   {
     JobStore store(path_.string());
     const uint64_t job = store.createJob("spec", 1);
     store.addBatch(job, 1, 0, BatchKind::Rays, 10, "kept");
     kept = store.batchFile(job, 0);
-    orphan = store.batchFile(job + 5, 2);
+    consumed = store.batchFile(job, 3);   // a segment of a known job that no row refers to
+    orphan = store.batchFile(job + 1, 0);   // a submit killed before its transaction committed
   }
-  std::FILE* f = std::fopen(orphan.c_str(), "wb");
-  ASSERT_NE(f, nullptr);
-  std::fputs("left by a job whose rows are gone", f);
-  std::fclose(f);
+  for (const auto& path : {orphan, consumed}) {
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("no row refers to this", f);
+    std::fclose(f);
+  }
   const std::filesystem::path stranger = orphan.parent_path() / "notes.txt";
   std::fclose(std::fopen(stranger.c_str(), "wb"));
   JobStore reopened(path_.string());
   EXPECT_TRUE(std::filesystem::exists(kept));
   EXPECT_FALSE(std::filesystem::exists(orphan));
+  EXPECT_FALSE(std::filesystem::exists(consumed));
   EXPECT_TRUE(std::filesystem::exists(stranger));   // not a name the store writes
+}
+
+// Files of jobs jobs.db does not have, beyond what a killed submit leaves
+// (photons, later segments, ids past a gap), mean jobs.db lost commits: the
+// store refuses to open, naming the jobs, and deletes nothing.
+TEST_F(JobStoreTest, FilesOfJobsTheDatabaseLacksRefuseTheStartAndStay) {
+  std::filesystem::path photons;
+  {
+    JobStore store(path_.string());
+    const uint64_t job = store.createJob("spec", 1);
+    photons = store.photonFile(job + 1);
+  }
+  std::filesystem::create_directories(photons.parent_path());
+  std::FILE* f = std::fopen(photons.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fputs("photons of a job whose rows are gone", f);
+  std::fclose(f);
+  try {
+    JobStore reopened(path_.string());
+    ADD_FAILURE() << "opened";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("hold files of 1 jobs it does not have (job 2)"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_TRUE(std::filesystem::exists(photons));
 }
 
 TEST_F(JobStoreTest, ADamagedRayBatchIsReportedNamingTheFileAndNothingIsLeased) {

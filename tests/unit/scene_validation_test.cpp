@@ -171,5 +171,22 @@ TEST(FloorLevels, TheStoreMetaWins) {
   EXPECT_EQ(floorCount(SceneStore::open(temp / "demo")), 7u);
 }
 
+// A door given twice, or a thousand times, in a catalogue written by hand:
+// every ray of its cells would test each copy. Named once, then counted.
+TEST(SceneValidation, DuplicatePortalsAreNamed) {
+  TempDirectory temp;
+  generateDemoBuilding(temp / "demo", 3);
+  {
+    sql::Database db(temp / "demo" + "/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("BEGIN");   // one commit, not a thousand
+    for (int copy = 0; copy < 1000; ++copy)
+      db.exec("INSERT INTO portals(cell_a, cell_b, polygon) SELECT cell_a, cell_b, polygon FROM portals WHERE id = 0");
+    db.exec("COMMIT");
+  }
+  const std::vector<std::string> problems = validateSceneStore(SceneStore::open(temp / "demo"));
+  EXPECT_TRUE(hasProblem(problems, {"duplicates portal"})) << joined(problems);
+  EXPECT_TRUE(hasProblem(problems, {"999 more duplicate portals"})) << joined(problems);
+}
+
 }  // namespace
 }  // namespace portico

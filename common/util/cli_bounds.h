@@ -1,0 +1,70 @@
+// Bounded numeric options for CLI11. CLI11 reads "-1" into an unsigned
+// option as 2^64-1 and "1e30" into nothing sensible; these validators look
+// at the text first and refuse, in one line naming the bounds, any value
+// that is not a number within them.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <system_error>
+
+#include "common/util/size_parse.h"
+
+namespace portico::cli {
+
+// A whole number in [min, max], written in decimal digits (a leading '-'
+// only where min is negative).
+inline CLI::Validator wholeNumber(int64_t min, uint64_t max) {
+  return CLI::Validator(
+      [min, max](std::string& text) -> std::string {
+        const std::string expected = fmt::format("a whole number from {} to {}", min, max);
+        const bool negative = !text.empty() && text[0] == '-';
+        const char* first = text.data() + (negative ? 1 : 0);
+        const char* last = text.data() + text.size();
+        uint64_t magnitude = 0;
+        const auto [end, error] = std::from_chars(first, last, magnitude);
+        if (first == last || error != std::errc() || end != last)
+          return fmt::format("'{}' is not {}", text, expected);
+        const __int128 value = negative ? -__int128(magnitude) : __int128(magnitude);
+        if (value < __int128(min) || value > __int128(max))
+          return fmt::format("{} is out of range: expected {}", text, expected);
+        return {};
+      },
+      fmt::format("INT in [{} - {}]", min, max));
+}
+
+// A finite number in [min, max].
+inline CLI::Validator realNumber(double min, double max) {
+  return CLI::Validator(
+      [min, max](std::string& text) -> std::string {
+        const std::string expected = fmt::format("a number from {:g} to {:g}", min, max);
+        double value = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (text.empty() || error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
+          return fmt::format("'{}' is not {}", text, expected);
+        if (value < min || value > max) return fmt::format("{} is out of range: expected {}", text, expected);
+        return {};
+      },
+      fmt::format("FLOAT in [{:g} - {:g}]", min, max));
+}
+
+// A byte size as parseByteSize reads it ("512MiB", "4GiB"), at most 1 PiB.
+inline CLI::Validator byteSize() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        try {
+          parseByteSize(text);
+        } catch (const std::exception& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "SIZE");
+}
+
+}  // namespace portico::cli
