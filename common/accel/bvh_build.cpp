@@ -5,9 +5,9 @@
 // spare lane) in one array, partitioned in place: a node's triangles are a
 // contiguous range of it. A node starts as one child holding its whole
 // range; the child of largest surface area is split by the best of 16
-// binned SAH planes per axis (centroids binned, the children's boxes from
-// the bins' boxes), until the node has Width children or none is worth
-// splitting. Costs count triangles in packets of four, as the leaves test
+// binned SAH planes per axis (centroids binned; ranges of 8192 references
+// or more bin every k-th, 4096 to 8191 of them), until the node has Width
+// children or none is worth splitting. Costs count triangles in packets of four, as the leaves test
 // them (Embree's block size), so a range of at most four triangles is one
 // packet test and always a leaf, and one of at most eight becomes a leaf
 // unless a split is predicted cheaper. A range whose centroids all fall in
@@ -31,8 +31,9 @@ namespace {
 constexpr int kBins = 16;
 // Ranges of at least this many references are binned into two sets of bins.
 constexpr uint32_t kTwoBinSets = 256;
-// Larger ranges bin every k-th reference, about this many in all: the
-// best plane moves little, and the top levels cost a partition each.
+// Ranges of twice this many references or more bin every k-th, this many
+// to twice as many in all: the best plane moves little, and the top levels
+// cost little more than their partition.
 constexpr uint32_t kSampledReferences = 4096;
 constexpr uint32_t kPacketSize = 4;
 constexpr uint32_t kAlwaysLeaf = 4;      // at most one packet: a leaf
