@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cerrno>
+#include <filesystem>
 #include <stdexcept>
 
 #include "common/net/curve_keys.h"
@@ -14,8 +15,14 @@ CoordinatorClient::CoordinatorClient(const std::string& endpoint, const std::str
     : endpoint_(endpoint), timeout_(timeout), context_(1), socket_(context_, zmq::socket_type::dealer) {
   socket_.set(zmq::sockopt::linger, 200);
   socket_.set(zmq::sockopt::maxmsgsize, int64_t(kMaxFrameBytes));
-  if (const std::string keys = keysForEndpoint(keysDirectory, endpoint); !keys.empty())
+  if (const std::string keys = keysForEndpoint(keysDirectory, endpoint); !keys.empty()) {
+    // An operator's folder holds operator.secret alone: it may do what a client does.
+    namespace fs = std::filesystem;
+    if (role == Role::Client && !fs::exists(fs::path(keys) / "client.secret") &&
+        fs::exists(fs::path(keys) / "operator.secret"))
+      role = Role::Operator;
     applyClientKeys(socket_, loadClientKeys(keys, role));
+  }
   socket_.connect(endpoint);
 }
 

@@ -230,6 +230,7 @@ TEST_F(Resilience, ACellLostWithItsWorkerThreeTimesFailsTheJobNamingTheCell) {
   for (int doomed = 0; doomed < 3; ++doomed) {
     zmq::socket_t socket(context, zmq::socket_type::dealer);
     socket.set(zmq::sockopt::linger, 0);
+    useLocalKeys(socket, cluster.endpoint(), net::Role::Worker);
     socket.connect(cluster.endpoint());
     {
       capnp::MallocMessageBuilder message;

@@ -25,6 +25,7 @@
 
 #include "common/image/image_writer.h"
 #include "common/net/client.h"
+#include "common/net/curve_keys.h"
 #include "common/util/child_process.h"
 
 namespace portico::harness {
@@ -117,6 +118,14 @@ inline std::string importVoxelStore(const std::string& name, int grid, const fs:
                                std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/" + name + "/scene.json", store.string()},
                               log);
   return code == 0 ? std::string() : "portico scene import failed: " + readFile(log);
+}
+
+// Gives a hand-made socket the keys this user's programs present to a
+// coordinator started without --keys (the per-user keys on tcp://; none on
+// ipc://), in `role`: tests that speak the protocol themselves.
+inline void useLocalKeys(zmq::socket_t& socket, const std::string& endpoint, net::Role role) {
+  if (const std::string keys = net::keysForEndpoint("", endpoint); !keys.empty())
+    net::applyClientKeys(socket, net::loadClientKeys(keys, role));
 }
 
 // How a LocalCluster's services are started beyond the defaults.
