@@ -54,6 +54,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
+                       {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
                        {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
   stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
                       {"deposits", get(counters, "photons.deposits")},

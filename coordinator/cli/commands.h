@@ -29,6 +29,7 @@ struct RenderOptions {
   float photonRadius = 0.5f;
   float exposure = 1.0f;
   std::string aov = "radiance";
+  std::string irradiance = "precomputed";   // what a gather hit reads: precomputed | knn
 };
 
 void addRenderOptions(CLI::App& command, RenderOptions& options);

@@ -32,6 +32,11 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
                      "default: 2 with room cells, every light with --grid voxel cells)");
   command.add_option("--photon-k", o.photonK, "photons per density estimate")->capture_default_str();
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")->capture_default_str();
+  command.add_option("--irradiance", o.irradiance,
+                     "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at every 4th "
+                     "photon of its cell) or knn (the k-nearest-photon estimate at every hit)")
+      ->check(CLI::IsMember({"precomputed", "knn"}))
+      ->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")->capture_default_str();
   command.add_option("--aov", o.aov,
                      "what the image shows: radiance; cells (false colour of each pixel's cell); "
@@ -72,6 +77,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setExposure(o.exposure);
   spec.setGather(o.gather);
   spec.setLightHops(o.lightHops);
+  spec.setIrradiance(o.irradiance == "knn" ? wire::Irradiance::KNN : wire::Irradiance::PRECOMPUTED);
   spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
 }
 
