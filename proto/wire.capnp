@@ -85,6 +85,7 @@ struct JobSpec {
   aov @13 :Aov;            # what the image shows
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
   irradiance @15 :Irradiance;  # what a final-gather hit reads
+  renderAccel @16 :Text;   # accelerator of render leases ("": accel)
 }
 
 enum Irradiance {

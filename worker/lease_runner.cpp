@@ -120,7 +120,11 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
     parameters.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
   }
   const bool renderPhase = assign.getPhase() == wire::Phase::RENDER;
-  const std::string accel = spec.getAccel().size() ? spec.getAccel().cStr() : "grid";
+  // Render leases may build another structure: they trace many rays per
+  // triangle, where one that costs more to build and less to trace pays.
+  const std::string accel = renderPhase && spec.getRenderAccel().size() ? spec.getRenderAccel().cStr()
+                            : spec.getAccel().size()                   ? spec.getAccel().cStr()
+                                                                       : "grid";
   LoadedCell& cell = accel == "auto" ? autoCell(cache, chooser, scene, cellId, assign.getCellWork(), renderPhase)
                                      : cache.cell(store, cellId, accel);
 

@@ -19,6 +19,9 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--accel", o.accel,
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
+  command.add_option("--render-accel", o.renderAccel,
+                     "accelerator of the render phase (default: kd:sah with the default --accel grid, else the "
+                     "--accel)");
   command.add_option("--photons", o.photons, "photons emitted in all")->capture_default_str();
   command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str();
   command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
@@ -66,6 +69,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setStore(std::filesystem::absolute(o.store).lexically_normal().string());
   spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
   spec.setAccel(o.accel);
+  spec.setRenderAccel(!o.renderAccel.empty() ? o.renderAccel : o.accel == "grid" ? "kd:sah" : o.accel);
   spec.setPhotons(o.photons);
   spec.setSpp(o.spp);
   spec.setSeed(o.seed);
