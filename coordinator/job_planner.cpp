@@ -75,6 +75,7 @@ void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
   // A bad --accel is refused here, naming the problem, rather than failing
   // every cell's lease in the workers.
   if (spec.getAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getAccel().cStr()));
+  if (spec.getRenderAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getRenderAccel().cStr()));
   if (scene.camera().cell >= scene.cells().size())
     throw std::invalid_argument(fmt::format("scene {}: the camera's cell {} does not exist", scene.directory(),
                                             scene.camera().cell));

@@ -55,10 +55,12 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["settings"] = {{"store", spec.getStore().cStr()},   {"output", spec.getOutput().cStr()},
                        {"photons", spec.getPhotons()},      {"spp", spec.getSpp()},
                        {"seed", spec.getSeed()},            {"accel", spec.getAccel().cStr()},
+                       {"render_accel", spec.getRenderAccel().size() ? spec.getRenderAccel().cStr() : spec.getAccel().cStr()},
                        {"width", spec.getWidth()},          {"height", spec.getHeight()},
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
+                       {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
                        {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
   stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
                       {"deposits", get(counters, "photons.deposits")},

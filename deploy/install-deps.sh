@@ -6,8 +6,13 @@
 #   deploy/install-deps.sh --slurm    also Slurm (slurmctld, slurmd, srun, sbatch) and MUNGE,
 #                                     for deploy/slurm/ and its test (tests/deploy/slurm_test.sh)
 #   deploy/install-deps.sh --fuzz     also clang and libFuzzer, for tests/fuzz (docs/fuzzing.md)
+#   deploy/install-deps.sh --mitsuba  also Mitsuba 3 and Dr.Jit (PyPI) in a virtual environment at
+#                                     $MITSUBA_VENV (default ~/.local/share/portico/mitsuba-venv) and
+#                                     Debian's libllvm19, for the side-by-side measurements of
+#                                     docs/image-quality.md (shared/tools/mitsuba_ladder.py)
 set -euo pipefail
 
+mitsuba=0
 packages=(
   cmake ninja-build g++ pkg-config make
   libembree-dev libopenimageio-dev openimageio-tools
@@ -26,8 +31,10 @@ for arg in "$@"; do
     # bookworm's clang is 14; its libFuzzer (libclang_rt.fuzzer) is in
     # libclang-rt-14-dev, only recommended by clang, so named here.
     --fuzz) packages+=(clang libclang-rt-14-dev) ;;
-    -h|--help) sed -n '2,8p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "install-deps.sh: unknown option $arg (known: --slurm, --fuzz)" >&2; exit 2 ;;
+    # Dr.Jit's LLVM back end (llvm_ad_rgb) loads libLLVM at run time.
+    --mitsuba) packages+=(libllvm19); mitsuba=1 ;;
+    -h|--help) sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    *) echo "install-deps.sh: unknown option $arg (known: --slurm, --fuzz, --mitsuba)" >&2; exit 2 ;;
   esac
 done
 
@@ -39,3 +46,10 @@ export DEBIAN_FRONTEND=noninteractive
 apt_opts=(-o DPkg::Lock::Timeout=600)
 $SUDO apt-get "${apt_opts[@]}" update -qq
 $SUDO apt-get "${apt_opts[@]}" install -y -qq --no-install-recommends "${packages[@]}"
+
+if [ "$mitsuba" = 1 ]; then
+  venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"
+  [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
+  "$venv/bin/pip" install -q mitsuba==3.9.1 drjit==1.5.0 numpy
+  echo "Mitsuba 3 in $venv: run with $venv/bin/python and DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+fi

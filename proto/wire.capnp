@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 5;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records
+const protocolVersion :UInt32 = 6;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal
 
 enum Phase {
   photons @0;
@@ -84,6 +84,13 @@ struct JobSpec {
   gather @12 :UInt32;      # final-gather rays per camera hit (0: estimate at the hit)
   aov @13 :Aov;            # what the image shows
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
+  irradiance @15 :Irradiance;  # what a final-gather hit reads
+  renderAccel @16 :Text;   # accelerator of render leases ("": accel)
+}
+
+enum Irradiance {
+  precomputed @0;          # the nearest irradiance precomputed at a subset of the cell's photons
+  knn @1;                  # the k-nearest-photon estimate at every gather hit
 }
 
 enum Aov {

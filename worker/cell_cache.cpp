@@ -115,14 +115,14 @@ void CellCache::rebuildAccelerator(LoadedCell& cell, const std::string& spec) {
   throw std::logic_error("rebuildAccelerator: the cell is not in the cache");
 }
 
-const PhotonMap* CellCache::photonMap(uint64_t job, uint32_t cell) {
+const IndirectLight* CellCache::indirectLight(uint64_t job, uint32_t cell) {
   auto it = maps_.find({job, cell});
   if (it == maps_.end()) return nullptr;
   touch(it->second);
   return it->second.map.get();
 }
 
-const PhotonMap& CellCache::storePhotonMap(uint64_t job, uint32_t cell, std::unique_ptr<PhotonMap> map) {
+const IndirectLight& CellCache::storeIndirectLight(uint64_t job, uint32_t cell, std::unique_ptr<IndirectLight> map) {
   Entry& entry = maps_[{job, cell}];
   if (entry.map) {
     held_ -= entry.bytes;

@@ -1,5 +1,6 @@
 // The worker's memory: loaded cells (mapped geometry + accelerator) and
-// photon maps, least recently used evicted first, under a byte budget.
+// photon maps with their irradiance caches, least recently used evicted
+// first, under a byte budget.
 #pragma once
 
 #include <cstdint>
@@ -17,7 +18,7 @@
 #include "common/scene/cell_geometry.h"
 #include "common/scene/scene_store.h"
 #include "common/transport/cell_tracer.h"
-#include "common/transport/photon_map.h"
+#include "common/transport/indirect_light.h"
 
 namespace portico {
 
@@ -61,9 +62,9 @@ class CellCache {
   LoadedCell* heldCell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec);
   // Replaces a loaded cell's accelerator with one built from `spec`.
   void rebuildAccelerator(LoadedCell& cell, const std::string& spec);
-  // The photon map of (job, cell), or nullptr when not cached; pinned.
-  const PhotonMap* photonMap(uint64_t job, uint32_t cell);
-  const PhotonMap& storePhotonMap(uint64_t job, uint32_t cell, std::unique_ptr<PhotonMap> map);
+  // The photon map (and irradiance cache) of (job, cell), or nullptr when not cached; pinned.
+  const IndirectLight* indirectLight(uint64_t job, uint32_t cell);
+  const IndirectLight& storeIndirectLight(uint64_t job, uint32_t cell, std::unique_ptr<IndirectLight> light);
   // Evicts unpinned entries, least recently used first, until `bytes` more
   // fit in the budget (or nothing unpinned is left).
   void makeRoom(uint64_t bytes);
@@ -77,7 +78,7 @@ class CellCache {
   using MapKey = std::pair<uint64_t, uint32_t>;
   struct Entry {
     std::unique_ptr<LoadedCell> cell;
-    std::unique_ptr<PhotonMap> map;
+    std::unique_ptr<IndirectLight> map;
     uint64_t bytes = 0;
     uint64_t pinnedEpoch = 0;
     std::optional<CellKey> cellKey;   // which map owns it, for O(log n) eviction

@@ -25,6 +25,8 @@ JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
   p.gather = spec.getGather();
   p.lightHops = spec.getLightHops();
   p.aov = static_cast<JobParameters::Aov>(spec.getAov());
+  p.irradiance = spec.getIrradiance() == wire::Irradiance::KNN ? JobParameters::Irradiance::Knn
+                                                                : JobParameters::Irradiance::Precomputed;
   return p;
 }
 
@@ -85,7 +87,7 @@ int64_t forwardToHeldCells(CellCache& cache, const SceneStore& scene, const std:
     for (auto it = out.crossings.begin(); it != out.crossings.end() && forwarded < limit;) {
       const uint32_t destination = it->first;
       LoadedCell* held = cache.heldCell(store, destination, accel);
-      const PhotonMap* photons = held && renderPhase ? cache.photonMap(job, destination) : nullptr;
+      const IndirectLight* photons = held && renderPhase ? cache.indirectLight(job, destination) : nullptr;
       if (!held || (renderPhase && !photons)) {
         ++it;
         continue;
@@ -120,25 +122,41 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
     parameters.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
   }
   const bool renderPhase = assign.getPhase() == wire::Phase::RENDER;
-  const std::string accel = spec.getAccel().size() ? spec.getAccel().cStr() : "grid";
+  // Render leases may build another structure: they trace many rays per
+  // triangle, where one that costs more to build and less to trace pays.
+  const std::string accel = renderPhase && spec.getRenderAccel().size() ? spec.getRenderAccel().cStr()
+                            : spec.getAccel().size()                   ? spec.getAccel().cStr()
+                                                                       : "grid";
   LoadedCell& cell = accel == "auto" ? autoCell(cache, chooser, scene, cellId, assign.getCellWork(), renderPhase)
                                      : cache.cell(store, cellId, accel);
 
-  const PhotonMap* indirect = nullptr;
+  const IndirectLight* indirect = nullptr;
+  int64_t irradianceMicroseconds = 0, irradiancePoints = 0;
   if (renderPhase) {
-    indirect = cache.photonMap(assign.getJob(), cellId);
+    indirect = cache.indirectLight(assign.getJob(), cellId);
     if (!indirect) {
       if (!photonRecords) throw std::logic_error("render lease without photons");
       // Final gathering uses every photon; the estimate at a camera hit only
       // those that bounced (direct light is sampled with shadow rays).
-      // Room for the decoded photons, which become the map, and its build's scratch.
+      // Room for the decoded photons, which become the map, its build's
+      // scratch and the irradiance cache (under a quarter of the map).
       const size_t count = photonRecords->size() / sizeof(PhotonRecord);
       cache.makeRoom(2 * count * sizeof(StoredPhoton));
       std::vector<StoredPhoton> photons;
       unpackRecords(photonRecords->data(), photonRecords->size(),
                     PhotonFrame(scene.cells()[cellId].bounds, parameters.photonRadius), spec.getGather() > 0, photons);
       photonRecords.reset();
-      indirect = &cache.storePhotonMap(assign.getJob(), cellId, std::make_unique<PhotonMap>(std::move(photons)));
+      auto light = std::make_unique<IndirectLight>(IndirectLight{PhotonMap(std::move(photons)), std::nullopt});
+      if (parameters.gather > 0 && parameters.irradiance == JobParameters::Irradiance::Precomputed) {
+        const auto precomputeStarted = std::chrono::steady_clock::now();
+        light->irradiance.emplace(light->photons, parameters.irradianceStride, parameters.irradianceK(),
+                                  parameters.photonRadius);
+        irradiancePoints = int64_t(light->irradiance->size());
+        irradianceMicroseconds = std::chrono::duration_cast<std::chrono::microseconds>(
+                                     std::chrono::steady_clock::now() - precomputeStarted)
+                                     .count();
+      }
+      indirect = &cache.storeIndirectLight(assign.getJob(), cellId, std::move(light));
     }
   }
 
@@ -239,6 +257,8 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   named.push_back({"cells.cache_hits", cacheStats.cellHits});
   named.push_back({"cells.bytes_read", cacheStats.bytesRead});
   named.push_back({"photon_maps.built", cacheStats.photonMapsBuilt});
+  named.push_back({"irradiance.points", irradiancePoints});
+  named.push_back({"time.irradiance_us", irradianceMicroseconds});
   named.push_back({"rays.forwarded", forwarded});
   named.push_back({"leases.extra_cells", int64_t(assign.getMoreCells().size())});
   // Microseconds: most builds take well under a millisecond.

@@ -122,7 +122,7 @@ FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::option
 bool WorkerSession::readyToTrace(const net::Decoded& decoded) {
   if (mirror_) return false;
   auto assign = decoded.envelope().getAssign();
-  return assign.getPhase() != wire::Phase::RENDER || cache_.photonMap(assign.getJob(), assign.getCell()) != nullptr;
+  return assign.getPhase() != wire::Phase::RENDER || cache_.indirectLight(assign.getJob(), assign.getCell()) != nullptr;
 }
 
 // The tracing thread: traces `first`, then, while the next queued lease is
@@ -267,7 +267,7 @@ int WorkerSession::run() {
           return;
         }
       }
-      if (assign.getPhase() == wire::Phase::RENDER && !cache_.photonMap(assign.getJob(), assign.getCell())) {
+      if (assign.getPhase() == wire::Phase::RENDER && !cache_.indirectLight(assign.getJob(), assign.getCell())) {
         capnp::MallocMessageBuilder message;
         auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
         fetch.setJob(assign.getJob());

@@ -41,9 +41,11 @@ ImageComparison compareImages(const LinearImage& image, const LinearImage& refer
         ++result.blocksChecked;
         result.blocksOverLimit += block.relativeError > blockLimit;
         result.worstBlockError = std::max(result.worstBlockError, block.relativeError);
+        result.blockRmse += block.relativeError * block.relativeError;
       }
       result.blocks.push_back(block);
     }
+  if (result.blocksChecked > 0) result.blockRmse = std::sqrt(result.blockRmse / result.blocksChecked);
   return result;
 }
 
@@ -51,9 +53,9 @@ std::string describe(const ImageComparison& c) {
   const BlockComparison* worst = nullptr;
   for (const auto& b : c.blocks)
     if (b.checked && (!worst || b.relativeError > worst->relativeError)) worst = &b;
-  std::string text = fmt::format("image mean {:.5f} vs reference {:.5f}: {:.2f} % off; {} blocks checked, {} over the limit",
-                                 c.imageMean, c.referenceMean, 100 * c.meanRelativeError, c.blocksChecked,
-                                 c.blocksOverLimit);
+  std::string text = fmt::format(
+      "image mean {:.5f} vs reference {:.5f}: {:.2f} % off; {} blocks checked, {} over the limit, block RMSE {:.2f} %",
+      c.imageMean, c.referenceMean, 100 * c.meanRelativeError, c.blocksChecked, c.blocksOverLimit, 100 * c.blockRmse);
   if (worst)
     text += fmt::format("; worst block at ({}, {}): {:.5f} vs {:.5f} ({:.1f} %)", worst->x, worst->y, worst->image,
                         worst->reference, 100 * worst->relativeError);

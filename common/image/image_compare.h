@@ -24,6 +24,9 @@ struct ImageComparison {
   int blocksChecked = 0;
   int blocksOverLimit = 0;
   double worstBlockError = 0;
+  // Root mean square of the checked blocks' relative errors (the "block
+  // RMSE" of shared/tools/mitsuba_ladder.py).
+  double blockRmse = 0;
 };
 
 // Blocks of blockSize x blockSize pixels; a block is checked when its

@@ -16,12 +16,13 @@ Ray toRay(const RayState& state) { return {state.origin, state.direction, state.
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
-                       const PhotonMap* photons)
+                       const IndirectLight* indirect)
     : scene_(scene),
       tracer_(tracer),
       parameters_(parameters),
       ownFrame_(scene.cells()[tracer.cell().id()].bounds, parameters.photonRadius),
-      photons_(photons),
+      photons_(indirect ? &indirect->photons : nullptr),
+      irradiance_(indirect && indirect->irradiance ? &*indirect->irradiance : nullptr),
       lightSampler_(scene.lights(), LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops)) {
   if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
 }
@@ -156,7 +157,13 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       return;
     }
     const Vec3 point = photon.origin + photon.direction * event.t;
-    deposit({point, photon.direction, photon.weight, photon.pathId, photon.depth}, out);
+    bool front;
+    const Vec3 normal = hitNormalFacing(mesh, event.primitive, photon.direction, front);
+    // Stored with the lit side's normal (into the surface), which the
+    // estimates compare with their own: photons on a wall meeting the floor
+    // do not count for the floor, and the irradiance cache knows the
+    // surface each of its points lies on.
+    deposit({point, -normal, photon.weight, photon.pathId, photon.depth}, out);
     // Russian roulette on the albedo: survivors carry power * albedo / p, so
     // the expected power is unchanged.
     const float survival = std::min(1.0f, maxComponent(material.albedo));
@@ -166,8 +173,6 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       ++out.counters.photonsAbsorbed;
       return;
     }
-    bool front;
-    const Vec3 normal = hitNormalFacing(mesh, event.primitive, photon.direction, front);
     photon.weight = photon.weight * material.albedo / survival;
     photon.depth = static_cast<uint16_t>(bounce + 1);
     photon.origin = offsetAlongNormal(point, normal);
@@ -307,6 +312,11 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
       bool front;
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
+      Vec3 perAlbedo;
+      if (irradiance_ && irradiance_->lookup(point, normal, perAlbedo)) {
+        addToFilm(ray.pixel, ray.weight * material.albedo * perAlbedo, out);
+        return;
+      }
       // Each gather lookup is one of many averaged per pixel, so it can use
       // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
       const uint32_t k = std::max(8u, parameters_.photonK / 4);

@@ -9,11 +9,9 @@
 // photon index.
 //
 // Layout: two flat arrays and no pointers. `photons_` holds the photons in
-// sorted order (photon(i) is the i-th); `nodes_` is a left-balanced kd-tree
-// in implicit heap order (the children of node i are 2i+1 and 2i+2), one
-// node per photon, 16 bytes: its position and one word packing the split
-// axis (2 bits) with the photon's index (30 bits) — Jensen's layout with
-// Tungsten's packed word. Both arrays can be written out and read back as-is.
+// sorted order (photon(i) is the i-th); `tree_` is a left-balanced kd-tree
+// over their positions (PointKdTree). Both can be written out and read back
+// as-is.
 #pragma once
 
 #include <cstddef>
@@ -21,12 +19,15 @@
 #include <vector>
 
 #include "common/math.h"
+#include "common/transport/point_kd_tree.h"
 
 namespace portico {
 
 struct StoredPhoton {
   Vec3 position;
-  Vec3 direction;   // of travel when it arrived, unit
+  // Unit, into the surface it landed on: the negated normal of the side it
+  // arrived on (so dot(direction, n) < 0 for a query facing that side).
+  Vec3 direction;
   Vec3 power;
   uint64_t pathId = 0;
   uint16_t bounce = 0;
@@ -35,9 +36,15 @@ struct StoredPhoton {
 class PhotonMap {
  public:
   // The most photons one map holds: node words keep 30 bits of index.
-  static constexpr size_t kMaxPhotons = (size_t{1} << 30) - 1;
+  static constexpr size_t kMaxPhotons = PointKdTree::kMaxPoints;
   // Cone filter constant k_c (Jensen): w = 1 - d / (k_c r).
   static constexpr float kConeFilter = 1.1f;
+  // radiance() counts a photon whose surface's normal is within 120 degrees
+  // of the query's: the far side of a thin wall (opposite normals) is left
+  // out, a wall meeting the floor is not. The disc below keeps the wall's
+  // photons to those near the corner, where they make up for the part of
+  // the disc beyond the wall (leaving them out read a corner 2 % lower).
+  static constexpr float kMostFacingAway = 0.5f;
   // Photons farther than this fraction of the search radius from the tangent
   // plane are ignored by radiance(): a flattened "disc" search, so thin walls
   // and corners do not leak light into each other.
@@ -72,31 +79,27 @@ class PhotonMap {
   // Radiance reflected towards the viewer by a Lambertian surface with this
   // albedo at p, normal n (unit, on the viewer's side):
   //   L = albedo/pi * sum_i power_i * w_i / (norm * pi * r^2)
-  // over the k nearest photons within maxRadius that arrived from the front
-  // (dot(direction, n) < 0; photons from behind do not count against k),
+  // over the k nearest photons within maxRadius on a surface that does not
+  // face away from n (dot(direction, n) < kMostFacingAway; others do not
+  // count against k),
   // dropping those farther than kDiscThickness * r from the tangent plane.
   // w_i = 1 - d_i / (k_c r) is Jensen's cone filter, norm = 1 - 2 / (3 k_c).
   // r is the distance of the k-th photon when k were found, else maxRadius
   // (the whole disc was searched); for an infinite maxRadius and fewer than
   // k photons, the farthest found. Returns 0 when no photon is found or r is
   // 0 (all found photons sit exactly on p).
-  Vec3 radiance(const Vec3& p, const Vec3& n, const Vec3& albedo, uint32_t k, float maxRadius) const;
+  //
+  // `leftOut` (null, or one flag per photon) leaves out the photons flagged
+  // non-zero, as if the map had none of them.
+  Vec3 radiance(const Vec3& p, const Vec3& n, const Vec3& albedo, uint32_t k, float maxRadius,
+                const std::vector<uint8_t>* leftOut = nullptr) const;
 
   // Memory held by the map, in bytes.
   uint64_t bytes() const;
 
  private:
-  struct Node {
-    Vec3 position;
-    uint32_t axisAndIndex;   // split axis in the top 2 bits, photon index below
-  };
-  static_assert(sizeof(Node) == 16);
-
-  template <typename Accept>
-  uint32_t search(const Vec3& p, uint32_t k, float maxRadiusSquared, Accept accept, uint64_t* heap) const;
-
   std::vector<StoredPhoton> photons_;
-  std::vector<Node> nodes_;
+  PointKdTree tree_;
   Bounds3 bounds_;
 };
 

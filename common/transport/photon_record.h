@@ -7,7 +7,8 @@
 //   50 m hall, far below any search radius;
 // - one bit: whether the photon bounced before (direct photons are left
 //   out of the estimate at camera hits);
-// - power as shared-exponent RGB, direction in octahedral coordinates.
+// - power as shared-exponent RGB, direction (into the surface, along its
+//   lit side's normal: StoredPhoton) in octahedral coordinates.
 //
 // Every deposit passes through the coordinator (and its sockets, files and
 // checksums) once per table it lands in: a 24-byte record of floats makes
@@ -30,7 +31,7 @@ namespace portico {
 struct PhotonRecord {
   uint64_t position;      // x | y << 21 | z << 42 on the frame's lattice; bit 63: bounced
   uint32_t power;         // RGBE: 8-bit mantissas, shared 8-bit exponent
-  int16_t direction[2];   // octahedral map of the unit direction of travel
+  int16_t direction[2];   // octahedral map of StoredPhoton::direction
 };
 static_assert(sizeof(PhotonRecord) == 16, "photon records are 16 bytes");
 

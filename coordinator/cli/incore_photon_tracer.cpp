@@ -212,7 +212,10 @@ InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePh
               break;
             }
             const Vec3 point = origin + direction * query.ray.tfar;
-            stored.push_back({point, direction, weight, path, uint16_t(depth)});
+            Vec3 normal = normalize(cell.mesh().geometricNormal(primitive));
+            if (!(dot(normal, direction) < 0)) normal = -normal;
+            // As the cell kernel deposits: the lit side's normal, pointing into the surface.
+            stored.push_back({point, -normal, weight, path, uint16_t(depth)});
             ++count.deposits;
             const float survival = std::min(1.0f, maxComponent(material.albedo));
             if (randomUniform(seed, RandomStream::Photon, path, depth, dim::Roulette) >= survival ||
@@ -220,8 +223,6 @@ InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePh
               ++count.absorbed;
               break;
             }
-            Vec3 normal = normalize(cell.mesh().geometricNormal(primitive));
-            if (!(dot(normal, direction) < 0)) normal = -normal;
             weight = weight * material.albedo / survival;
             ++depth;
             origin = offsetAlongNormal(point, normal);

@@ -25,6 +25,9 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--accel", o.accel,
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
+  command.add_option("--render-accel", o.renderAccel,
+                     "accelerator of the render phase (default: kd:sah with the default --accel grid, else the "
+                     "--accel)");
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
   command.add_option("--photons", o.photons, "photons emitted in all")
@@ -52,6 +55,11 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")
       ->capture_default_str()
       ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
+  command.add_option("--irradiance", o.irradiance,
+                     "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at every 4th "
+                     "photon of its cell) or knn (the k-nearest-photon estimate at every hit)")
+      ->check(CLI::IsMember({"precomputed", "knn"}))
+      ->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")
       ->capture_default_str()
       ->check(realNumber(limits::kMinExposure, limits::kMaxExposure));
@@ -97,6 +105,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   checkOutputPath(o.output);
   spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
   spec.setAccel(o.accel);
+  spec.setRenderAccel(!o.renderAccel.empty() ? o.renderAccel : o.accel == "grid" ? "kd:sah" : o.accel);
   spec.setPhotons(o.photons);
   spec.setSpp(o.spp);
   spec.setSeed(o.seed);
@@ -108,6 +117,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   spec.setExposure(o.exposure);
   spec.setGather(o.gather);
   spec.setLightHops(o.lightHops);
+  spec.setIrradiance(o.irradiance == "knn" ? wire::Irradiance::KNN : wire::Irradiance::PRECOMPUTED);
   spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
 }
 

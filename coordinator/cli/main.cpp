@@ -7,6 +7,7 @@
 #include "common/scene/building_importer.h"
 #include "coordinator/cli/bench_calibrate.h"
 #include "coordinator/cli/bench_paper.h"
+#include "coordinator/cli/bench_quality.h"
 #include "coordinator/cli/commands.h"
 #include "common/util/cli_bounds.h"
 
@@ -126,6 +127,19 @@ int main(int argc, char** argv) {
                    "threads of Embree's builder (0: every core); 1 compares like with like")
       ->capture_default_str();
 
+  BenchQualityOptions benchQuality;
+  auto* benchQualityCommand = bench->add_subcommand(
+      "quality", "error against time on a reference scene: a ladder of render settings (docs/image-quality.md)");
+  benchQualityCommand->add_option("SCENE_DIR", benchQuality.sceneDirectory, "folder of scene.json and reference.exr")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  benchQualityCommand->add_option("--settings", benchQuality.settings,
+                                  "portico render arguments per rung, rungs separated by ';'")
+      ->capture_default_str();
+  benchQualityCommand->add_option("--workers", benchQuality.workers, "workers of each render")->capture_default_str();
+  benchQualityCommand->add_option("--csv", benchQuality.csv, "write one row per setting");
+  benchQualityCommand->add_option("--plot", benchQuality.plot, "write a PNG: block RMSE and worst block against seconds");
+
   BenchPipelineOptions benchPipeline;
   auto* benchPipelineCommand = bench->add_subcommand(
       "pipeline", "one photon pass over a generated building: in-core Embree (2 threads) vs portico (1, 2 workers)");
@@ -214,6 +228,7 @@ int main(int argc, char** argv) {
     if (*keysGenerate) return runKeysGenerate(keysDirectory);
     if (*benchAccelCommand) return runBenchAccel(benchAccel);
     if (*benchPipelineCommand) return runBenchPipeline(benchPipeline);
+    if (*benchQualityCommand) return runBenchQuality(benchQuality);
     if (*benchPaperCommand) return runBenchPaper(benchPaper);
     if (*calibrateCommand) return runBenchCalibrate(calibrate);
   } catch (const std::exception& e) {

@@ -55,13 +55,16 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
   std::vector<std::string> keys;
   if (!local.keys.empty()) keys = {"--keys", std::filesystem::absolute(local.keys).string()};
   // mkdtemp made the directory 0700: the socket in it is this user's alone.
-  const std::string listen = "ipc://" + (work / "coordinator.sock").string();
-  std::vector<std::string> coordinatorArgv{findProgram("portico-coordinator"), "--listen", listen, "--db",
+  // A socket file whose name is known before the coordinator starts: the
+  // workers start beside it instead of after it has bound (its start-up,
+  // most of it loading shared libraries, is about a third of a small
+  // render's wall time), and ZeroMQ connects them once it listens.
+  const std::string endpoint = "ipc://" + (work / "coordinator.ipc").string();
+  std::vector<std::string> coordinatorArgv{findProgram("portico-coordinator"), "--listen", endpoint, "--db",
                                            (work / "jobs.db").string(), "--endpoint-file", endpointFile,
                                            "--log-level", local.logLevel};
   coordinatorArgv.insert(coordinatorArgv.end(), keys.begin(), keys.end());
   ChildProcess coordinator(coordinatorArgv, coordinatorLog);
-  const std::string endpoint = readEndpoint(endpointFile, coordinator, coordinatorLog);
   std::vector<ChildProcess> workers;
   const std::string workerProgram = findProgram("portico-worker");
   for (uint32_t i = 0; i < local.workers; ++i) {
@@ -70,6 +73,8 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
     argv.insert(argv.end(), keys.begin(), keys.end());
     workers.emplace_back(argv, (work / fmt::format("worker-{}.log", i)).string());
   }
+
+  readEndpoint(endpointFile, coordinator, coordinatorLog);   // it listens: submit
 
   signal(SIGINT, onInterrupt);
   signal(SIGTERM, onInterrupt);
@@ -100,7 +105,9 @@ int runRender(const RenderOptions& render, const LocalRunOptions& local) {
       status["error"] = fmt::format("every worker exited; see the logs in {}", work.string());
       break;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    // Polled often: a small render ends within a second, and waiting a
+    // longer period after it adds to every run.
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   if (interrupted) {
     // A terminal's Ctrl-C reached the services too, and the coordinator may

@@ -1,0 +1,125 @@
+#include "coordinator/cli/bench_quality.h"
+
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+#include "common/util/child_process.h"
+#include "coordinator/cli/bench_plot.h"
+#include "coordinator/cli/csv_field.h"
+
+namespace portico::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::vector<std::string> splitOn(const std::string& text, char separator) {
+  std::vector<std::string> parts;
+  std::stringstream stream(text);
+  for (std::string part; std::getline(stream, part, separator);)
+    if (part.find_first_not_of(' ') != std::string::npos) parts.push_back(part);
+  return parts;
+}
+
+// Runs argv to its end; throws naming `what` and its log when it fails.
+void runChild(const std::vector<std::string>& argv, const fs::path& log, const std::string& what) {
+  ChildProcess child(argv, log.string());
+  if (child.wait() != 0) throw std::runtime_error(fmt::format("{} failed:\n{}", what, readFile(log)));
+}
+
+struct Rung {
+  std::string settings;
+  double seconds = 0, meanError = 0, worstBlock = 0, blockRmse = 0;
+};
+
+// portico-compare's line: "... X % off; ... block RMSE Y %; worst block at (..): a vs b (Z %)".
+void parseComparison(const std::string& text, Rung& rung) {
+  static const std::regex pattern(R"(([0-9.]+) % off.*block RMSE ([0-9.]+) %.*\(([0-9.]+) %\))");
+  std::smatch match;
+  if (!std::regex_search(text, match, pattern))
+    throw std::runtime_error("portico-compare printed no comparison: " + text);
+  rung.meanError = std::stod(match[1]) / 100;
+  rung.blockRmse = std::stod(match[2]) / 100;
+  rung.worstBlock = std::stod(match[3]) / 100;
+}
+
+}  // namespace
+
+int runBenchQuality(const BenchQualityOptions& options) {
+  const fs::path scene = fs::path(options.sceneDirectory) / "scene.json";
+  const fs::path reference = fs::path(options.sceneDirectory) / "reference.exr";
+  if (!fs::exists(scene)) throw std::invalid_argument(fmt::format("{}: no scene.json", options.sceneDirectory));
+  if (!fs::exists(reference))
+    throw std::invalid_argument(fmt::format("{}: no reference.exr beside scene.json", options.sceneDirectory));
+  const std::vector<std::string> ladder = splitOn(options.settings, ';');
+  if (ladder.empty()) throw std::invalid_argument("--settings: no setting to render");
+
+  const fs::path work = fs::temp_directory_path() / fmt::format("portico-bench-quality-{}", getpid());
+  fs::remove_all(work);
+  fs::create_directories(work);
+  const std::string portico = findProgram("portico"), compare = findProgram("portico-compare");
+  runChild({portico, "scene", "import", scene.string(), (work / "store").string()}, work / "import.log",
+           "importing " + scene.string());
+
+  std::vector<Rung> rungs;
+  std::cout << "settings,seconds,mean_err,worst_block,rel_rmse_blocks\n";
+  for (size_t i = 0; i < ladder.size(); ++i) {
+    const fs::path image = work / fmt::format("rung-{}.exr", i);
+    std::vector<std::string> argv{portico, "render", (work / "store").string(), "-o", image.string(),
+                                  "--workers", std::to_string(options.workers)};
+    for (const std::string& word : splitOn(ladder[i], ' ')) argv.push_back(word);
+    Rung rung{ladder[i]};
+    const auto started = std::chrono::steady_clock::now();
+    runChild(argv, work / fmt::format("render-{}.log", i), "portico render " + ladder[i]);
+    rung.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    // portico-compare exits 1 when a block is over the reference test's
+    // limit: a rung of a ladder may well be; its line is what counts here.
+    const fs::path compareLog = work / fmt::format("compare-{}.log", i);
+    ChildProcess comparison({compare, image.string(), reference.string()}, compareLog.string());
+    comparison.wait();
+    parseComparison(readFile(compareLog), rung);
+    std::cout << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(rung.settings), rung.seconds, rung.meanError,
+                             rung.worstBlock, rung.blockRmse)
+              << std::flush;
+    rungs.push_back(rung);
+  }
+
+  if (!options.csv.empty()) {
+    std::ofstream out(options.csv);
+    out << "settings,seconds,mean_err,worst_block,rel_rmse_blocks\n";
+    for (const Rung& r : rungs)
+      out << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(r.settings), r.seconds, r.meanError, r.worstBlock,
+                         r.blockRmse);
+    if (!out) throw std::runtime_error(fmt::format("{}: cannot write", options.csv));
+  }
+  if (!options.plot.empty()) {
+    PlotPanel panel{fmt::format("{}: error against time", fs::path(options.sceneDirectory).filename().string()),
+                    "seconds (portico render, start-up included)", "relative error", true, true, {}};
+    PlotSeries rmse, worst;
+    rmse.label = "block RMSE", rmse.color = {31, 119, 180};
+    worst.label = "worst block", worst.color = {214, 39, 40}, worst.dashed = true;
+    for (const Rung& r : rungs) {
+      rmse.x.push_back(r.seconds), rmse.y.push_back(r.blockRmse);
+      worst.x.push_back(r.seconds), worst.y.push_back(r.worstBlock);
+    }
+    panel.series = {rmse, worst};
+    writePlotPng(options.plot, {panel});
+  }
+  fs::remove_all(work);
+  return 0;
+}
+
+}  // namespace portico::cli

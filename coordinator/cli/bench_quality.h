@@ -1,0 +1,26 @@
+// `portico bench quality SCENE_DIR`: error against time on a reference
+// scene (scene.json with reference.exr beside it). Imports the scene once,
+// renders it with each setting of a ladder through `portico render` (the
+// whole command timed, start-up included), scores each image with
+// `portico-compare` and prints one CSV row per setting with the columns of
+// shared/tools/mitsuba_ladder.py: seconds, mean error, worst block, block
+// RMSE (16x16 blocks, those under 5 % of the image mean skipped).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace portico::cli {
+
+struct BenchQualityOptions {
+  std::string sceneDirectory;
+  // `portico render` arguments per rung, rungs separated by ';'.
+  std::string settings = "--spp 4 --gather 2;--spp 8 --gather 4;--spp 16 --gather 4;--spp 32 --gather 8";
+  uint32_t workers = 2;
+  std::string csv;
+  std::string plot;
+};
+
+int runBenchQuality(const BenchQualityOptions& options);
+
+}  // namespace portico::cli
