@@ -26,7 +26,7 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
   command.add_option("--render-accel", o.renderAccel,
-                     "accelerator of the render phase (default: kd:sah with the default --accel grid, else the "
+                     "accelerator of the render phase (default: bvh with the default --accel grid, else the "
                      "--accel)");
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
@@ -105,7 +105,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   checkOutputPath(o.output);
   spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
   spec.setAccel(o.accel);
-  spec.setRenderAccel(!o.renderAccel.empty() ? o.renderAccel : o.accel == "grid" ? "kd:sah" : o.accel);
+  spec.setRenderAccel(!o.renderAccel.empty() ? o.renderAccel : o.accel == "grid" ? "bvh" : o.accel);
   spec.setPhotons(o.photons);
   spec.setSpp(o.spp);
   spec.setSeed(o.seed);
