@@ -10,6 +10,8 @@ namespace portico {
 
 namespace {
 constexpr float kPortalSlack = 1e-4f;   // metres
+// Twice offsetAlongNormal's relative offset of a bounce (sampling.h).
+constexpr float kBounceReach = 4e-5f;
 // Growth of a box, relative to the largest coordinate involved, that lies
 // far beyond the triangle test's rounding: 2^-16, 256 float ulps.
 constexpr float kRelativeReach = 1.0f / 65536.0f;
@@ -124,8 +126,10 @@ CellEvent CellTracer::trace(const Ray& ray) const {
     limited.tMax = event.kind == CellEvent::Kind::Surface ? hit.t : ray.tMax;
     // A ray starting on a portal's plane (a camera exactly on a voxel face)
     // and moving out must leave at t = 0, whatever the rounding of t: an
-    // outward portal a hair behind the origin still counts.
-    limited.tMin = std::min(ray.tMin, -kPortalSlack);
+    // outward portal a hair behind the origin still counts. So does one
+    // behind a bounce off a surface lying on the portal's plane: the bounce
+    // starts offsetAlongNormal (2e-5 of the coordinates) beyond it.
+    limited.tMin = std::min(ray.tMin, -std::max(kPortalSlack, kBounceReach * std::max(1.0f, largestMagnitude(ray.origin))));
     // The box of the segment the portal test accepts hits on. The test is
     // backward stable: a point it reports (origin + t * direction, exactly)
     // lies within a few ulps of the triangle, measured in the magnitudes of
