@@ -32,7 +32,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
   import->add_option("--camera", importOptions.camera, "the building.json's camera of this name (default: the first)");
-  import->add_option("INPUT", importInputs, "building.json, or mesh files (OBJ, PLY, glTF/GLB, ...)")
+  std::string ifcLights = "auto";
+  import->add_option("--lights", ifcLights,
+                     "IFC input: lamps from the model's light fixtures (fixtures), one ceiling panel per space (panels), "
+                     "or fixtures where the model has some, else panels (auto)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "fixtures", "panels"}));
+  import->add_option("INPUT", importInputs, "building.json, an IFC model (.ifc), or mesh files (OBJ, PLY, glTF/GLB, ...)")
       ->required();
   import->add_option("STORE", store, "scene store directory to write")->required();
   import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
@@ -188,7 +194,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
-    if (*import) return runSceneImport(importInputs, importOptions, store);
+    if (*import) return runSceneImport(importInputs, importOptions, store, ifcLights);
     if (*info) return runSceneInfo(store, SceneInfoOptions{json, !noCompress});
     if (*plan) return runScenePlan(store, planOptions);
     if (*renderCommand) return runRender(render, local);

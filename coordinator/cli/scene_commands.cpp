@@ -15,6 +15,7 @@
 #include "common/scene/scene_validation.h"
 #include "coordinator/cli/compressed_size.h"
 #include "coordinator/cli/commands.h"
+#include "coordinator/cli/ifc_conversion.h"
 
 namespace portico::cli {
 
@@ -37,8 +38,19 @@ int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, 
   return runSceneInfo(store, false);
 }
 
-int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store) {
-  importBuilding(inputs, store, options);
+int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
+                   const std::string& ifcLights) {
+  if (inputs.size() == 1 && isIfcFile(inputs[0])) {
+    // The converter's files live beside the store while it is written, then go.
+    const std::string converted = store + ".ifc-conversion";
+    std::filesystem::remove_all(converted);
+    importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, options);
+    std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
+                               std::filesystem::copy_options::overwrite_existing);
+    std::filesystem::remove_all(converted);
+  } else {
+    importBuilding(inputs, store, options);
+  }
   return runSceneInfo(store, false);
 }
 
