@@ -165,11 +165,27 @@ def touching_pairs(owner):
     return sorted(pairs)
 
 
-def _face_samples(lo, hi, axis, plane):
+def _axis_samples(lo, hi, lines, planes):
+    """Sample coordinates in [lo, hi]: every grid interval inside gets its own,
+    SAMPLE apart at most, and either side of every surface plane gets one
+    just off it, so that a sliver of open air between a grid line and a
+    surface (a few millimetres) is sampled too."""
+    inner = lines[(lines > lo) & (lines < hi)]
+    bounds = np.concatenate([[lo], inner, [hi]])
+    samples = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        n = max(1, int(np.ceil((b - a) / SAMPLE)))
+        samples.append(a + (np.arange(n) + 0.5) * (b - a) / n)
+    near = planes[(planes > lo) & (planes < hi)]
+    beside = np.concatenate([near - CLEARANCE / 4, near + CLEARANCE / 4])
+    samples.append(beside[(beside > lo) & (beside < hi)])
+    return np.unique(np.concatenate(samples))
+
+
+def _face_samples(lo, hi, axis, plane, lines, planes):
     u, v = [a for a in range(3) if a != axis]
-    counts = [max(1, int(np.ceil((hi[a] - lo[a]) / SAMPLE))) for a in (u, v)]
-    su = lo[u] + (np.arange(counts[0]) + 0.5) * (hi[u] - lo[u]) / counts[0]
-    sv = lo[v] + (np.arange(counts[1]) + 0.5) * (hi[v] - lo[v]) / counts[1]
+    su = _axis_samples(lo[u], hi[u], lines[u], planes[u])
+    sv = _axis_samples(lo[v], hi[v], lines[v], planes[v])
     gu, gv = np.meshgrid(su, sv, indexing="ij")
     points = np.zeros((gu.size, 3))
     points[:, axis], points[:, u], points[:, v] = plane, gu.ravel(), gv.ravel()
@@ -191,6 +207,7 @@ def _sealed(points, sealers):
 
 def find_portals(cells, owner, lines, sealers):
     """Portals between touching cells, each on the rectangle the two boxes share."""
+    planes = [_surface_planes([mesh for mesh, _ in sealers], a) for a in range(3)]
     portals = []
     for a, b, axis, plane_index in touching_pairs(owner):
         plane = lines[axis][plane_index]
@@ -200,7 +217,7 @@ def find_portals(cells, owner, lines, sealers):
         if cells[a].label == cells[b].label and cells[a].label != AIR:
             portals.append(Portal(a, b, axis, plane, lo, hi))      # two parts of one space
             continue
-        points = _face_samples(lo, hi, axis, plane)
+        points = _face_samples(lo, hi, axis, plane, lines, planes)
         open_points = points[~_sealed(points, sealers)]
         if len(open_points) == 0:
             continue

@@ -34,11 +34,11 @@ text = open(info).read()
 expect("valid:" in text, "store not valid: " + text[-300:])
 p = r["photons"]
 expect(p["emitted"] == 20000, f"emitted {p['emitted']}")
-# Every photon is accounted for; a small share still leaks between cells
-# (docs/importing-buildings.md, limits): at most 0.1 % of photons, 1 % of rays.
+# Every photon is accounted for; a rare photon still slips between cells
+# through a slit under the sealing test's sampling (docs/importing-buildings.md).
 expect(p["absorbed"] + p["escaped"] == p["emitted"], f"photons unaccounted: {p}")
-expect(p["escaped"] <= p["emitted"] // 1000, f"escaped photons {p['escaped']} > 0.1 %")
-expect(r["rays"]["escaped"] <= r["rays"]["traced"] // 100, f"rays escaped {r['rays']['escaped']} > 1 % of {r['rays']['traced']}")
+expect(p["escaped"] <= p["emitted"] // 10000, f"escaped photons {p['escaped']} > 0.01 %")
+expect(r["rays"]["escaped"] == 0, f"rays escaped: {r['rays']['escaped']} of {r['rays']['traced']}")
 if problems:
     print(f"{camera}: " + "; ".join(problems)); sys.exit(1)
 print(f"ok {camera}: {s['cells']} cells, {s['portals']} portals, {s['doors_with_portal']}/{s['doors']} doors and "
