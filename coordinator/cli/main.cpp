@@ -8,6 +8,7 @@
 #include "coordinator/cli/bench_calibrate.h"
 #include "coordinator/cli/bench_paper.h"
 #include "coordinator/cli/commands.h"
+#include "coordinator/cli/scene_export.h"
 
 int main(int argc, char** argv) {
   using namespace portico::cli;
@@ -48,6 +49,10 @@ int main(int argc, char** argv) {
   info->add_flag("--json", json, "one JSON object on stdout");
   bool noCompress = false;
   info->add_flag("--no-compress", noCompress, "skip the zlib-compressed size (slow on large stores)");
+  std::string exportOutput;
+  auto* exportCommand = scene->add_subcommand("export", "write a scene store's triangles as OBJ + MTL");
+  exportCommand->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  exportCommand->add_option("-o,--output", exportOutput, "OBJ file to write (its MTL beside it)")->required();
   ScenePlanOptions planOptions;
   auto* plan = scene->add_subcommand("plan", "draw top-down floor plans of a scene store as a PNG");
   plan->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
@@ -197,6 +202,7 @@ int main(int argc, char** argv) {
     if (*import) return runSceneImport(importInputs, importOptions, store, ifcLights);
     if (*info) return runSceneInfo(store, SceneInfoOptions{json, !noCompress});
     if (*plan) return runScenePlan(store, planOptions);
+    if (*exportCommand) return runSceneExport(store, exportOutput);
     if (*renderCommand) return runRender(render, local);
     if (*submit) return runSubmit(connect, render);
     if (*status) return runStatus(connect, job, json);
