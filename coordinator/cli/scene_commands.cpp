@@ -113,6 +113,7 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
   info["lights"] = store.lights().size();
   info["materials"] = store.materials().size();
   info["floors"] = floors;
+  info["level_kind"] = levelWord(store);
   info["triangles"] = store.totalTriangles();
   info["avg_triangles_per_cell"] = avgTriangles;
   info["max_triangles_per_cell"] = maxTriangles;
@@ -137,9 +138,10 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
     return problems.empty() ? 0 : 1;
   }
 
-  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} floor{}, {} materials, {} triangles\n",
+  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} {}{}, {} materials, {} triangles\n",
                            store.directory(), store.cells().size(), store.portals().size(), store.lights().size(),
-                           floors, floors == 1 ? "" : "s", store.materials().size(), store.totalTriangles());
+                           floors, levelWord(store), floors == 1 ? "" : "s", store.materials().size(),
+                           store.totalTriangles());
   std::cout << fmt::format("triangles per cell: avg {:.1f}, max {} ({} cell{} without triangles)\n", avgTriangles,
                            maxTriangles, emptyCells, emptyCells == 1 ? "" : "s");
   if (bytes.compressed)
