@@ -198,10 +198,9 @@ def _sealed(points, sealers):
     for mesh, (mlo, mhi) in sealers:
         if np.any(mhi < lo) or np.any(mlo > hi):
             continue
-        todo = ~sealed
-        if not todo.any():
-            break
-        sealed[todo] = inside_mesh(points[todo], mesh, axis=0)
+        todo = ~sealed & np.all((points >= mlo) & (points <= mhi), axis=1)
+        if todo.any():
+            sealed[todo] = inside_mesh(points[todo], mesh, axis=0)
     return sealed
 
 

@@ -82,7 +82,7 @@ def _match_openings(openings, portals, cells, cell_of_point):
     found = []
     for o in openings:
         extent = o.hi - o.lo
-        thin = 0 if extent[0] < extent[2] else 2
+        thin = int(np.argmin(extent))     # across the wall, or the roof for a skylight
         centre = (o.lo + o.hi) / 2
         sides = []
         for sign in (-1, 1):
