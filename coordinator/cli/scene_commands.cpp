@@ -44,9 +44,14 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
     // The converter's files live beside the store while it is written, then go.
     const std::string converted = store + ".ifc-conversion";
     std::filesystem::remove_all(converted);
-    importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, options);
-    std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
-                               std::filesystem::copy_options::overwrite_existing);
+    try {
+      importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, options);
+      std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
+                                 std::filesystem::copy_options::overwrite_existing);
+    } catch (...) {
+      std::filesystem::remove_all(converted);
+      throw;
+    }
     std::filesystem::remove_all(converted);
   } else {
     importBuilding(inputs, store, options);

@@ -15,6 +15,7 @@ import sys
 import time
 
 import numpy as np
+import ifcopenshell
 
 from . import cell_partition as cp
 from .clip import distribute
@@ -217,8 +218,8 @@ def main(argv=None):
         return 2
     try:
         summary = convert(args.ifc, args.out_dir, args.lights)
-    except RuntimeError as error:       # IfcOpenShell's parse errors
-        print(f"{args.ifc}: {error}", file=sys.stderr)
+    except (RuntimeError, ifcopenshell.Error) as error:       # IfcOpenShell's parse errors
+        print(f"{args.ifc}: not a readable IFC model: {error}", file=sys.stderr)
         return 1
     print(json.dumps(summary))
     return 0
