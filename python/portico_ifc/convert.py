@@ -145,7 +145,7 @@ def convert(ifc_path, out_dir, lights="auto"):
     material = np.concatenate([g[1] for g in groups])
     for c, triangles, source in distribute(corners, lines, owner, cells):
         for m in np.unique(material[source]):
-            name = f"{names[c]}.{_slug(material_names[m])}-{m}"
+            name = f"{names[c]}-{_slug(material_names[m])}-{m}"
             path = os.path.join("meshes", f"{c:04d}-{m:03d}.obj")
             _write_obj(os.path.join(out_dir, path), triangles[material[source] == m])
             objects.append({"obj": path, "name": name, "cell": names[c], "albedo": list(material_albedo[m])})
