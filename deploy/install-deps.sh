@@ -47,6 +47,14 @@ apt_opts=(-o DPkg::Lock::Timeout=600)
 $SUDO apt-get "${apt_opts[@]}" update -qq
 $SUDO apt-get "${apt_opts[@]}" install -y -qq --no-install-recommends "${packages[@]}"
 
+# IFC import (`portico scene import model.ifc`, docs/importing-buildings.md)
+# reads models with IfcOpenShell, which Debian does not package: a virtual
+# environment beside the sources holds it (and numpy), as the user running
+# this script, where `portico` looks for it.
+repo="$(cd "$(dirname "$0")/.." && pwd)"
+if [ ! -x "$repo/.venv/bin/python3" ]; then python3 -m venv "$repo/.venv"; fi
+"$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "ifcopenshell==0.9.0.post1" "numpy>=1.24"
+
 if [ "$mitsuba" = 1 ]; then
   venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"

@@ -44,4 +44,9 @@ uint32_t floorCount(const SceneStore& store) {
   return static_cast<uint32_t>(findFloorLevels(store.cells()).levels.size());
 }
 
+const char* levelWord(const SceneStore& store) {
+  const auto it = store.meta().find("cells");
+  return it != store.meta().end() && it->second.rfind("grid", 0) == 0 ? "layer" : "floor";
+}
+
 }  // namespace portico

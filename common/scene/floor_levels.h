@@ -28,4 +28,8 @@ FloorLevels findFloorLevels(const std::vector<CellInfo>& cells);
 // of levels findFloorLevels finds.
 uint32_t floorCount(const SceneStore& store);
 
+// "layer" for a store cut into voxels (its levels are slabs of voxels, not
+// storeys), else "floor": the word `scene info` and `scene plan` use.
+const char* levelWord(const SceneStore& store);
+
 }  // namespace portico

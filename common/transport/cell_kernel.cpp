@@ -1,5 +1,8 @@
 #include "common/transport/cell_kernel.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "common/rng.h"
 #include "common/transport/sampling.h"
 
@@ -128,11 +131,18 @@ Vec3 portalCountColour(uint32_t crossings) {
 }
 
 void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out) {
-  // Restart exactly on the portal; the neighbour ignores the portal it came
-  // through because rays only leave a cell through outward-facing portals.
-  ray.origin = ray.origin + ray.direction * event.t;
-  ray.tMax = ray.tMax - event.t;
-  ray.tMin = 0;
+  // The neighbour traces the same ray (same origin and direction) from just
+  // before the portal. Restarting from the rounded crossing point instead
+  // would put a surface lying on the portal's plane, or a hair beyond it, at
+  // a slightly negative distance, and the ray would pass through it and out
+  // of the building. Going back 2^-16 of the coordinates' magnitude covers
+  // the rounding of both hit distances; the neighbour holds nothing the ray
+  // has already passed, so nothing is hit twice. The neighbour ignores the
+  // portal the ray came through: rays only leave through outward portals.
+  const float magnitude = std::max(std::abs(ray.origin.x), std::max(std::abs(ray.origin.y), std::abs(ray.origin.z))) +
+                          event.t * std::max(std::abs(ray.direction.x),
+                                             std::max(std::abs(ray.direction.y), std::abs(ray.direction.z)));
+  ray.tMin = std::max(0.0f, event.t - magnitude / 65536.0f);
   out.crossings[event.neighborCell].push_back(ray);
 }
 

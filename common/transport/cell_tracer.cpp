@@ -10,6 +10,10 @@ namespace portico {
 
 namespace {
 constexpr float kPortalSlack = 1e-4f;   // metres
+// Twice offsetAlongNormal's relative offset of a bounce (sampling.h).
+constexpr float kBounceReach = 4e-5f;
+// The most grazing exit for which a portal behind the origin is looked for.
+constexpr float kMinLeavingCosine = 1.0f / 1024.0f;
 // Growth of a box, relative to the largest coordinate involved, that lies
 // far beyond the triangle test's rounding: 2^-16, 256 float ulps.
 constexpr float kRelativeReach = 1.0f / 65536.0f;
@@ -124,8 +128,13 @@ CellEvent CellTracer::trace(const Ray& ray) const {
     limited.tMax = event.kind == CellEvent::Kind::Surface ? hit.t : ray.tMax;
     // A ray starting on a portal's plane (a camera exactly on a voxel face)
     // and moving out must leave at t = 0, whatever the rounding of t: an
-    // outward portal a hair behind the origin still counts.
-    limited.tMin = std::min(ray.tMin, -kPortalSlack);
+    // outward portal a hair behind the origin still counts. So does one
+    // behind a bounce off a surface lying on the portal's plane: the bounce
+    // starts offsetAlongNormal (2e-5 of the coordinates) beyond it, outside
+    // the cell. "Behind" is measured across the portal's plane, so along a
+    // ray leaving at a grazing angle it reaches further back (below).
+    const float behind = std::max(kPortalSlack, kBounceReach * std::max(1.0f, largestMagnitude(ray.origin)));
+    limited.tMin = std::min(ray.tMin, -behind / kMinLeavingCosine);
     // The box of the segment the portal test accepts hits on. The test is
     // backward stable: a point it reports (origin + t * direction, exactly)
     // lies within a few ulps of the triangle, measured in the magnitudes of
@@ -150,11 +159,14 @@ CellEvent CellTracer::trace(const Ray& ray) const {
           segment.hi.y < portal.reach.lo.y || segment.lo.y > portal.reach.hi.y ||
           segment.hi.z < portal.reach.lo.z || segment.lo.z > portal.reach.hi.z)
         continue;
-      if (dot(ray.direction, portal.outward) <= 0) continue;
+      const float leaving = dot(ray.direction, portal.outward);
+      if (leaving <= 0) continue;
       if (!frame) frame.emplace(ray.direction);
+      Ray own = limited;
+      own.tMin = std::min(ray.tMin, -behind / std::max(leaving, kMinLeavingCosine));
       float t, u, v;
       // Strictly nearer than the geometry: a wall at the same t wins.
-      if (intersectTriangle(*frame, limited, portal.v0, portal.v1, portal.v2, t, u, v) && t < limited.tMax) {
+      if (intersectTriangle(*frame, own, portal.v0, portal.v1, portal.v2, t, u, v) && t < limited.tMax) {
         limited.tMax = t;
         event.kind = CellEvent::Kind::Portal;
         event.t = t;

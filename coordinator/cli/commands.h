@@ -41,7 +41,9 @@ void addRenderOptions(CLI::App& command, RenderOptions& options);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
-int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store);
+// An .ifc input goes through the IFC converter first; ifcLights: auto, fixtures or panels.
+int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
+                   const std::string& ifcLights = "auto");
 // `scene info`: counts (Tables 1 and 2 of the paper), bytes raw and
 // compressed, and the validation pass; exit status 1 when the store is invalid.
 struct SceneInfoOptions {

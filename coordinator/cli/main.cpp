@@ -10,6 +10,7 @@
 #include "coordinator/cli/bench_quality.h"
 #include "coordinator/cli/commands.h"
 #include "common/util/cli_bounds.h"
+#include "coordinator/cli/scene_export.h"
 
 int main(int argc, char** argv) {
   using namespace portico::cli;
@@ -34,7 +35,13 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
   import->add_option("--camera", importOptions.camera, "the building.json's camera of this name (default: the first)");
-  import->add_option("INPUT", importInputs, "building.json, or mesh files (OBJ, PLY, glTF/GLB, ...)")
+  std::string ifcLights = "auto";
+  import->add_option("--lights", ifcLights,
+                     "IFC input: lamps from the model's light fixtures (fixtures), one ceiling panel per space (panels), "
+                     "or fixtures where the model has some, else panels (auto)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "fixtures", "panels"}));
+  import->add_option("INPUT", importInputs, "building.json, an IFC model (.ifc), or mesh files (OBJ, PLY, glTF/GLB, ...)")
       ->required();
   import->add_option("STORE", store, "scene store directory to write")->required();
   import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
@@ -44,6 +51,10 @@ int main(int argc, char** argv) {
   info->add_flag("--json", json, "one JSON object on stdout");
   bool noCompress = false;
   info->add_flag("--no-compress", noCompress, "skip the zlib-compressed size (slow on large stores)");
+  std::string exportOutput;
+  auto* exportCommand = scene->add_subcommand("export", "write a scene store's triangles as OBJ + MTL");
+  exportCommand->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  exportCommand->add_option("-o,--output", exportOutput, "OBJ file to write (its MTL beside it)")->required();
   ScenePlanOptions planOptions;
   auto* plan = scene->add_subcommand("plan", "draw top-down floor plans of a scene store as a PNG");
   plan->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
@@ -215,9 +226,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     if (*generate) return runSceneGenerate(preset, seed, floors, store);
-    if (*import) return runSceneImport(importInputs, importOptions, store);
+    if (*import) return runSceneImport(importInputs, importOptions, store, ifcLights);
     if (*info) return runSceneInfo(store, SceneInfoOptions{json, !noCompress});
     if (*plan) return runScenePlan(store, planOptions);
+    if (*exportCommand) return runSceneExport(store, exportOutput);
     if (*renderCommand) return runRender(render, local);
     if (*submit) return runSubmit(connect, render);
     if (*status) return runStatus(connect, job, json);

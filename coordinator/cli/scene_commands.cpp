@@ -16,6 +16,7 @@
 #include "common/scene/scene_validation.h"
 #include "coordinator/cli/compressed_size.h"
 #include "coordinator/cli/commands.h"
+#include "coordinator/cli/ifc_conversion.h"
 
 namespace portico::cli {
 
@@ -42,7 +43,8 @@ namespace {
 constexpr size_t kObjectsWorthProgress = 1000;
 }  // namespace
 
-int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store) {
+int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
+                   const std::string& ifcLights) {
   // Progress on stderr, once a second, for imports of many objects (a
   // mesh file costs a few milliseconds to read).
   ImportOptions withProgress = options;
@@ -57,7 +59,22 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
                              100.0 * double(read) / double(objects),
                              std::chrono::duration<double>(now - started).count());
   };
-  importBuilding(inputs, store, withProgress);
+  if (inputs.size() == 1 && isIfcFile(inputs[0])) {
+    // The converter's files live beside the store while it is written, then go.
+    const std::string converted = store + ".ifc-conversion";
+    std::filesystem::remove_all(converted);
+    try {
+      importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, withProgress);
+      std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
+                                 std::filesystem::copy_options::overwrite_existing);
+    } catch (...) {
+      std::filesystem::remove_all(converted);
+      throw;
+    }
+    std::filesystem::remove_all(converted);
+  } else {
+    importBuilding(inputs, store, withProgress);
+  }
   return runSceneInfo(store, false);
 }
 
@@ -120,6 +137,7 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
   info["lights"] = store.lights().size();
   info["materials"] = store.materials().size();
   info["floors"] = floors;
+  info["level_kind"] = levelWord(store);
   info["triangles"] = store.totalTriangles();
   info["avg_triangles_per_cell"] = avgTriangles;
   info["max_triangles_per_cell"] = maxTriangles;
@@ -144,9 +162,10 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
     return problems.empty() ? 0 : 1;
   }
 
-  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} floor{}, {} materials, {} triangles\n",
+  std::cout << fmt::format("{}: {} cells, {} portals, {} lights, {} {}{}, {} materials, {} triangles\n",
                            store.directory(), store.cells().size(), store.portals().size(), store.lights().size(),
-                           floors, floors == 1 ? "" : "s", store.materials().size(), store.totalTriangles());
+                           floors, levelWord(store), floors == 1 ? "" : "s", store.materials().size(),
+                           store.totalTriangles());
   std::cout << fmt::format("triangles per cell: avg {:.1f}, max {} ({} cell{} without triangles)\n", avgTriangles,
                            maxTriangles, emptyCells, emptyCells == 1 ? "" : "s");
   if (bytes.compressed)

@@ -13,6 +13,7 @@
 #include "common/scene/floor_levels.h"
 #include "common/scene/portal_geometry.h"
 #include "coordinator/cli/commands.h"
+#include "coordinator/cli/plan_walls.h"
 
 namespace portico::cli {
 
@@ -20,6 +21,9 @@ namespace {
 
 constexpr Color kDoorColor{200, 20, 20}, kWindowColor{30, 100, 220}, kOpeningColor{130, 40, 170};
 constexpr Color kLightColor{255, 215, 0}, kLightOutline{110, 80, 0};
+constexpr Color kWallColor{60, 60, 60}, kCameraColor{0, 150, 60};
+constexpr float kSliceHeight = 1.5f;                 // metres above the floor: walls cut at eye height
+constexpr float kLargestOpening = 0.1f;              // of the plan's area: larger horizontal portals are air
 constexpr int kMargin = 16;                          // around the footprint, in pixels
 constexpr int kLabelHeight = kTextHeight + 2 * 8;    // the floor's label above its plan
 constexpr double kMaxPixels = 64e6;                  // a picture larger than this gets smaller panels
@@ -62,8 +66,8 @@ class PlanDrawer {
   void chooseFloors(int floor) {
     const auto count = static_cast<int>(floors_.levels.size());
     if (floor >= count)
-      throw std::runtime_error(fmt::format("scene store {}: no floor {} (it has {} floors, 0 to {})",
-                                           store_.directory(), floor, count, count - 1));
+      throw std::runtime_error(fmt::format("scene store {}: no {} {} (it has {} {}s, 0 to {})", store_.directory(),
+                                           levelWord(store_), floor, count, levelWord(store_), count - 1));
     for (int f = 0; f < count; ++f)
       if (floor < 0 || f == floor) drawnFloors_.push_back(static_cast<uint32_t>(f));
   }
@@ -125,7 +129,7 @@ class PlanDrawer {
     canvas.line(right, panel.y, right, bottom, kLightGrey, 1, false);
     canvas.line(panel.x, bottom, right, bottom, kLightGrey, 1, false);
     const float level = std::abs(floors_.levels[floor]) < 0.005f ? 0.0f : floors_.levels[floor];   // no "-0.00"
-    canvas.text(panel.x + kMargin, panel.y + 8, fmt::format("floor {}  y = {:.2f} m", floor, level), kBlack);
+    canvas.text(panel.x + kMargin, panel.y + 8, fmt::format("{} {}  y = {:.2f} m", levelWord(store_), floor, level), kBlack);
 
     std::vector<const CellInfo*> cells;
     for (const CellInfo& cell : store_.cells())
@@ -148,6 +152,13 @@ class PlanDrawer {
         canvas.text(x0 + 4, y0 + 4, cell->name, outline);
     }
 
+    // Walls: the floor's triangles cut at eye height (door and window
+    // openings show as gaps), under the portals drawn next.
+    std::vector<uint32_t> ids;
+    for (const CellInfo* cell : cells) ids.push_back(cell->id);
+    for (const PlanSegment& s : sliceCells(store_, ids, floors_.levels[floor] + kSliceHeight))
+      canvas.line(panel.px(s.x0), panel.py(s.z0), panel.px(s.x1), panel.py(s.z1), kWallColor, 2, false);
+
     for (const Portal& portal : store_.portals()) {
       const bool onFloor = (drawn_[portal.cellA] && floors_.cellFloor[portal.cellA] == floor) ||
                            (drawn_[portal.cellB] && floors_.cellFloor[portal.cellB] == floor);
@@ -155,7 +166,10 @@ class PlanDrawer {
       const bool toLeftOut = !drawn_[portal.cellA] || !drawn_[portal.cellB];
       const Vec3 normal = newellNormal(portal.polygon);
       if (std::abs(normal.y) > 0.7f * length(normal)) {
-        if (!toLeftOut) drawOpening(canvas, panel, portal.polygon);
+        // A stair or slab opening; not the open air between two cells of an
+        // outdoors, which would hatch over the whole plan.
+        if (!toLeftOut && 0.5f * length(normal) < kLargestOpening * footprintArea(frame_))
+          drawOpening(canvas, panel, portal.polygon);
       } else {
         drawWall(canvas, panel, portal.polygon, toLeftOut ? kWindowColor : kDoorColor, wallThickness(panel, portal));
       }
@@ -167,6 +181,16 @@ class PlanDrawer {
       const int x = panel.px(c.x), y = panel.py(c.z);
       canvas.fill(x - 4, y - 4, x + 4, y + 4, kLightOutline);
       canvas.fill(x - 3, y - 3, x + 3, y + 3, kLightColor);
+    }
+
+    // The camera: a dot and a short line towards its target.
+    const Camera& camera = store_.camera();
+    if (camera.cell < floors_.cellFloor.size() && floors_.cellFloor[camera.cell] == floor) {
+      const int x = panel.px(camera.origin.x), y = panel.py(camera.origin.z);
+      const float dx = camera.target.x - camera.origin.x, dz = camera.target.z - camera.origin.z;
+      const float reach = 24.0f / std::max(1e-6f, std::sqrt(dx * dx + dz * dz));   // 24 pixels
+      canvas.line(x, y, x + dx * reach, y + dz * reach, kCameraColor, 2, false);
+      canvas.fill(x - 4, y - 4, x + 4, y + 4, kCameraColor);
     }
   }
 
@@ -230,8 +254,9 @@ int runScenePlan(const std::string& directory, const ScenePlanOptions& options) 
   const Canvas canvas = drawFloorPlans(store, options.floor, options.panelSize);
   writePng(options.output, canvas, "floor plan");
   std::cout << fmt::format("{}: {}x{} pixels, {}\n", options.output, canvas.width(), canvas.height(),
-                           options.floor < 0 ? fmt::format("{} floor(s)", findFloorLevels(store.cells()).levels.size())
-                                             : fmt::format("floor {}", options.floor));
+                           options.floor < 0 ? fmt::format("{} {}(s)", findFloorLevels(store.cells()).levels.size(),
+                                                                           levelWord(store))
+                                             : fmt::format("{} {}", levelWord(store), options.floor));
   return 0;
 }
 

@@ -67,7 +67,7 @@ TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
 
 INSTANTIATE_TEST_SUITE_P(Mitsuba, ReferenceScene,
                          ::testing::Values(ReferenceCase{"cornell_closed", 0}, ReferenceCase{"two_rooms", 0},
-                                           ReferenceCase{"cornell_closed", 3}),
+                                           ReferenceCase{"cornell_closed", 3}, ReferenceCase{"ifc_fzk_wohnen", 0}),
                          [](const auto& info) {
                            return info.param.name + (info.param.grid ? "_grid" + std::to_string(info.param.grid) : "");
                          });

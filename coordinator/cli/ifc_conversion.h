@@ -1,0 +1,18 @@
+// `portico scene import model.ifc STORE`: the IFC model goes through the
+// IfcOpenShell converter (python/portico_ifc, docs/importing-buildings.md)
+// into a building.json and its OBJ files, which the usual importer stores.
+#pragma once
+
+#include <string>
+
+namespace portico::cli {
+
+bool isIfcFile(const std::string& path);
+
+// Runs the converter on `ifc`, writing building.json, meshes/ and
+// conversion.json into `outDirectory`; returns the building.json's path.
+// `lights`: auto, fixtures or panels. Throws std::runtime_error, one line
+// naming the file, when the converter cannot run or fails.
+std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const std::string& lights);
+
+}  // namespace portico::cli

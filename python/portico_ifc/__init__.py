@@ -1,0 +1,1 @@
+"""IFC building models -> portico's building.json (docs/importing-buildings.md)."""

@@ -1,0 +1,225 @@
+"""IFC model -> building.json + one OBJ per (cell, material) (docs/importing-buildings.md).
+
+    python -m portico_ifc model.ifc OUTDIR [--lights auto|fixtures|panels]
+
+Writes OUTDIR/building.json and OUTDIR/meshes/*.obj, and prints a summary
+(JSON) of what was found: spaces, cells, portals, doors and windows with a
+portal, lamps, cameras.
+"""
+
+import argparse
+import json
+import os
+import re
+import sys
+import time
+
+import numpy as np
+import ifcopenshell
+
+from . import cell_partition as cp
+from .clip import distribute
+from .ifc_model import read_ifc
+from .lights_cameras import fixture_lamps, space_cameras, space_panels
+
+MARGIN = 2.0        # metres of outside air around the building
+SKY_INSET = 0.05    # metres: the black enclosure lies this far inside the outer cell faces
+SKY_ALBEDO = (0.0, 0.0, 0.0)
+GROUND_ALBEDO = (0.25, 0.25, 0.25)
+
+
+def _slug(text):
+    return re.sub(r"[^A-Za-z0-9]+", "-", text).strip("-").lower()[:40] or "x"
+
+
+def _enclosure(lo, hi):
+    """The box from lo to hi as inward-facing triangles: ground (bottom) and sky."""
+    x0, y0, z0 = lo
+    x1, y1, z1 = hi
+    quads = {
+        "ground": [(x0, y0, z0), (x0, y0, z1), (x1, y0, z1), (x1, y0, z0)],
+        "sky": [[(x0, y1, z0), (x1, y1, z0), (x1, y1, z1), (x0, y1, z1)],
+                [(x0, y0, z0), (x1, y0, z0), (x1, y1, z0), (x0, y1, z0)],
+                [(x0, y0, z1), (x0, y1, z1), (x1, y1, z1), (x1, y0, z1)],
+                [(x0, y0, z0), (x0, y1, z0), (x0, y1, z1), (x0, y0, z1)],
+                [(x1, y0, z0), (x1, y0, z1), (x1, y1, z1), (x1, y1, z0)]],
+    }
+
+    def triangles(quad):
+        q = np.array(quad, dtype=np.float64)
+        return [q[[0, 1, 2]], q[[0, 2, 3]]]
+
+    ground = np.array(triangles(quads["ground"]))
+    sky = np.array([t for quad in quads["sky"] for t in triangles(quad)])
+    return ground, sky
+
+
+def _write_obj(path, triangles):
+    with open(path, "w") as f:
+        for t in triangles:
+            for p in t:
+                f.write(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}\n")
+        for i in range(len(triangles)):
+            f.write(f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}\n")
+
+
+def _cell_names(cells, spaces):
+    names, seen = [], {}
+    for c in cells:
+        base = f"space-{_slug(spaces[c.label].name)}" if c.label != cp.AIR else "air"
+        seen[base] = seen.get(base, 0) + 1
+        names.append(base)
+    counts = {}
+    result = []
+    for n in names:
+        counts[n] = counts.get(n, 0) + 1
+        result.append(n if seen[n] == 1 else f"{n}-{counts[n]}")
+    return result
+
+
+def _match_openings(openings, portals, cells, cell_of_point):
+    """For each door and window: the cells either side of it and whether a
+    portal joins them across the hole."""
+    found = []
+    for o in openings:
+        extent = o.hi - o.lo
+        thin = int(np.argmin(extent))     # across the wall, or the roof for a skylight
+        centre = (o.lo + o.hi) / 2
+        sides = []
+        for sign in (-1, 1):
+            p = centre.copy()
+            p[thin] += sign * (extent[thin] / 2 + 0.3)
+            sides.append(cell_of_point(p))
+        crossing = [p for p in portals if p.axis == thin and o.lo[thin] - 1e-3 <= p.plane <= o.hi[thin] + 1e-3 and
+                    all(p.lo[a] - 1e-3 <= centre[a] <= p.hi[a] + 1e-3 for a in range(3) if a != thin)]
+        labels = [cells[s].label if s is not None else None for s in sides]
+        found.append({"kind": o.kind, "name": o.name, "sides": labels,
+                      "portal": bool(crossing), "between_two_regions": labels[0] != labels[1]})
+    return found
+
+
+def convert(ifc_path, out_dir, lights="auto"):
+    started = time.time()
+    model = read_ifc(ifc_path)
+    read_seconds = time.time() - started
+    if not model.spaces:
+        raise SystemExit(f"{ifc_path}: no IfcSpace with geometry; cells follow spaces, so there is nothing to cut")
+    every = np.concatenate([e.mesh.vertices for e in model.elements] + [s.mesh.vertices for s in model.spaces])
+    building_lo, building_hi = every.min(axis=0), every.max(axis=0)
+    outer_lo = building_lo - np.array([MARGIN, SKY_INSET * 2, MARGIN])
+    outer_hi = building_hi + MARGIN
+
+    lines = cp.grid_lines(model.spaces, outer_lo, outer_hi, [e.mesh for e in model.elements])
+    labels = cp.label_boxes(lines, model.spaces)
+    cells, owner = cp.merge_boxes(labels, lines)
+    sealers = [(e.mesh, e.mesh.bounds()) for e in model.elements if e.sealing]
+    portals = cp.find_portals(cells, owner, lines, sealers)
+
+    def cell_of_point(p):
+        idx = [int(np.searchsorted(lines[a], p[a], side="right")) - 1 for a in range(3)]
+        if any(i < 0 or i >= len(lines[a]) - 1 for a, i in enumerate(idx)):
+            return None
+        return int(owner[tuple(idx)])
+
+    if lights == "fixtures" or (lights == "auto" and model.fixtures):
+        lamps = fixture_lamps(model.fixtures, cells, cell_of_point)
+    else:
+        lamps = space_panels(model.spaces, cells)
+    cameras = space_cameras(model.spaces, cells)
+    seen = {}
+    for cam in cameras:
+        seen[cam["name"]] = seen.get(cam["name"], 0) + 1
+        if seen[cam["name"]] > 1:
+            cam["name"] = f"{cam['name']} ({seen[cam['name']]})"
+    names = _cell_names(cells, model.spaces)
+
+    os.makedirs(os.path.join(out_dir, "meshes"), exist_ok=True)
+    objects = []
+    ground, sky = _enclosure(outer_lo + SKY_INSET, outer_hi - SKY_INSET)
+    groups = [(e.mesh.corners(), e.material_of_triangle) for e in model.elements]
+    material_names = [m[0] for m in model.materials] + ["ground", "sky"]
+    material_albedo = [m[1] for m in model.materials] + [GROUND_ALBEDO, SKY_ALBEDO]
+    groups.append((ground, np.full(len(ground), len(model.materials))))
+    groups.append((sky, np.full(len(sky), len(model.materials) + 1)))
+    corners = np.concatenate([g[0] for g in groups])
+    material = np.concatenate([g[1] for g in groups])
+    for c, triangles, source in distribute(corners, lines, owner, cells):
+        for m in np.unique(material[source]):
+            name = f"{names[c]}-{_slug(material_names[m])}-{m}"
+            path = os.path.join("meshes", f"{c:04d}-{m:03d}.obj")
+            _write_obj(os.path.join(out_dir, path), triangles[material[source] == m])
+            objects.append({"obj": path, "name": name, "cell": names[c], "albedo": list(material_albedo[m])})
+    for i, lamp in enumerate(lamps):
+        path = os.path.join("meshes", f"lamp-{i:04d}.obj")
+        q = np.array(lamp["quad"])
+        _write_obj(os.path.join(out_dir, path), [q[[0, 1, 2]], q[[0, 2, 3]]])
+        objects.append({"obj": path, "name": lamp["name"], "cell": names[lamp["cell"]], "albedo": [0, 0, 0],
+                        "emission": lamp["radiance"]})
+
+    def rectangle(p):
+        u, v = [a for a in range(3) if a != p.axis]
+        corners = []
+        for cu, cv in ((p.lo[u], p.lo[v]), (p.hi[u], p.lo[v]), (p.hi[u], p.hi[v]), (p.lo[u], p.hi[v])):
+            q = [0.0, 0.0, 0.0]
+            q[p.axis], q[u], q[v] = float(p.plane), float(cu), float(cv)
+            corners.append(q)
+        return corners
+
+    building = {
+        "name": model.name or os.path.splitext(os.path.basename(ifc_path))[0],
+        "units": "metres",
+        "_source": os.path.basename(ifc_path),
+        "cells": [{"name": names[i], "aabb": {"min": c.lo.tolist(), "max": c.hi.tolist()}} for i, c in enumerate(cells)],
+        "portals": [{"between": [names[p.cell_a], names[p.cell_b]], "polygon": rectangle(p)} for p in portals],
+        "objects": objects,
+        "cameras": cameras,
+    }
+    with open(os.path.join(out_dir, "building.json"), "w") as f:
+        json.dump(building, f, indent=1)
+
+    openings = _match_openings(model.openings, portals, cells, cell_of_point)
+    summary = {
+        "schema": model.schema,
+        "unit_scale": model.unit_scale,
+        "spaces": len(model.spaces),
+        "space_cells": sum(1 for c in cells if c.label != cp.AIR),
+        "air_cells": sum(1 for c in cells if c.label == cp.AIR),
+        "cells": len(cells),
+        "portals": len(portals),
+        "connected_components": cp.connected_components(len(cells), portals),
+        "spaces_with_cells": len({c.label for c in cells if c.label != cp.AIR}),
+        "doors": sum(1 for o in openings if o["kind"] == "door"),
+        "windows": sum(1 for o in openings if o["kind"] == "window"),
+        "doors_with_portal": sum(1 for o in openings if o["kind"] == "door" and o["portal"]),
+        "windows_with_portal": sum(1 for o in openings if o["kind"] == "window" and o["portal"]),
+        "light_fixtures": len(model.fixtures),
+        "lights": len(lamps),
+        "light_source": "fixtures" if lamps and lamps[0]["name"].startswith("fixture") else "space panels",
+        "cameras": len(cameras),
+        "materials": len(model.materials),
+        "elements": len(model.elements),
+        "read_seconds": round(read_seconds, 2),
+        "seconds": round(time.time() - started, 2),
+    }
+    with open(os.path.join(out_dir, "conversion.json"), "w") as f:
+        json.dump({"summary": summary, "openings": openings}, f, indent=1)
+    return summary
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="portico_ifc", description=__doc__.split("\n\n")[0])
+    parser.add_argument("ifc")
+    parser.add_argument("out_dir")
+    parser.add_argument("--lights", choices=("auto", "fixtures", "panels"), default="auto",
+                        help="auto: light fixtures where the model has some, else one ceiling panel per space")
+    args = parser.parse_args(argv)
+    if not os.path.isfile(args.ifc):
+        print(f"{args.ifc}: does not exist", file=sys.stderr)
+        return 2
+    try:
+        summary = convert(args.ifc, args.out_dir, args.lights)
+    except (RuntimeError, ifcopenshell.Error) as error:       # IfcOpenShell's parse errors
+        print(f"{args.ifc}: not a readable IFC model: {error}", file=sys.stderr)
+        return 1
+    print(json.dumps(summary))
+    return 0
