@@ -1,8 +1,8 @@
 // The bounds of a job's parameters. `portico render|submit` refuses a value
 // outside them before anything starts, and the coordinator refuses it again
 // at submit (validateSpec), so that a hand-made message gets no further.
-// Each is well beyond what a production job asks for (docs/architecture.md,
-// "Limits"), and within what a coordinator queues in seconds and a lease
+// Each is well beyond what a production job asks for (docs/security.md,
+// "Job limits"), and within what a coordinator queues in seconds and a lease
 // traces in about a second's batches.
 #pragma once
 

@@ -34,7 +34,7 @@ inline constexpr const char* kUnknownWorkerError = "unknown worker: say Hello fi
 
 // The largest frame a coordinator accepts (ZMQ_MAXMSGSIZE): a worker's Result
 // for a lease of `leaseRays` rays, with room for the fan-out of final
-// gathering, shadow rays and photon deposits (docs/architecture.md, "Message limits").
+// gathering, shadow rays and photon deposits (docs/security.md, "Message limits").
 uint64_t maxCoordinatorFrameBytes(int64_t leaseRays);
 
 enum class Encoding { Packed, Flat };
