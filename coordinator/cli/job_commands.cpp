@@ -56,8 +56,8 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
       ->capture_default_str()
       ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
   command.add_option("--irradiance", o.irradiance,
-                     "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at every 4th "
-                     "photon of its cell) or knn (the k-nearest-photon estimate at every hit)")
+                     "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at about one "
+                     "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
       ->check(CLI::IsMember({"precomputed", "knn"}))
       ->capture_default_str();
   command.add_option("--exposure", o.exposure, "PNG exposure")
