@@ -22,13 +22,8 @@ namespace {
 
 using namespace harness;
 
-class Bounds : public ::testing::Test {
+class Bounds : public DemoStoreSuite<Bounds> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("bounds");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
   // The two_rooms reference scene, its JSON changed by `edit`, imported into
   // dir/store; returns the import's exit status (its log in dir/import.log).
   static int importEditedTwoRooms(const fs::path& dir, const std::function<void(nlohmann::json&)>& edit) {
@@ -43,9 +38,7 @@ class Bounds : public ::testing::Test {
                        (dir / "store").string()},
                       dir / "import.log");
   }
-  static fs::path dir_, store_;
 };
-fs::path Bounds::dir_, Bounds::store_;
 
 // The client checks before it connects (the endpoint here has no one
 // behind it): a negative count does not wrap to 2^64-1, a size of 1e30 is

@@ -16,13 +16,8 @@ namespace {
 
 using namespace harness;
 
-class Interruption : public ::testing::Test {
+class Interruption : public DemoStoreSuite<Interruption> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("interruption");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
   // A job whose render leases last tens of seconds (64 spp, 1024 gather rays
   // per camera hit: a camera batch is 16 M gather rays); returns once a
   // worker has traced in its render pass for half a second (0: never got there).
@@ -41,9 +36,7 @@ class Interruption : public ::testing::Test {
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     return job;
   }
-  static fs::path dir_, store_;
 };
-fs::path Interruption::dir_, Interruption::store_;
 
 // Without the Cancel to its worker, `portico cancel` would mark the job
 // cancelled while the worker traced on for as long as the lease lasted.

@@ -15,13 +15,8 @@ namespace {
 
 using namespace harness;
 
-class JobDatabase : public ::testing::Test {
+class JobDatabase : public DemoStoreSuite<JobDatabase> {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("job-database");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
   // A coordinator on dir/jobs.db with a queued job (its emission batches
   // written to jobs.db-batches/), killed with SIGKILL: jobs.db and its WAL
   // hold the job.
@@ -42,9 +37,7 @@ class JobDatabase : public ::testing::Test {
     std::sort(files.begin(), files.end());
     return files;
   }
-  static fs::path dir_, store_;
 };
-fs::path JobDatabase::dir_, JobDatabase::store_;
 
 // Starting would forget the job and delete its batch files.
 TEST_F(JobDatabase, AJobsDbThatLostItsWalOrWasTruncatedIsRefusedAndNothingIsDeleted) {

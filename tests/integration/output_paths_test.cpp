@@ -14,17 +14,7 @@ namespace {
 
 using namespace harness;
 
-class Outputs : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("outputs");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
-  static fs::path dir_, store_;
-};
-fs::path Outputs::dir_, Outputs::store_;
-
+class Outputs : public DemoStoreSuite<Outputs> {};
 TEST_F(Outputs, BadPathsAreRefusedAtSubmitNamingTheProblemAndNothingIsCreated) {
   const fs::path dir = dir_ / "bad";
   LocalCluster cluster(dir, 0);

@@ -20,17 +20,7 @@ namespace {
 
 using namespace harness;
 
-class Pipeline : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("pipeline");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
-  static fs::path dir_, store_;
-};
-fs::path Pipeline::dir_, Pipeline::store_;
-
+class Pipeline : public DemoStoreSuite<Pipeline> {};
 
 TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitForBit) {
   const uint64_t photons = 60000;

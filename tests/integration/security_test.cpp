@@ -21,12 +21,11 @@ namespace {
 
 using namespace harness;
 
-class Security : public ::testing::Test {
+class Security : public DemoStoreSuite<Security> {
  protected:
   static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("security");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
+    DemoStoreSuite::SetUpTestSuite();
+    if (::testing::Test::HasFatalFailure()) return;
     // The right keys, and a client pair the coordinator does not know that
     // still pins the right coordinator key (so it is the client key that fails).
     keys_ = dir_ / "keys";
@@ -48,9 +47,9 @@ class Security : public ::testing::Test {
     fs::copy_file(keys_ / (role + ".secret"), stolen / (as + ".secret"), fs::copy_options::overwrite_existing);
     return stolen;
   }
-  static fs::path dir_, store_, keys_, wrongKeys_;
+  static fs::path keys_, wrongKeys_;
 };
-fs::path Security::dir_, Security::store_, Security::keys_, Security::wrongKeys_;
+fs::path Security::keys_, Security::wrongKeys_;
 
 // Polls a log until it holds `text` (a line libzmq's events produce a moment later).
 bool waitForLog(const fs::path& log, const std::string& text, std::chrono::milliseconds limit) {

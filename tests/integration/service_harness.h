@@ -112,6 +112,20 @@ inline std::string generateDemoStore(const fs::path& store, int seed) {
 // Imports tests/scenes/NAME/scene.json into `store`, its meshes cut into
 // voxel cells of a grid x grid x grid lattice (`portico scene import
 // --grid`); returns "" on success, else the command's log.
+// A test suite whose tests share one demo building, generated once into a
+// temporary directory named after the suite (`Suite`: the derived fixture,
+// so that each suite has its own directory and store).
+template <class Suite>
+class DemoStoreSuite : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = makeTempDirectory(::testing::UnitTest::GetInstance()->current_test_suite()->name());
+    store_ = dir_ / "demo";
+    ASSERT_EQ(generateDemoStore(store_, 3), "");
+  }
+  static inline fs::path dir_, store_;
+};
+
 inline std::string importVoxelStore(const std::string& name, int grid, const fs::path& store) {
   const fs::path log = store.string() + ".import.log";
   const int code = runCommand({kBin + "portico", "scene", "import", "--grid", std::to_string(grid),

@@ -20,17 +20,7 @@ namespace {
 using namespace harness;
 using Clock = std::chrono::steady_clock;
 
-class ServiceLifecycle : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ = makeTempDirectory("lifecycle");
-    store_ = dir_ / "demo";
-    ASSERT_EQ(generateDemoStore(store_, 3), "");
-  }
-  static fs::path dir_, store_;
-};
-fs::path ServiceLifecycle::dir_, ServiceLifecycle::store_;
-
+class ServiceLifecycle : public DemoStoreSuite<ServiceLifecycle> {};
 // Polls until `done` holds; returns how long it took (or `limit`).
 std::chrono::milliseconds timeUntil(const std::function<bool()>& done, std::chrono::milliseconds limit) {
   const auto started = Clock::now();
