@@ -5,9 +5,11 @@
 #include <iostream>
 
 #include "common/scene/building_importer.h"
-#include "coordinator/cli/bench_calibrate.h"
-#include "coordinator/cli/bench_paper.h"
-#include "coordinator/cli/bench_quality.h"
+#include "coordinator/cli/bench/bench_accel.h"
+#include "coordinator/cli/bench/bench_calibrate.h"
+#include "coordinator/cli/bench/bench_paper.h"
+#include "coordinator/cli/bench/bench_pipeline.h"
+#include "coordinator/cli/bench/bench_quality.h"
 #include "coordinator/cli/commands.h"
 #include "common/util/cli_bounds.h"
 #include "coordinator/cli/scene_export.h"

@@ -17,6 +17,8 @@
 // shared machine hurts every mode alike); the median is reported. Deposits
 // and absorbed/escaped photons are printed for every mode so that one can
 // see that they do the same work.
+#include "coordinator/cli/bench/bench_pipeline.h"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <sys/resource.h>
@@ -39,11 +41,10 @@
 #include "common/scene/building_presets.h"
 #include "common/scene/scene_store.h"
 #include "common/util/temporary_directory.h"
-#include "coordinator/cli/commands.h"
-#include "coordinator/cli/incore_photon_tracer.h"
-#include "coordinator/cli/accel_measure.h"
-#include "coordinator/cli/bench_plot.h"
-#include "coordinator/cli/pipeline_run.h"
+#include "coordinator/cli/bench/incore_photon_tracer.h"
+#include "coordinator/cli/bench/accel_measure.h"
+#include "coordinator/cli/bench/bench_plot.h"
+#include "coordinator/cli/bench/pipeline_run.h"
 
 namespace portico::cli {
 

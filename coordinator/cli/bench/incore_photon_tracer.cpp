@@ -1,6 +1,6 @@
 // The in-core Embree photon tracer of `portico bench pipeline`
 // (incore_photon_tracer.h).
-#include "coordinator/cli/incore_photon_tracer.h"
+#include "coordinator/cli/bench/incore_photon_tracer.h"
 
 #include <embree3/rtcore.h>
 #include <fmt/format.h>

@@ -11,6 +11,8 @@
 // pass and the median of `runs` timed passes, all on this one thread with
 // flush-to-zero on. Ratios to Embree compare numbers taken minutes apart on
 // the same machine; absolute numbers move with the machine's load.
+#include "coordinator/cli/bench/bench_accel.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -30,10 +32,9 @@
 #include "common/accel/embree_accelerator.h"
 #include "common/rng.h"
 #include "common/scene/furnished_hall.h"
-#include "coordinator/cli/accel_measure.h"
-#include "coordinator/cli/bench_plot.h"
-#include "coordinator/cli/csv_field.h"
-#include "coordinator/cli/commands.h"
+#include "coordinator/cli/bench/accel_measure.h"
+#include "coordinator/cli/bench/bench_plot.h"
+#include "coordinator/cli/bench/csv_field.h"
 
 namespace portico::cli {
 
