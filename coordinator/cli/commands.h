@@ -89,4 +89,13 @@ int runShutdown(const ConnectOptions& connect);
 // `keys generate DIR`: a CURVE key pair for the coordinator and one per role (keys_command.cpp).
 int runKeysGenerate(const std::string& directory);
 
+// The subcommands, their options and their actions, by group: scene
+// (scene_command_line.cpp), render and the job commands
+// (job_command_line.cpp), keys (keys_command.cpp); bench is
+// bench/bench_command_line.h's.
+class CommandTable;
+void addSceneCommands(CLI::App& app, CommandTable& table);
+void addJobCommands(CLI::App& app, CommandTable& table);
+void addKeysCommands(CLI::App& app, CommandTable& table);
+
 }  // namespace portico::cli
