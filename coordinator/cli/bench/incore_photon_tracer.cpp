@@ -1,5 +1,5 @@
 // The in-core Embree photon tracer of `portico bench pipeline`
-// (incore_photon_tracer.h).
+// (incore_photon_tracer.h): load, build, then trace, each a step below.
 #include "coordinator/cli/bench/incore_photon_tracer.h"
 
 #include <embree3/rtcore.h>
@@ -8,19 +8,17 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <cmath>
 #include <exception>
 #include <memory>
-#include <mutex>
-#include <numeric>
 #include <stdexcept>
+#include <string>
 #include <thread>
 
 #include "common/accel/embree_accelerator.h"  // FlushDenormalsScope
-#include "common/rng.h"
+#include "common/accel/embree_device.h"
 #include "common/scene/cell_geometry.h"
 #include "common/transport/photon_map.h"  // StoredPhoton: the record a deposit appends
-#include "common/transport/sampling.h"
+#include "common/transport/photon_scattering.h"
 
 namespace portico::cli {
 
@@ -30,39 +28,57 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// Embree reports errors through a callback; collect them and throw after the call.
-struct DeviceErrors {
-  std::mutex mutex;
-  std::string text;
-};
+using Cells = std::vector<std::unique_ptr<CellGeometry>>;
 
-void onError(void* user, RTCError code, const char* message) {
-  auto* errors = static_cast<DeviceErrors*>(user);
-  std::lock_guard<std::mutex> lock(errors->mutex);
-  if (!errors->text.empty()) errors->text += "; ";
-  errors->text += fmt::format("Embree error {}{}", int(code), message ? std::string(": ") + message : "");
+// Every cell file mapped and validated, kept for the whole run.
+Cells loadCells(const SceneStore& scene, InCorePhotonResult& result) {
+  const auto loadStart = Clock::now();
+  Cells cells;
+  cells.reserve(scene.cells().size());
+  for (const CellInfo& info : scene.cells()) {
+    cells.push_back(CellGeometry::load(scene.cellPath(info.id), info.id, scene.materials().size()));
+    result.triangles += cells.back()->mesh().triangleCount;
+    result.bytesMapped += cells.back()->bytes();
+  }
+  result.cells = uint32_t(cells.size());
+  result.loadSeconds = secondsSince(loadStart);
+  return cells;
 }
 
-bool onMemory(void* user, ssize_t bytes, bool) {
-  static_cast<std::atomic<int64_t>*>(user)->fetch_add(int64_t(bytes), std::memory_order_relaxed);
-  return true;
-}
-
-// The process's devices and scenes are released in reverse order of creation.
-struct EmbreeScene {
-  DeviceErrors errors;
-  std::atomic<int64_t> bytes{0};
-  RTCDevice device = nullptr;
-  RTCScene scene = nullptr;
-  ~EmbreeScene() {
+// One device, one scene over every cell; released scene first.
+struct InCoreScene {
+  explicit InCoreScene(const std::string& config) : device(config) {}
+  ~InCoreScene() {
     if (scene) rtcReleaseScene(scene);
-    if (device) rtcReleaseDevice(device);
   }
-  void check(const std::string& what) {
-    std::lock_guard<std::mutex> lock(errors.mutex);
-    if (!errors.text.empty()) throw std::runtime_error("embree: " + what + " (" + errors.text + ")");
-  }
+  EmbreeDevice device;
+  RTCScene scene = nullptr;
+  std::vector<std::vector<float>> vertexCopies;  // cells whose positions Embree cannot read in place
 };
+
+// One triangle geometry per cell (geometry id = cell id) over the mapped
+// buffers, one BVH over all of them, built on `threads` threads.
+std::unique_ptr<InCoreScene> buildScene(const Cells& cells, uint32_t threads, InCorePhotonResult& result) {
+  const auto buildStart = Clock::now();
+  EmbreeDevice::clearErrors();
+  auto embree = std::make_unique<InCoreScene>(fmt::format("threads={}", threads));
+  result.deviceSeconds = secondsSince(buildStart);
+  embree->scene = rtcNewScene(embree->device.handle());
+  if (!embree->scene) EmbreeDevice::fail("cannot create a scene");
+  rtcSetSceneFlags(embree->scene, RTC_SCENE_FLAG_NONE);
+  rtcSetSceneBuildQuality(embree->scene, RTC_BUILD_QUALITY_MEDIUM);
+  embree->vertexCopies.reserve(cells.size());
+  for (const auto& cell : cells) {
+    attachEmbreeTriangles(embree->device, embree->scene, cell->mesh(), RTC_BUILD_QUALITY_MEDIUM,
+                          embree->vertexCopies.emplace_back(), cell->id());
+    EmbreeDevice::check(fmt::format("cannot add cell {}", cell->id()));
+  }
+  rtcCommitScene(embree->scene);
+  EmbreeDevice::check(fmt::format("building the scene of {} triangles failed", result.triangles));
+  result.buildSeconds = secondsSince(buildStart);
+  result.bvhBytes = embree->device.bytesAllocated();
+  return embree;
+}
 
 // One emission batch, as the coordinator queues them (kPhotonsPerEmitBatch
 // there; any size here: the photons are the same whatever the split).
@@ -73,8 +89,87 @@ struct EmitChunk {
   uint64_t photonsOfLight;
 };
 
+// The pass's photons in chunks of `chunkSize`, light after light, path ids
+// numbered across the lights as the coordinator numbers them.
+std::vector<EmitChunk> emissionChunks(const SceneStore& scene, uint64_t photons, uint32_t chunkSize) {
+  const std::vector<uint64_t> shares = photonSharesOfLights(scene.lights(), photons);
+  std::vector<EmitChunk> chunks;
+  uint64_t nextPath = 0;
+  for (uint32_t light = 0; light < shares.size(); ++light) {
+    for (uint64_t first = 0; first < shares[light]; first += chunkSize)
+      chunks.push_back({light, nextPath + first, uint32_t(std::min<uint64_t>(chunkSize, shares[light] - first)),
+                        shares[light]});
+    nextPath += shares[light];
+  }
+  return chunks;
+}
+
 struct ThreadCounters {
   int64_t emitted = 0, deposits = 0, absorbed = 0, escaped = 0, rays = 0;
+};
+
+// What one tracing thread reads and writes.
+struct Tracer {
+  const SceneStore& scene;
+  const Cells& cells;
+  RTCScene rtcScene;
+  uint64_t seed;
+  uint32_t maxBounces;
+  ThreadCounters& count;
+  std::vector<StoredPhoton>& stored;
+
+  // The nearest surface along the photon's segment; false when it leaves the building.
+  bool intersect(const RayState& photon, RTCIntersectContext& context, RTCRayHit& query) {
+    ++count.rays;
+    query.ray.org_x = photon.origin.x, query.ray.org_y = photon.origin.y, query.ray.org_z = photon.origin.z;
+    query.ray.dir_x = photon.direction.x, query.ray.dir_y = photon.direction.y, query.ray.dir_z = photon.direction.z;
+    query.ray.tnear = 0.0f;
+    query.ray.tfar = kInfinity;
+    query.ray.time = 0.0f;
+    query.ray.mask = 0xffffffffu;
+    query.ray.id = 0;
+    query.ray.flags = 0;
+    query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    query.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(rtcScene, &context, &query);
+    return query.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+
+  // CellKernel::tracePhoton, with the whole building as one cell.
+  void trace(RayState photon, RTCIntersectContext& context) {
+    for (;;) {
+      alignas(16) RTCRayHit query;
+      if (!intersect(photon, context, query)) {
+        ++count.escaped;
+        return;
+      }
+      const CellGeometry& cell = *cells[query.hit.geomID];
+      const uint32_t primitive = query.hit.primID;
+      const Material& material = scene.materials()[cell.material(primitive)];
+      const PhotonScatter scatter =
+          scatterPhoton(photon, {cell.mesh(), primitive, query.ray.tfar, material}, seed, maxBounces);
+      if (scatter.deposited) {
+        stored.push_back(scatter.deposit);
+        ++count.deposits;
+      }
+      if (!scatter.bounced) {
+        ++count.absorbed;
+        return;
+      }
+    }
+  }
+
+  // CellKernel::emitPhotons for one chunk.
+  void emit(const EmitChunk& chunk, RTCIntersectContext& context) {
+    const AreaLight& light = scene.lights()[chunk.light];
+    const Vec3 lightNormal = light.normal();
+    const Vec3 power = light.power() / float(chunk.photonsOfLight);
+    for (uint64_t path = chunk.firstPath; path < chunk.firstPath + chunk.count; ++path) {
+      ++count.emitted;
+      trace(emitPhoton(light, lightNormal, power, seed, path), context);
+    }
+  }
 };
 
 }  // namespace
@@ -84,154 +179,28 @@ InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePh
   if (scene.lights().empty()) throw std::invalid_argument(fmt::format("scene {} has no lights", scene.directory()));
   if (options.threads == 0) throw std::invalid_argument("the in-core tracer needs at least one thread");
   InCorePhotonResult result;
-  const auto& materials = scene.materials();
-
-  // Load: every cell file mapped and validated, kept for the whole run.
-  const auto loadStart = Clock::now();
-  std::vector<std::unique_ptr<CellGeometry>> cells;
-  cells.reserve(scene.cells().size());
-  for (const CellInfo& info : scene.cells()) {
-    cells.push_back(CellGeometry::load(scene.cellPath(info.id), info.id, materials.size()));
-    result.triangles += cells.back()->mesh().triangleCount;
-    result.bytesMapped += cells.back()->bytes();
-  }
-  result.cells = uint32_t(cells.size());
-  result.loadSeconds = secondsSince(loadStart);
-
-  // Build: one scene, one triangle geometry per cell (geometry id = cell id)
-  // over the mapped buffers, one BVH over all of them.
-  const auto buildStart = Clock::now();
-  EmbreeScene embree;
-  const std::string config = fmt::format("threads={}", options.threads);
-  embree.device = rtcNewDevice(config.c_str());
-  if (!embree.device)
-    throw std::runtime_error(fmt::format("embree: cannot create a device ({})", int(rtcGetDeviceError(nullptr))));
-  rtcSetDeviceErrorFunction(embree.device, onError, &embree.errors);
-  rtcSetDeviceMemoryMonitorFunction(embree.device, onMemory, &embree.bytes);
-  result.deviceSeconds = secondsSince(buildStart);
-  embree.scene = rtcNewScene(embree.device);
-  embree.check("cannot create a scene");
-  rtcSetSceneFlags(embree.scene, RTC_SCENE_FLAG_NONE);
-  rtcSetSceneBuildQuality(embree.scene, RTC_BUILD_QUALITY_MEDIUM);
-  std::vector<std::vector<float>> vertexCopies;  // cells whose positions Embree cannot read in place
-  for (const auto& cell : cells) {
-    const MeshView& mesh = cell->mesh();
-    if (mesh.triangleCount == 0 || mesh.vertexCount == 0) continue;
-    RTCGeometry geometry = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    rtcSetGeometryBuildQuality(geometry, RTC_BUILD_QUALITY_MEDIUM);
-    const float* positions = mesh.positions;
-    if (mesh.positionsPaddingFloats < 1) {  // Embree reads a float past the last vertex
-      vertexCopies.emplace_back(mesh.positions, mesh.positions + 3 * mesh.vertexCount);
-      vertexCopies.back().push_back(0.0f);
-      positions = vertexCopies.back().data();
-    }
-    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions, 0,
-                               3 * sizeof(float), mesh.vertexCount);
-    rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices, 0,
-                               3 * sizeof(uint32_t), mesh.triangleCount);
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(embree.scene, geometry, cell->id());
-    rtcReleaseGeometry(geometry);
-    embree.check(fmt::format("cannot add cell {}", cell->id()));
-  }
-  rtcCommitScene(embree.scene);
-  embree.check(fmt::format("building the scene of {} triangles failed", result.triangles));
-  result.buildSeconds = secondsSince(buildStart);
-  result.bvhBytes = embree.bytes.load();
+  const Cells cells = loadCells(scene, result);
+  const std::unique_ptr<InCoreScene> embree = buildScene(cells, options.threads, result);
 
   // The photon pass: emission chunks handed out in order to the threads.
-  const std::vector<uint64_t> shares = photonSharesOfLights(scene.lights(), options.photons);
-  std::vector<EmitChunk> chunks;
-  uint64_t nextPath = 0;
-  const uint32_t chunkSize = std::max<uint32_t>(1, options.photonsPerChunk);
-  for (uint32_t light = 0; light < shares.size(); ++light) {
-    for (uint64_t first = 0; first < shares[light]; first += chunkSize)
-      chunks.push_back({light, nextPath + first, uint32_t(std::min<uint64_t>(chunkSize, shares[light] - first)),
-                        shares[light]});
-    nextPath += shares[light];
-  }
+  const std::vector<EmitChunk> chunks =
+      emissionChunks(scene, options.photons, std::max<uint32_t>(1, options.photonsPerChunk));
   std::atomic<size_t> nextChunk{0};
   std::vector<ThreadCounters> counters(options.threads);
   std::vector<std::vector<StoredPhoton>> deposits(options.threads);
   std::vector<std::exception_ptr> failures(options.threads);
-  const uint64_t seed = options.seed;
-  const uint32_t maxBounces = options.maxBounces;
-  RTCScene rtcScene = embree.scene;
-
   auto work = [&](uint32_t thread) {
     try {
       const FlushDenormalsScope flushDenormals;
-      ThreadCounters& count = counters[thread];
-      std::vector<StoredPhoton>& stored = deposits[thread];
       // About 2.7 deposits per photon in the generated buildings: reserve
       // more (address space only; pages are touched as records arrive).
-      stored.reserve(size_t(options.photons / options.threads + 1) * 4);
+      deposits[thread].reserve(size_t(options.photons / options.threads + 1) * 4);
+      Tracer tracer{scene, cells, embree->scene, options.seed, options.maxBounces, counters[thread], deposits[thread]};
       RTCIntersectContext context;
       rtcInitIntersectContext(&context);
-      for (size_t c = nextChunk.fetch_add(1); c < chunks.size(); c = nextChunk.fetch_add(1)) {
-        const EmitChunk& chunk = chunks[c];
-        const AreaLight& light = scene.lights()[chunk.light];
-        const Vec3 lightNormal = light.normal();
-        const Vec3 power = light.power() / float(chunk.photonsOfLight);
-        for (uint64_t path = chunk.firstPath; path < chunk.firstPath + chunk.count; ++path) {
-          // Emission: CellKernel::emitPhotons.
-          const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
-          const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
-          Vec3 origin = offsetAlongNormal(light.corner + light.edge1 * u + light.edge2 * v, lightNormal);
-          Vec3 direction =
-              sampleCosineHemisphere(lightNormal, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
-                                     randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
-          Vec3 weight = power;
-          uint32_t depth = 0;
-          ++count.emitted;
-          // Bounces: CellKernel::tracePhoton, with the whole building as one cell.
-          for (;;) {
-            ++count.rays;
-            alignas(16) RTCRayHit query;
-            query.ray.org_x = origin.x, query.ray.org_y = origin.y, query.ray.org_z = origin.z;
-            query.ray.dir_x = direction.x, query.ray.dir_y = direction.y, query.ray.dir_z = direction.z;
-            query.ray.tnear = 0.0f;
-            query.ray.tfar = kInfinity;
-            query.ray.time = 0.0f;
-            query.ray.mask = 0xffffffffu;
-            query.ray.id = 0;
-            query.ray.flags = 0;
-            query.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            query.hit.primID = RTC_INVALID_GEOMETRY_ID;
-            query.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(rtcScene, &context, &query);
-            if (query.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
-              ++count.escaped;
-              break;
-            }
-            const CellGeometry& cell = *cells[query.hit.geomID];
-            const uint32_t primitive = query.hit.primID;
-            const Material& material = materials[cell.material(primitive)];
-            if (material.emissive() || !(maxComponent(material.albedo) > 0)) {
-              ++count.absorbed;
-              break;
-            }
-            const Vec3 point = origin + direction * query.ray.tfar;
-            Vec3 normal = normalize(cell.mesh().geometricNormal(primitive));
-            if (!(dot(normal, direction) < 0)) normal = -normal;
-            // As the cell kernel deposits: the lit side's normal, pointing into the surface.
-            stored.push_back({point, -normal, weight, path, uint16_t(depth)});
-            ++count.deposits;
-            const float survival = std::min(1.0f, maxComponent(material.albedo));
-            if (randomUniform(seed, RandomStream::Photon, path, depth, dim::Roulette) >= survival ||
-                depth + 1u >= maxBounces) {
-              ++count.absorbed;
-              break;
-            }
-            weight = weight * material.albedo / survival;
-            ++depth;
-            origin = offsetAlongNormal(point, normal);
-            direction =
-                sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, path, depth, dim::DirectionU),
-                                       randomUniform(seed, RandomStream::Photon, path, depth, dim::DirectionV));
-          }
-        }
-      }
+      for (size_t c = nextChunk.fetch_add(1); c < chunks.size(); c = nextChunk.fetch_add(1))
+        tracer.emit(chunks[c], context);
+      EmbreeDevice::check("tracing failed");
     } catch (...) {
       failures[thread] = std::current_exception();
     }
@@ -246,7 +215,6 @@ InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePh
   result.traceSeconds = secondsSince(traceStart);
   for (const std::exception_ptr& failure : failures)
     if (failure) std::rethrow_exception(failure);
-  embree.check("tracing failed");
   for (uint32_t t = 0; t < options.threads; ++t) {
     result.emitted += counters[t].emitted;
     result.deposits += counters[t].deposits;
