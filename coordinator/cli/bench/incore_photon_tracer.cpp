@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <exception>
 #include <memory>
 #include <stdexcept>
@@ -19,14 +18,11 @@
 #include "common/scene/cell_geometry.h"
 #include "common/transport/photon_map.h"  // StoredPhoton: the record a deposit appends
 #include "common/transport/photon_scattering.h"
+#include "coordinator/cli/bench/accel_measure.h"  // Clock, secondsSince
 
 namespace portico::cli {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double secondsSince(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 using Cells = std::vector<std::unique_ptr<CellGeometry>>;
 
