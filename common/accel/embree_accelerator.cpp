@@ -1,12 +1,12 @@
-// Embree accelerator: one process-wide device, one scene per cell with one
-// triangle geometry over shared buffers, rtcIntersect1 / rtcOccluded1.
+// Embree accelerator: one process-wide device (embree_device.h), one scene
+// per cell with one triangle geometry over shared buffers, rtcIntersect1 /
+// rtcOccluded1.
 #include "common/accel/embree_accelerator.h"
 
 #include <embree3/rtcore.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/accel/embree_device.h"
 #include "common/accel/triangle_intersect.h"
 
 #if defined(__SSE__) || defined(__x86_64__)
@@ -28,54 +29,16 @@ namespace {
 
 // The process's device, made on first use and kept for the process's
 // lifetime (releasing it from a static destructor can race TBB's shutdown).
-struct EmbreeDevice {
-  RTCDevice device = nullptr;
-  std::string config;
-  std::atomic<int64_t> bytes{0};  // allocated by the device now (memory monitor)
-};
-
 std::mutex deviceMutex;
 std::string requestedConfig;
 EmbreeDevice* processDevice = nullptr;
 
-// Embree reports errors on the thread whose API call failed (its calls
-// catch internal exceptions, including those of build threads): collect
-// them per thread, turn them into exceptions after the call.
-thread_local std::string embreeErrors;
-
-void onEmbreeError(void*, RTCError code, const char* message) {
-  if (!embreeErrors.empty()) embreeErrors += "; ";
-  embreeErrors += "Embree error " + std::to_string(int(code)) + (message ? std::string(": ") + message : "");
-}
-
-bool onEmbreeMemory(void* user, ssize_t bytes, bool) {
-  static_cast<EmbreeDevice*>(user)->bytes.fetch_add(int64_t(bytes), std::memory_order_relaxed);
-  return true;
-}
-
-[[noreturn]] void failEmbree(const std::string& what) {
-  std::string errors;
-  errors.swap(embreeErrors);
-  throw std::runtime_error("embree: " + what + (errors.empty() ? "" : " (" + errors + ")"));
-}
-
 EmbreeDevice& sharedDevice() {
   std::lock_guard<std::mutex> lock(deviceMutex);
   if (processDevice) return *processDevice;
-  auto* created = new EmbreeDevice;
-  created->config = requestedConfig;
-  created->device = rtcNewDevice(created->config.empty() ? nullptr : created->config.c_str());
-  if (!created->device) {
-    const RTCError code = rtcGetDeviceError(nullptr);
-    delete created;
-    throw std::runtime_error("embree: cannot create the device (error " + std::to_string(int(code)) +
-                             "; config '" + requestedConfig + "')");
-  }
-  rtcSetDeviceErrorFunction(created->device, onEmbreeError, nullptr);
-  rtcSetDeviceMemoryMonitorFunction(created->device, onEmbreeMemory, created);
-  spdlog::debug("embree: device ready ({}), config '{}'", rtcGetDeviceProperty(created->device, RTC_DEVICE_PROPERTY_VERSION),
-                created->config);
-  processDevice = created;
+  processDevice = new EmbreeDevice(requestedConfig);
+  spdlog::debug("embree: device ready ({}), config '{}'",
+                rtcGetDeviceProperty(processDevice->handle(), RTC_DEVICE_PROPERTY_VERSION), processDevice->config());
   return *processDevice;
 }
 
@@ -112,7 +75,7 @@ void fillRay(const Ray& ray, RTCRay& out) {
 
 bool configureEmbreeDevice(std::string_view config) {
   std::lock_guard<std::mutex> lock(deviceMutex);
-  if (processDevice) return processDevice->config == config;
+  if (processDevice) return processDevice->config() == config;
   requestedConfig = std::string(config);
   return true;
 }
@@ -132,44 +95,24 @@ EmbreeAccelerator::EmbreeAccelerator(const MeshView& mesh, std::string_view spec
   }
 
   EmbreeDevice& device = sharedDevice();
-  embreeErrors.clear();
-  const int64_t bytesBefore = device.bytes.load(std::memory_order_relaxed);
-  RTCScene scene = rtcNewScene(device.device);
-  if (!scene) failEmbree("cannot create a scene");
+  EmbreeDevice::clearErrors();
+  const int64_t bytesBefore = device.bytesAllocated();
+  RTCScene scene = rtcNewScene(device.handle());
+  if (!scene) EmbreeDevice::fail("cannot create a scene");
   scene_ = scene;
   try {
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_NONE);
     rtcSetSceneBuildQuality(scene, buildQuality);
-    if (mesh.triangleCount > 0 && mesh.vertexCount > 0) {
-      RTCGeometry geometry = rtcNewGeometry(device.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-      if (!geometry) failEmbree("cannot create a triangle geometry");
-      rtcSetGeometryBuildQuality(geometry, buildQuality);
-      // Embree loads each float3 vertex with a 16-byte load: the last one
-      // needs one readable float after it.
-      const float* positions = mesh.positions;
-      if (mesh.positionsPaddingFloats < 1) {
-        vertexCopy_.reserve(3 * mesh.vertexCount + 1);
-        vertexCopy_.assign(mesh.positions, mesh.positions + 3 * mesh.vertexCount);
-        vertexCopy_.push_back(0.0f);
-        positions = vertexCopy_.data();
-      }
-      rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, positions, 0,
-                                 3 * sizeof(float), mesh.vertexCount);
-      rtcSetSharedGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, mesh.indices, 0,
-                                 3 * sizeof(uint32_t), mesh.triangleCount);
-      rtcCommitGeometry(geometry);
-      rtcAttachGeometry(scene, geometry);
-      rtcReleaseGeometry(geometry);
-    }
+    attachEmbreeTriangles(device, scene, mesh, buildQuality, vertexCopy_);
     rtcCommitScene(scene);
-    if (!embreeErrors.empty()) failEmbree("building the scene of " + std::to_string(mesh.triangleCount) + " triangles failed");
+    EmbreeDevice::check("building the scene of " + std::to_string(mesh.triangleCount) + " triangles failed");
   } catch (...) {
     rtcReleaseScene(scene);
     scene_ = nullptr;
     throw;
   }
 
-  const int64_t sceneBytes = device.bytes.load(std::memory_order_relaxed) - bytesBefore;
+  const int64_t sceneBytes = device.bytesAllocated() - bytesBefore;
   stats_.triangleReferences = mesh.triangleCount;
   stats_.bytes = sizeof(*this) + uint64_t(std::max<int64_t>(sceneBytes, 0)) + vertexCopy_.capacity() * sizeof(float);
   stats_.buildMs =

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/rng.h"
+#include "common/transport/photon_scattering.h"
 #include "common/transport/sampling.h"
 
 namespace portico {
@@ -35,19 +36,9 @@ void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t coun
   const AreaLight& light = scene_.lights().at(lightId);
   const Vec3 normal = light.normal();
   const Vec3 power = light.power() / float(photonsOfLight);
-  const uint64_t seed = parameters_.seed;
   for (uint64_t path = firstPath; path < firstPath + count; ++path) {
     checkStop();
-    const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
-    const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
-    const Vec3 point = light.corner + light.edge1 * u + light.edge2 * v;
-    RayState photon;
-    photon.kind = RayKind::Photon;
-    photon.pathId = path;
-    photon.origin = offsetAlongNormal(point, normal);
-    photon.direction = sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
-                                              randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
-    photon.weight = power;
+    const RayState photon = emitPhoton(light, normal, power, parameters_.seed, path);
     ++out.counters.photonsEmitted;
     tracePhoton(photon, out);
   }
@@ -162,35 +153,13 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       return;
     }
     const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
-    if (material.emissive() || !(maxComponent(material.albedo) > 0)) {
+    const PhotonScatter scatter =
+        scatterPhoton(photon, {mesh, event.primitive, event.t, material}, seed, parameters_.maxPhotonBounces);
+    if (scatter.deposited) deposit(scatter.deposit, out);
+    if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
       return;
     }
-    const Vec3 point = photon.origin + photon.direction * event.t;
-    bool front;
-    const Vec3 normal = hitNormalFacing(mesh, event.primitive, photon.direction, front);
-    // Stored with the lit side's normal (into the surface), which the
-    // estimates compare with their own: photons on a wall meeting the floor
-    // do not count for the floor, and the irradiance cache knows the
-    // surface each of its points lies on.
-    deposit({point, -normal, photon.weight, photon.pathId, photon.depth}, out);
-    // Russian roulette on the albedo: survivors carry power * albedo / p, so
-    // the expected power is unchanged.
-    const float survival = std::min(1.0f, maxComponent(material.albedo));
-    const uint32_t bounce = photon.depth;
-    if (randomUniform(seed, RandomStream::Photon, photon.pathId, bounce, dim::Roulette) >= survival ||
-        bounce + 1u >= parameters_.maxPhotonBounces) {
-      ++out.counters.photonsAbsorbed;
-      return;
-    }
-    photon.weight = photon.weight * material.albedo / survival;
-    photon.depth = static_cast<uint16_t>(bounce + 1);
-    photon.origin = offsetAlongNormal(point, normal);
-    photon.direction =
-        sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionU),
-                               randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionV));
-    photon.tMin = 0;
-    photon.tMax = kInfinity;
   }
 }
 

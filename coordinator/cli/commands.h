@@ -70,37 +70,6 @@ struct LocalRunOptions {
 };
 int runRender(const RenderOptions& render, const LocalRunOptions& local);
 
-// `bench accel`: accelerators on furnished cells of chosen sizes (bench_command.cpp).
-struct BenchAccelOptions {
-  std::string sizes = "1000,10000,100000,1000000";
-  uint64_t rays = 100000;
-  std::string specs = "grid,hgrid,kd:median,kd:sah,kd:bbox,bvh,embree";
-  std::string csv;
-  std::string plot;
-  uint64_t seed = 1;
-  uint32_t runs = 3;
-  uint32_t embreeThreads = 1;  // 0: Embree's default (every core)
-};
-int runBenchAccel(const BenchAccelOptions& options);
-
-// `bench pipeline`: one photon pass over a generated building, in-core with
-// Embree on 2 threads and through portico with 1 and 2 workers (bench_pipeline.cpp).
-struct BenchPipelineOptions {
-  std::string preset;
-  std::string store;        // reuse the scene store there, or generate it there (and keep it); "" = temporary
-  uint32_t floors = 0;      // the tower's floors
-  uint64_t sceneSeed = 1;   // furnishing seed of the generated building
-  uint64_t photons = 0;     // 0: the paper's workload, kPaperPhotonsPerLight per light of the building
-  uint64_t seed = 1;        // the photon pass's seed
-  std::string modes = "embree-incore-2t,portico-1w,portico-2w";
-  std::string accel = "grid";
-  std::string memory = "8GiB";  // per portico worker
-  uint32_t runs = 1;
-  std::string csv;
-  std::string plot;
-};
-int runBenchPipeline(const BenchPipelineOptions& options);
-
 // How the client commands reach a running coordinator.
 struct ConnectOptions {
   std::string endpoint;
@@ -119,5 +88,14 @@ int runShutdown(const ConnectOptions& connect);
 
 // `keys generate DIR`: a CURVE key pair for the coordinator and one per role (keys_command.cpp).
 int runKeysGenerate(const std::string& directory);
+
+// The subcommands, their options and their actions, by group: scene
+// (scene_command_line.cpp), render and the job commands
+// (job_command_line.cpp), keys (keys_command.cpp); bench is
+// bench/bench_command_line.h's.
+class CommandTable;
+void addSceneCommands(CLI::App& app, CommandTable& table);
+void addJobCommands(CLI::App& app, CommandTable& table);
+void addKeysCommands(CLI::App& app, CommandTable& table);
 
 }  // namespace portico::cli

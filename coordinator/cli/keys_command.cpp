@@ -4,8 +4,10 @@
 
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 #include "common/net/curve_keys.h"
+#include "coordinator/cli/command_table.h"
 #include "coordinator/cli/commands.h"
 
 namespace portico::cli {
@@ -24,6 +26,17 @@ int runKeysGenerate(const std::string& directory) {
       "operators:   portico shutdown --keys DIR (needs coordinator.public, operator.secret)\n",
       dir, written.empty() ? std::string("every key pair was already there") : "wrote the key pairs " + pairs);
   return 0;
+}
+
+void addKeysCommands(CLI::App& app, CommandTable& table) {
+  auto directory = std::make_shared<std::string>();
+  auto* keys = app.add_subcommand("keys", "ZeroMQ CURVE keys for services listening beyond loopback");
+  keys->require_subcommand(1);
+  auto* keysGenerate = keys->add_subcommand(
+      "generate", "write the key pairs DIR lacks: coordinator, client, worker and operator .{public,secret} (Z85; "
+                  "secrets mode 0600; existing keys are kept)");
+  keysGenerate->add_option("DIR", *directory, "directory to write the key files into")->required();
+  table.add(keysGenerate, [directory] { return runKeysGenerate(*directory); });
 }
 
 }  // namespace portico::cli

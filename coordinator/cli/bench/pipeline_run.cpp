@@ -1,6 +1,6 @@
 // `portico render` as a child process, and its statistics read back: the one
 // measurement of the pipeline benches (pipeline_run.h).
-#include "coordinator/cli/pipeline_run.h"
+#include "coordinator/cli/bench/pipeline_run.h"
 
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -11,7 +11,7 @@
 #include <thread>
 
 #include "common/util/child_process.h"
-#include "coordinator/cli/accel_measure.h"
+#include "coordinator/cli/bench/accel_measure.h"
 
 namespace portico::cli {
 

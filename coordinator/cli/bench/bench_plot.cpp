@@ -1,7 +1,7 @@
 // The plotter behind `portico bench --plot`: axes with decade or 1-2-5
 // ticks, series as lines (solid or dashed) with markers, a legend; drawn on
 // a Canvas (png_canvas.h).
-#include "coordinator/cli/bench_plot.h"
+#include "coordinator/cli/bench/bench_plot.h"
 
 #include <algorithm>
 #include <cmath>

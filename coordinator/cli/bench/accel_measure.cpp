@@ -1,4 +1,4 @@
-#include "coordinator/cli/accel_measure.h"
+#include "coordinator/cli/bench/accel_measure.h"
 
 #include <algorithm>
 #include <cmath>

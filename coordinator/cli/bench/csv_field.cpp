@@ -1,4 +1,4 @@
-#include "coordinator/cli/csv_field.h"
+#include "coordinator/cli/bench/csv_field.h"
 
 namespace portico::cli {
 

@@ -17,6 +17,8 @@
 // shared machine hurts every mode alike); the median is reported. Deposits
 // and absorbed/escaped photons are printed for every mode so that one can
 // see that they do the same work.
+#include "coordinator/cli/bench/bench_pipeline.h"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <sys/resource.h>
@@ -39,11 +41,10 @@
 #include "common/scene/building_presets.h"
 #include "common/scene/scene_store.h"
 #include "common/util/temporary_directory.h"
-#include "coordinator/cli/commands.h"
-#include "coordinator/cli/incore_photon_tracer.h"
-#include "coordinator/cli/accel_measure.h"
-#include "coordinator/cli/bench_plot.h"
-#include "coordinator/cli/pipeline_run.h"
+#include "coordinator/cli/bench/incore_photon_tracer.h"
+#include "coordinator/cli/bench/accel_measure.h"
+#include "coordinator/cli/bench/bench_plot.h"
+#include "coordinator/cli/bench/pipeline_run.h"
 
 namespace portico::cli {
 
@@ -195,22 +196,10 @@ void writeBarPlot(const std::string& path, const std::string& title, const std::
   writeBarPlotPng(path, {panel}, 760, 480);
 }
 
-}  // namespace
-
-int runBenchPipeline(const BenchPipelineOptions& requested) {
-  BenchPipelineOptions options = requested;
-  const std::vector<Mode> modes = parseModes(options.modes);
-  const uint32_t runs = std::max<uint32_t>(1, options.runs);
-  const std::optional<BuildingPreset> preset = findBuildingPreset(options.preset, options.floors);
-  if (!preset)
-    throw std::invalid_argument(fmt::format("unknown preset '{}' (known: {})", options.preset,
-                                            fmt::join(buildingPresetNames(), ", ")));
-
-  const TemporaryDirectory temporary("portico-bench-pipeline");
-  const std::filesystem::path& work = temporary.path();
-
-  // The store: --store reused if it holds one, else generated there (and
-  // kept), else generated into the temporary directory.
+// The store: --store reused if it holds one, else generated there (and
+// kept), else generated into the temporary directory `work`.
+std::string prepareStore(const BenchPipelineOptions& options, const BuildingPreset& preset,
+                         const std::filesystem::path& work) {
   std::string store = options.store.empty() ? (work / "store").string()
                                             : std::filesystem::absolute(options.store).string();
   const bool reuse = !options.store.empty() && std::filesystem::exists(std::filesystem::path(store) / "scene.db");
@@ -219,34 +208,37 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
   } else {
     std::cout << fmt::format("portico bench pipeline: generating {} into {} ...\n", options.preset, store);
     std::cout.flush();
-    const GeneratedBuildingStats generated = generateBuilding(*preset, options.sceneSeed, store);
+    const GeneratedBuildingStats generated = generateBuilding(preset, options.sceneSeed, store);
     std::cout << fmt::format("  {} triangles, {} cells, {} portals, {} lights in {:.1f} s\n", generated.triangles,
                              generated.cells, generated.portals, generated.lights, generated.seconds);
   }
-  const SceneStore scene = SceneStore::open(store);
-  // By default the paper's workload for the building: at 1 M photons the
-  // octagon's photon phase is ~1.5 s with one worker, a third of it loading
-  // and building its 233 cells, which the paper's 7.75 M amortise. At most
-  // 10 M: the in-core tracer keeps every deposit in memory (~130 bytes per
-  // photon), and Soda Hall's 135 M would take 17 GiB of it.
+  return store;
+}
+
+// --photons, or by default the paper's workload for the building: at 1 M
+// photons the octagon's photon phase is ~1.5 s with one worker, a third of
+// it loading and building its 233 cells, which the paper's 7.75 M amortise.
+// At most 10 M: the in-core tracer keeps every deposit in memory (~130
+// bytes per photon), and Soda Hall's 135 M would take 17 GiB of it.
+uint64_t photonsOfPass(uint64_t requested, const SceneStore& scene, const std::string& store) {
   constexpr uint64_t kMostDefaultPhotons = 10000000;
-  if (options.photons == 0) {
+  uint64_t photons = requested;
+  if (photons == 0) {
     const uint64_t paperPhotons = kPaperPhotonsPerLight * scene.lights().size();
-    options.photons = std::min(paperPhotons, kMostDefaultPhotons);
+    photons = std::min(paperPhotons, kMostDefaultPhotons);
     if (paperPhotons > kMostDefaultPhotons)
       std::cout << fmt::format("photons: {} (the paper's 50 000 per light would be {}; --photons sets any count)\n",
-                               options.photons, paperPhotons);
+                               photons, paperPhotons);
   }
-  if (options.photons == 0) throw std::invalid_argument(fmt::format("the scene store {} has no lights", store));
-  uint64_t storeBytes = 0;
-  for (const CellInfo& cell : scene.cells()) storeBytes += cell.byteCount;
-  std::cout << fmt::format(
-      "scene: {} cells, {} triangles, {} lights, {:.0f} MiB of cell files; {} photons, seed {}, portico accelerator "
-      "'{}', worker memory {}; {} run(s) per mode, interleaved, median reported\n",
-      scene.cells().size(), scene.totalTriangles(), scene.lights().size(), double(storeBytes) / (1 << 20),
-      options.photons, options.seed, options.accel, options.memory, runs);
-  std::cout.flush();
+  if (photons == 0) throw std::invalid_argument(fmt::format("the scene store {} has no lights", store));
+  return photons;
+}
 
+// Every mode `runs` times, interleaved: a slow minute of a shared machine
+// hurts every mode alike.
+std::vector<ModeResult> runModes(const std::vector<Mode>& modes, uint32_t runs, const SceneStore& scene,
+                                 const std::string& store, const BenchPipelineOptions& options,
+                                 const std::filesystem::path& work) {
   std::vector<ModeResult> results;
   for (const Mode& mode : modes) results.push_back({mode, {}});
   for (uint32_t run = 0; run < runs; ++run) {
@@ -259,12 +251,13 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
       std::cout.flush();
     }
   }
+  return results;
+}
 
-  // The table.
-  double embreeRate = 0;
-  for (const ModeResult& r : results)
-    if (r.mode.workers == 0 && r.seconds() > 0) embreeRate = double(options.photons) / r.seconds();
-  const auto rateOf = [&](const ModeResult& r) { return r.seconds() > 0 ? double(options.photons) / r.seconds() : 0.0; };
+// The table on stdout; returns the CSV's text. embreeRate: the in-core
+// tracer's photons/s (0 when it did not run).
+std::string printResults(const std::vector<ModeResult>& results, uint64_t photons, double embreeRate) {
+  const auto rateOf = [&](const ModeResult& r) { return r.seconds() > 0 ? double(photons) / r.seconds() : 0.0; };
   const auto ratioText = [&](double rate) { return embreeRate > 0 ? fmt::format("{:.2f}", rate / embreeRate) : ""; };
   std::cout << fmt::format("\n{:<18} {:>9} {:>9} {:>12} {:>9} {:>8} {:>8} {:>8} {:>10} {:>10} {:>10}\n", "mode",
                            "photons", "seconds", "photons/s", "x embree", "build s", "trace s", "CPU s", "deposits",
@@ -276,13 +269,13 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
     const Sample& s = r.typical();
     const double rate = rateOf(r);
     std::cout << fmt::format("{:<18} {:>9} {:>9.2f} {:>12.0f} {:>9} {:>8.2f} {:>8} {:>8.2f} {:>10} {:>10} {:>10}\n",
-                             r.mode.name, options.photons, r.seconds(), rate, ratioText(rate), s.buildSeconds,
+                             r.mode.name, photons, r.seconds(), rate, ratioText(rate), s.buildSeconds,
                              r.mode.workers == 0 ? fmt::format("{:.2f}", s.traceSeconds) : "", s.cpuSeconds,
                              s.deposits, s.absorbed, s.escaped);
     std::vector<std::string> all;
     for (const Sample& sample : r.samples) all.push_back(fmt::format("{:.3f}", sample.seconds));
     csv += fmt::format("{},{},{:.3f},{:.1f},{},{:.3f},{:.3f},{},{:.3f},{:.3f},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-                       r.mode.name, options.photons, r.seconds(), rate, ratioText(rate), s.loadSeconds,
+                       r.mode.name, photons, r.seconds(), rate, ratioText(rate), s.loadSeconds,
                        s.buildSeconds, r.mode.workers == 0 ? fmt::format("{:.3f}", s.traceSeconds) : "",
                        s.wallSeconds, s.cpuSeconds, s.emitted, s.deposits, s.absorbed, s.escaped, s.rays, s.crossings,
                        s.portalCopies, s.cellsLoaded, s.cacheHits, s.bytesRead, s.leases, r.samples.size(),
@@ -291,23 +284,19 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
   std::cout << "build s: in-core, Embree's BVH (2 threads) after loading the cells; portico, its workers' "
                "accelerator builds added up (inside seconds). CPU s: the whole run's CPU time (portico: every "
                "process, start-up and token render included)\n";
+  return csv;
+}
 
-  // Same work? Deposits of portico with any number of workers are the same
-  // bits; the in-core tracer's differ only where a photon's path meets a
-  // portal or Embree's triangle test disagrees with portico's in the last bit.
-  const ModeResult* embree = nullptr;
-  std::vector<const ModeResult*> porticos;
-  for (const ModeResult& r : results) {
-    if (r.mode.workers == 0)
-      embree = &r;
-    else
-      porticos.push_back(&r);
-  }
+// Same work? Deposits of portico with any number of workers are the same
+// bits; the in-core tracer's differ only where a photon's path meets a
+// portal or Embree's triangle test disagrees with portico's in the last bit.
+// Returns 3 when portico's modes disagree, else 0.
+int checkSameWork(const ModeResult* embree, const std::vector<const ModeResult*>& porticos, uint64_t photons) {
   int status = 0;
   for (const ModeResult* p : porticos) {
     const Sample& s = p->typical();
-    if (s.emitted != int64_t(options.photons)) {
-      std::cerr << fmt::format("portico: {} emitted {} photons, not {}\n", p->mode.name, s.emitted, options.photons);
+    if (s.emitted != int64_t(photons)) {
+      std::cerr << fmt::format("portico: {} emitted {} photons, not {}\n", p->mode.name, s.emitted, photons);
       status = 3;
     }
     if (p != porticos.front() && s.deposits != porticos.front()->typical().deposits) {
@@ -325,9 +314,14 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
         p.deposits, p.deposits ? 100.0 * double(e.deposits - p.deposits) / double(p.deposits) : 0.0, e.absorbed,
         p.absorbed, e.escaped, p.escaped);
   }
-  // The ratio of the medians, and the median of each round's own ratio:
-  // the two modes of a round run a few seconds apart, so a machine whose
-  // speed drifts over minutes moves both alike.
+  return status;
+}
+
+// Portico with N workers against 1: the ratio of the medians, and the
+// median of each round's own ratio (the two modes of a round run a few
+// seconds apart, so a machine whose speed drifts over minutes moves both
+// alike).
+void printScaling(const std::vector<const ModeResult*>& porticos) {
   for (const ModeResult* p : porticos)
     if (p->mode.workers > 1)
       for (const ModeResult* q : porticos)
@@ -343,6 +337,48 @@ int runBenchPipeline(const BenchPipelineOptions& requested) {
           std::cout << fmt::format("{} / {}: {:.2f}x{}\n", p->mode.name, q->mode.name, q->seconds() / p->seconds(),
                                    perRound);
         }
+}
+
+}  // namespace
+
+int runBenchPipeline(const BenchPipelineOptions& requested) {
+  BenchPipelineOptions options = requested;
+  const std::vector<Mode> modes = parseModes(options.modes);
+  const uint32_t runs = std::max<uint32_t>(1, options.runs);
+  const std::optional<BuildingPreset> preset = findBuildingPreset(options.preset, options.floors);
+  if (!preset)
+    throw std::invalid_argument(fmt::format("unknown preset '{}' (known: {})", options.preset,
+                                            fmt::join(buildingPresetNames(), ", ")));
+
+  const TemporaryDirectory temporary("portico-bench-pipeline");
+  const std::filesystem::path& work = temporary.path();
+  const std::string store = prepareStore(options, *preset, work);
+  const SceneStore scene = SceneStore::open(store);
+  options.photons = photonsOfPass(options.photons, scene, store);
+  uint64_t storeBytes = 0;
+  for (const CellInfo& cell : scene.cells()) storeBytes += cell.byteCount;
+  std::cout << fmt::format(
+      "scene: {} cells, {} triangles, {} lights, {:.0f} MiB of cell files; {} photons, seed {}, portico accelerator "
+      "'{}', worker memory {}; {} run(s) per mode, interleaved, median reported\n",
+      scene.cells().size(), scene.totalTriangles(), scene.lights().size(), double(storeBytes) / (1 << 20),
+      options.photons, options.seed, options.accel, options.memory, runs);
+  std::cout.flush();
+
+  const std::vector<ModeResult> results = runModes(modes, runs, scene, store, options, work);
+  double embreeRate = 0;
+  const ModeResult* embree = nullptr;
+  std::vector<const ModeResult*> porticos;
+  for (const ModeResult& r : results) {
+    if (r.mode.workers == 0) {
+      embree = &r;
+      if (r.seconds() > 0) embreeRate = double(options.photons) / r.seconds();
+    } else {
+      porticos.push_back(&r);
+    }
+  }
+  const std::string csv = printResults(results, options.photons, embreeRate);
+  const int status = checkSameWork(embree, porticos, options.photons);
+  printScaling(porticos);
 
   if (!options.csv.empty()) {
     std::ofstream out(options.csv);

@@ -1,4 +1,4 @@
-#include "coordinator/cli/bench_quality.h"
+#include "coordinator/cli/bench/bench_quality.h"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "common/util/child_process.h"
-#include "coordinator/cli/bench_plot.h"
-#include "coordinator/cli/csv_field.h"
+#include "coordinator/cli/bench/bench_plot.h"
+#include "coordinator/cli/bench/csv_field.h"
 
 namespace portico::cli {
 namespace {

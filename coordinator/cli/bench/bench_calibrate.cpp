@@ -26,9 +26,9 @@
 #include "common/scene/cell_geometry.h"
 #include "common/scene/scene_store.h"
 #include "common/util/temporary_directory.h"
-#include "coordinator/cli/accel_measure.h"
-#include "coordinator/cli/bench_calibrate.h"
-#include "coordinator/cli/csv_field.h"
+#include "coordinator/cli/bench/accel_measure.h"
+#include "coordinator/cli/bench/bench_calibrate.h"
+#include "coordinator/cli/bench/csv_field.h"
 
 namespace portico::cli {
 

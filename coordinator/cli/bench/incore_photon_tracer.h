@@ -2,11 +2,10 @@
 // of portico. Every cell's triangles in one Embree scene (one BVH over the
 // whole building), and N threads tracing the job's photon pass through it
 // with rtcIntersect1: the same emission (lights' shares in proportion to
-// power, as coordinator/job_planner.cpp plans them), the same counter-based
-// random numbers and the same bounce logic as CellKernel::emitPhotons /
-// tracePhoton (deposit at a diffuse hit, Russian roulette on the albedo,
-// cosine bounce, emitters and black surfaces absorb, the same bounce cap),
-// so it does the same work as portico's photon phase, without cells.
+// power, as coordinator/job_planner.cpp plans them) and the same steps at
+// each surface as the cell kernel (common/transport/photon_scattering.h:
+// the same random numbers, deposits, Russian roulette and bounce cap), so
+// it does the same work as portico's photon phase, without cells.
 #pragma once
 
 #include "common/transport/photon_shares.h"

@@ -1,0 +1,90 @@
+// A photon of the photon pass, step by step: its emission from a light, and
+// what it does at each surface it hits (a deposit, Russian roulette on the
+// albedo, a cosine bounce). The cell kernel (CellKernel::emitPhotons and
+// tracePhoton, cell by cell) and `portico bench pipeline`'s in-core tracer
+// (the whole building in one Embree scene) both take these steps, so the two
+// trace the same photons with the same random numbers and differ only in how
+// they find the next surface.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+
+#include "common/mesh_view.h"
+#include "common/rng.h"
+#include "common/scene/scene_types.h"
+#include "common/transport/photon_map.h"
+#include "common/transport/ray_state.h"
+#include "common/transport/sampling.h"
+
+namespace portico {
+
+// Photon `path` leaving `light` (whose normal() is lightNormal): from a
+// uniform point of the light, moved just off it, in a cosine-distributed
+// direction, carrying `power` (the light's power over its photon count).
+inline RayState emitPhoton(const AreaLight& light, const Vec3& lightNormal, const Vec3& power, uint64_t seed,
+                           uint64_t path) {
+  const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
+  const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
+  const Vec3 point = light.corner + light.edge1 * u + light.edge2 * v;
+  RayState photon;
+  photon.kind = RayKind::Photon;
+  photon.pathId = path;
+  photon.origin = offsetAlongNormal(point, lightNormal);
+  photon.direction = sampleCosineHemisphere(lightNormal, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
+                                            randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
+  photon.weight = power;
+  return photon;
+}
+
+// Where a photon's segment ends: triangle `primitive` of `mesh`, at distance
+// t along the photon's direction, made of `material`.
+struct PhotonHit {
+  const MeshView& mesh;
+  uint32_t primitive;
+  float t;
+  const Material& material;
+};
+
+// What the photon did at a surface.
+struct PhotonScatter {
+  bool deposited = false;   // `deposit` is the record to store
+  StoredPhoton deposit;
+  bool bounced = false;     // the photon is now its next segment; else it is absorbed
+};
+
+// Emitters and black surfaces absorb the photon and store nothing. Elsewhere
+// it deposits, with the lit side's normal pointing into the surface (the
+// estimates compare it with their own: photons on a wall meeting the floor
+// do not count for the floor, and the irradiance cache knows the surface
+// each of its points lies on). Then Russian roulette on the albedo: a
+// survivor carries power * albedo / p, so the expected power is unchanged,
+// and leaves in a cosine-distributed direction, unless it has made
+// maxBounces - 1 bounces.
+inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint64_t seed, uint32_t maxBounces) {
+  PhotonScatter scatter;
+  const Material& material = hit.material;
+  if (material.emissive() || !(maxComponent(material.albedo) > 0)) return scatter;
+  const Vec3 point = photon.origin + photon.direction * hit.t;
+  const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
+  const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;
+  scatter.deposited = true;
+  scatter.deposit = {point, -normal, photon.weight, photon.pathId, photon.depth};
+  const float survival = std::min(1.0f, maxComponent(material.albedo));
+  const uint32_t bounce = photon.depth;
+  if (randomUniform(seed, RandomStream::Photon, photon.pathId, bounce, dim::Roulette) >= survival ||
+      bounce + 1u >= maxBounces)
+    return scatter;
+  scatter.bounced = true;
+  photon.weight = photon.weight * material.albedo / survival;
+  photon.depth = static_cast<uint16_t>(bounce + 1);
+  photon.origin = offsetAlongNormal(point, normal);
+  photon.direction =
+      sampleCosineHemisphere(normal, randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionU),
+                             randomUniform(seed, RandomStream::Photon, photon.pathId, photon.depth, dim::DirectionV));
+  photon.tMin = 0;
+  photon.tMax = kInfinity;
+  return scatter;
+}
+
+}  // namespace portico

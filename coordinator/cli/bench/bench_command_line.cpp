@@ -1,0 +1,154 @@
+// The options and actions of `portico bench`'s subcommands, one registration
+// function per benchmark.
+#include "coordinator/cli/bench/bench_command_line.h"
+
+#include <memory>
+
+#include "coordinator/cli/bench/bench_accel.h"
+#include "coordinator/cli/bench/bench_calibrate.h"
+#include "coordinator/cli/bench/bench_paper.h"
+#include "coordinator/cli/bench/bench_pipeline.h"
+#include "coordinator/cli/bench/bench_quality.h"
+#include "coordinator/cli/command_table.h"
+
+namespace portico::cli {
+
+namespace {
+
+void addAccel(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchAccelOptions>();
+  auto* benchAccelCommand =
+      bench.add_subcommand("accel", "build time and tracing speed of the accelerators on furnished cells");
+  benchAccelCommand->add_option("--sizes", o->sizes, "triangle counts of the cells (e.g. 1000,10k,1M)")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--rays", o->rays, "rays per kind (photon, camera) and size")
+      ->capture_default_str();
+  benchAccelCommand
+      ->add_option("--specs", o->specs,
+                   "accelerator specs, comma-separated (name=value items belong to the spec before them; ';' "
+                   "also separates); kinds not in this build are skipped")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--csv", o->csv, "write one row per structure, size and ray kind");
+  benchAccelCommand->add_option("--plot", o->plot, "write a PNG: build time and Mrays/s against triangles");
+  benchAccelCommand->add_option("--seed", o->seed, "seed of the furnishing and of the rays")
+      ->capture_default_str();
+  benchAccelCommand->add_option("--runs", o->runs, "timed runs per measurement (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchAccelCommand
+      ->add_option("--embree-threads", o->embreeThreads,
+                   "threads of Embree's builder (0: every core); 1 compares like with like")
+      ->capture_default_str();
+  table.add(benchAccelCommand, [o] { return runBenchAccel(*o); });
+}
+
+void addQuality(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchQualityOptions>();
+  auto* benchQualityCommand = bench.add_subcommand(
+      "quality", "error against time on a reference scene: a ladder of render settings (docs/image-quality.md)");
+  benchQualityCommand->add_option("SCENE_DIR", o->sceneDirectory, "folder of scene.json and reference.exr")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  benchQualityCommand->add_option("--settings", o->settings,
+                                  "portico render arguments per rung, rungs separated by ';'")
+      ->capture_default_str();
+  benchQualityCommand->add_option("--workers", o->workers, "workers of each render")->capture_default_str();
+  benchQualityCommand->add_option("--csv", o->csv, "write one row per setting");
+  benchQualityCommand->add_option("--plot", o->plot, "write a PNG: block RMSE and worst block against seconds");
+  table.add(benchQualityCommand, [o] { return runBenchQuality(*o); });
+}
+
+void addPipeline(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchPipelineOptions>();
+  auto* benchPipelineCommand = bench.add_subcommand(
+      "pipeline", "one photon pass over a generated building: in-core Embree (2 threads) vs portico (1, 2 workers)");
+  benchPipelineCommand->add_option("--preset", o->preset, "building preset: l-shape, z-building, octagon, soda-hall, tower")
+      ->required();
+  benchPipelineCommand->add_option("--photons", o->photons,
+                                   "photons of the pass (default: the paper's workload, 50 000 per light, at most 10 M: "
+                                   "7.75 M for the octagon, 1.2 M for the l-shape)");
+  benchPipelineCommand->add_option("--store", o->store,
+                                   "scene store to reuse, or to generate the building into and keep (default: a temporary one)");
+  benchPipelineCommand->add_option("--floors", o->floors, "floors of the tower preset");
+  benchPipelineCommand->add_option("--scene-seed", o->sceneSeed, "furnishing seed of the building")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--seed", o->seed, "seed of the photon pass")->capture_default_str();
+  benchPipelineCommand->add_option("--modes", o->modes, "modes, comma-separated (portico-Nw for any N)")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--accel", o->accel, "portico's accelerator spec")->capture_default_str();
+  benchPipelineCommand->add_option("--memory", o->memory, "cache budget per portico worker")
+      ->capture_default_str();
+  benchPipelineCommand->add_option("--runs", o->runs, "runs per mode, interleaved (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchPipelineCommand->add_option("--csv", o->csv, "write one row per mode");
+  benchPipelineCommand->add_option("--plot", o->plot, "write a PNG bar chart of photons/s");
+  table.add(benchPipelineCommand, [o] { return runBenchPipeline(*o); });
+}
+
+void addPaper(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchPaperOptions>();
+  auto* benchPaperCommand = bench.add_subcommand(
+      "paper", "rerun every experiment of Fradin & Meneveaux 2006 section 6 through the pipeline (docs/paper-benchmark.md)");
+  benchPaperCommand->add_flag("--quick", o->quick, "a reduced version of every experiment (a few minutes)");
+  benchPaperCommand->add_flag("--smoke", o->smoke, "the smallest version, l-shape only (the ctest)")
+      ->group("");   // hidden
+  benchPaperCommand->add_option("--out", o->out, "directory of the CSVs, PNGs, summary.json and stores/")
+      ->capture_default_str();
+  benchPaperCommand->add_option("--buildings", o->buildings,
+                                "buildings, comma-separated (l-shape, z-building, octagon, soda-hall, tower); "
+                                "default: the mode's");
+  benchPaperCommand->add_option("--experiments", o->experiments,
+                                "experiments, comma-separated (default: all; fig4_5_grid_resolution, fig6_hgrid_init, "
+                                "table3_kd_depth, fig7_8_kd_heuristics, fig9_best_topological, table4_uniform_cells, "
+                                "fig11_topological_vs_uniform, auto_vs_fixed)");
+  benchPaperCommand->add_option("--photons-per-light", o->photonsPerLight,
+                                "photons per light of the passes (default: quick 300, otherwise 1000; the 'few' "
+                                "count is 2/5 of it)");
+  benchPaperCommand->add_option("--workers", o->workers, "workers of each render")->capture_default_str();
+  benchPaperCommand->add_option("--runs", o->runs, "runs per measurement (the median is reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  benchPaperCommand->add_option("--seed", o->seed, "seed of the photon passes")->capture_default_str();
+  benchPaperCommand->add_option("--scene-seed", o->sceneSeed, "furnishing seed of the buildings")
+      ->capture_default_str();
+  benchPaperCommand->add_option("--memory", o->memory, "cache budget per worker")->capture_default_str();
+  benchPaperCommand->add_option("--timeout", o->timeoutSeconds,
+                                "seconds a run may take before it is stopped and marked failed (default: the mode's)");
+  table.add(benchPaperCommand, [o] { return runBenchPaper(*o); });
+}
+
+void addCalibrate(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<CalibrateOptions>();
+  auto* calibrateCommand = bench.add_subcommand(
+      "calibrate", "fit the --accel auto cost model to this machine and store it where workers look");
+  calibrateCommand->add_option("-o,--out", o->output,
+                               "calibration file (default: $PORTICO_CALIBRATION, else ~/.cache/portico/calibration.json)");
+  calibrateCommand->add_option("--preset", o->preset, "building whose cells are measured")->capture_default_str();
+  calibrateCommand->add_option("--store", o->store, "measure this scene store's cells instead");
+  calibrateCommand->add_option("--max-cells", o->maxCells, "cells of the building, spread over its sizes")
+      ->capture_default_str();
+  calibrateCommand->add_option("--sizes", o->sizes, "triangle counts of the furnished halls also measured")
+      ->capture_default_str();
+  calibrateCommand->add_option("--rays", o->rays, "photon-like rays per cell")->capture_default_str()
+      ->check(CLI::Range(uint64_t(100), uint64_t(100000000)));
+  calibrateCommand->add_option("--runs", o->runs, "timed passes per measurement (median)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  calibrateCommand->add_option("--csv", o->csv, "write every measurement beside the model's prediction");
+  table.add(calibrateCommand, [o] { return runBenchCalibrate(*o); });
+}
+
+}  // namespace
+
+void addBenchCommands(CLI::App& app, CommandTable& table) {
+  auto* bench = app.add_subcommand("bench", "measure portico's parts");
+  bench->require_subcommand(1);
+  addAccel(*bench, table);
+  addQuality(*bench, table);
+  addPipeline(*bench, table);
+  addPaper(*bench, table);
+  addCalibrate(*bench, table);
+}
+
+}  // namespace portico::cli

@@ -1,0 +1,119 @@
+// The options and arguments of `portico render` and of the commands that
+// talk to a running coordinator: submit, status, wait, cancel, fetch-image,
+// shutdown.
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+
+#include "common/util/cli_bounds.h"
+#include "coordinator/cli/command_table.h"
+#include "coordinator/cli/commands.h"
+
+namespace portico::cli {
+
+namespace {
+
+void addRender(CLI::App& app, CommandTable& table) {
+  struct Options {
+    RenderOptions render;
+    LocalRunOptions local;
+  };
+  auto o = std::make_shared<Options>();
+  auto* renderCommand = app.add_subcommand("render", "render locally: starts a coordinator and workers");
+  addRenderOptions(*renderCommand, o->render);
+  renderCommand->add_option("--workers", o->local.workers, "local worker processes")
+      ->capture_default_str()
+      ->check(wholeNumber(1, 256));
+  renderCommand->add_option("--memory", o->local.memory, "cache budget per worker")->capture_default_str()->check(byteSize());
+  renderCommand->add_flag("--keep-logs", o->local.keepLogs, "keep the services' logs and jobs.db");
+  renderCommand->add_option("--log-level", o->local.logLevel, "services' log level")->capture_default_str();
+  renderCommand->add_option("--keys", o->local.keys, "CURVE keys directory for the local services (`portico keys generate`)")
+      ->check(CLI::ExistingDirectory);
+  table.add(renderCommand, [o] { return runRender(o->render, o->local); });
+}
+
+// The coordinator to reach and the job asked about (status: 0 for every job).
+struct JobOptions {
+  ConnectOptions connect;
+  uint64_t job = 0;
+};
+
+void addSubmit(CLI::App& app, CommandTable& table) {
+  struct Options {
+    ConnectOptions connect;
+    RenderOptions render;
+  };
+  auto o = std::make_shared<Options>();
+  auto* submit = app.add_subcommand("submit", "submit a job to a running coordinator; prints its id");
+  addConnectOptions(*submit, o->connect);
+  addRenderOptions(*submit, o->render);
+  table.add(submit, [o] { return runSubmit(o->connect, o->render); });
+}
+
+void addStatus(CLI::App& app, CommandTable& table) {
+  struct Options : JobOptions {
+    bool json = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* status = app.add_subcommand("status", "show a job's progress (or every job)");
+  addConnectOptions(*status, o->connect);
+  status->add_option("JOB", o->job, "job id");
+  status->add_flag("--json", o->json, "one JSON object on stdout");
+  table.add(status, [o] { return runStatus(o->connect, o->job, o->json); });
+}
+
+void addWait(CLI::App& app, CommandTable& table) {
+  struct Options : JobOptions {
+    bool quiet = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* wait = app.add_subcommand("wait", "block until a job ends; exit 0 if it is done");
+  addConnectOptions(*wait, o->connect);
+  wait->add_option("JOB", o->job, "job id")->required();
+  wait->add_flag("--quiet", o->quiet, "no progress lines");
+  table.add(wait, [o] { return runWait(o->connect, o->job, o->quiet); });
+}
+
+void addCancel(CLI::App& app, CommandTable& table) {
+  auto o = std::make_shared<JobOptions>();
+  auto* cancel = app.add_subcommand("cancel", "cancel a job");
+  addConnectOptions(*cancel, o->connect);
+  cancel->add_option("JOB", o->job, "job id")->required();
+  table.add(cancel, [o] { return runCancel(o->connect, o->job); });
+}
+
+void addFetchImage(CLI::App& app, CommandTable& table) {
+  struct Options : JobOptions {
+    std::string imagePath;
+  };
+  auto o = std::make_shared<Options>();
+  auto* fetchImage = app.add_subcommand(
+      "fetch-image", "write a done job's image (and its .json statistics) as this user, e.g. where the coordinator could not");
+  addConnectOptions(*fetchImage, o->connect);
+  fetchImage->add_option("JOB", o->job, "job id")->required();
+  fetchImage->add_option("-o,--output", o->imagePath, "where to write it (default: the job's own output path)");
+  table.add(fetchImage, [o] { return runFetchImage(o->connect, o->job, o->imagePath); });
+}
+
+void addShutdown(CLI::App& app, CommandTable& table) {
+  auto o = std::make_shared<ConnectOptions>();
+  auto* shutdown = app.add_subcommand("shutdown", "stop a running coordinator (needs the operator key: --keys DIR "
+                                                  "with operator.secret, or its own user on ipc://)");
+  addConnectOptions(*shutdown, *o);
+  table.add(shutdown, [o] { return runShutdown(*o); });
+}
+
+}  // namespace
+
+void addJobCommands(CLI::App& app, CommandTable& table) {
+  addRender(app, table);
+  addSubmit(app, table);
+  addStatus(app, table);
+  addWait(app, table);
+  addCancel(app, table);
+  addFetchImage(app, table);
+  addShutdown(app, table);
+}
+
+}  // namespace portico::cli

@@ -1,0 +1,111 @@
+// The options and arguments of `portico scene generate|import|info|export|plan`.
+#include <CLI/CLI.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common/scene/building_importer.h"
+#include "coordinator/cli/command_table.h"
+#include "coordinator/cli/commands.h"
+#include "coordinator/cli/scene_export.h"
+
+namespace portico::cli {
+
+namespace {
+
+void addGenerate(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::string preset, store;
+    uint64_t seed = 1;
+    uint32_t floors = 0;
+  };
+  auto o = std::make_shared<Options>();
+  auto* generate = scene.add_subcommand("generate", "generate a building into a scene store");
+  generate->add_option("--preset", o->preset, "building preset: demo, l-shape, z-building, octagon, soda-hall, tower")->required();
+  generate->add_option("--seed", o->seed, "random seed of the furnishing")->capture_default_str();
+  generate->add_option("--floors", o->floors, "floors of the tower preset (default 1); the other presets have their own");
+  generate->add_option("STORE", o->store, "scene store directory to write")->required();
+  table.add(generate, [o] { return runSceneGenerate(o->preset, o->seed, o->floors, o->store); });
+}
+
+void addImport(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::vector<std::string> inputs;
+    ImportOptions import;
+    std::string store;
+    std::string ifcLights = "auto";
+  };
+  auto o = std::make_shared<Options>();
+  auto* import = scene.add_subcommand("import", "import a building.json, or mesh files, into a scene store");
+  import->add_option("--grid", o->import.gridResolution,
+                     "cut the scene into RGxRGxRG uniform voxel cells instead of its own cells (0: off)")
+      ->capture_default_str()
+      ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
+  import->add_option("--camera", o->import.camera, "the building.json's camera of this name (default: the first)");
+  import->add_option("--lights", o->ifcLights,
+                     "IFC input: lamps from the model's light fixtures (fixtures), one ceiling panel per space (panels), "
+                     "or fixtures where the model has some, else panels (auto)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "fixtures", "panels"}));
+  import->add_option("INPUT", o->inputs, "building.json, an IFC model (.ifc), or mesh files (OBJ, PLY, glTF/GLB, ...)")
+      ->required();
+  import->add_option("STORE", o->store, "scene store directory to write")->required();
+  import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
+  table.add(import, [o] { return runSceneImport(o->inputs, o->import, o->store, o->ifcLights); });
+}
+
+void addInfo(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::string store;
+    bool json = false;
+    bool noCompress = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* info = scene.add_subcommand("info", "describe a scene store");
+  info->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  info->add_flag("--json", o->json, "one JSON object on stdout");
+  info->add_flag("--no-compress", o->noCompress, "skip the zlib-compressed size (slow on large stores)");
+  table.add(info, [o] { return runSceneInfo(o->store, SceneInfoOptions{o->json, !o->noCompress}); });
+}
+
+void addExport(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::string store, output;
+  };
+  auto o = std::make_shared<Options>();
+  auto* exportCommand = scene.add_subcommand("export", "write a scene store's triangles as OBJ + MTL");
+  exportCommand->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  exportCommand->add_option("-o,--output", o->output, "OBJ file to write (its MTL beside it)")->required();
+  table.add(exportCommand, [o] { return runSceneExport(o->store, o->output); });
+}
+
+void addPlan(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::string store;
+    ScenePlanOptions plan;
+  };
+  auto o = std::make_shared<Options>();
+  auto* plan = scene.add_subcommand("plan", "draw top-down floor plans of a scene store as a PNG");
+  plan->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  plan->add_option("-o,--output", o->plan.output, "PNG file to write")->required();
+  plan->add_option("--floor", o->plan.floor, "draw only this floor (0 = lowest)")->check(CLI::NonNegativeNumber);
+  plan->add_option("--size", o->plan.panelSize, "pixels along the longer side of each floor's panel")
+      ->capture_default_str()
+      ->check(CLI::Range(64, 8192));
+  table.add(plan, [o] { return runScenePlan(o->store, o->plan); });
+}
+
+}  // namespace
+
+void addSceneCommands(CLI::App& app, CommandTable& table) {
+  auto* scene = app.add_subcommand("scene", "create and inspect scene stores");
+  scene->require_subcommand(1);
+  addGenerate(*scene, table);
+  addImport(*scene, table);
+  addInfo(*scene, table);
+  addExport(*scene, table);
+  addPlan(*scene, table);
+}
+
+}  // namespace portico::cli
