@@ -372,27 +372,32 @@ std::optional<FaceHole> holeOf(const Bounds3& box, const std::vector<Vec3>& poly
   return std::nullopt;
 }
 
-}  // namespace
+// The building's plan as it is written: every cell, and the portals' polygons.
+struct BuildingPlan {
+  std::vector<PlannedCell> cells;   // floor after floor, then the facades, then the sky
+  std::vector<std::vector<Vec3>> portalPolygons;   // by portal id
+  size_t floorCells = 0;            // cells of one floor
+  size_t firstFacade = 0;
+  uint32_t skyId = 0;
+  float top = 0;                    // the roof's height
+};
 
-GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory) {
-  const auto start = std::chrono::steady_clock::now();
-  if (preset.floors == 0 || preset.cells == 0) throw std::runtime_error("preset " + preset.name + ": no floors or cells");
-  DemoRandom random(seed);
+// Rooms per wing: cells = floors * (wings + junctions + rooms) + 2 facades
+// per wing + sky, shared as evenly as the wings allow.
+std::vector<uint32_t> roomsPerWing(const BuildingPreset& preset) {
   const std::vector<PathElement> path = layoutPath(preset.layout);
   const uint32_t wings = uint32_t(std::count_if(path.begin(), path.end(), [](auto& e) { return !e.junction; }));
   const uint32_t junctions = uint32_t(path.size()) - wings;
-
-  // Cells = floors * (wings + junctions + rooms) + 2 facades per wing + sky.
   const double perFloor = double(preset.cells - 2 * wings - 1) / double(preset.floors);
   const uint32_t roomsPerFloor = uint32_t(std::max<long>(2 * wings, std::lround(perFloor) - long(wings + junctions)));
-  std::vector<uint32_t> roomsPerWing(wings, roomsPerFloor / wings);
-  for (uint32_t w = 0; w < roomsPerFloor % wings; ++w) ++roomsPerWing[w];
-  FloorPlanner planner(preset, random);
-  const FloorTemplate floor = planner.plan(roomsPerWing);
+  std::vector<uint32_t> rooms(wings, roomsPerFloor / wings);
+  for (uint32_t w = 0; w < roomsPerFloor % wings; ++w) ++rooms[w];
+  return rooms;
+}
 
-  // Cells, floor after floor, then the facades and the sky.
-  std::vector<PlannedCell> cells;
-  const float top = kStorey * float(preset.floors);
+// The cells of every floor, then the facades (the sky comes with the camera).
+void planCells(const BuildingPreset& preset, const FloorTemplate& floor, BuildingPlan& plan) {
+  plan.top = kStorey * float(preset.floors);
   for (uint32_t f = 0; f < preset.floors; ++f)
     for (const TemplateCell& t : floor.cells) {
       PlannedCell cell;
@@ -403,31 +408,27 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
       cell.floor = f;
       cell.stairUp = t.kind == CellKind::Junction && f + 1 < preset.floors;
       cell.stairDown = t.kind == CellKind::Junction && f > 0;
-      cells.push_back(std::move(cell));
+      plan.cells.push_back(std::move(cell));
     }
-  const size_t firstFacade = cells.size();
+  plan.firstFacade = plan.cells.size();
   for (size_t k = 0; k < floor.facades.size(); ++k) {
     const FloorRect& r = floor.facades[k];
     PlannedCell cell;
     cell.kind = CellKind::Facade;
     cell.name = fmt::format("facade-{}", k);
-    cell.box = Bounds3(Vec3(r.x0, 0, r.z0), Vec3(r.x1, top, r.z1));
-    cells.push_back(std::move(cell));
+    cell.box = Bounds3(Vec3(r.x0, 0, r.z0), Vec3(r.x1, plan.top, r.z1));
+    plan.cells.push_back(std::move(cell));
   }
+  plan.floorCells = floor.cells.size();
+}
+
+// The camera looks down on the top floor from the south; the sky cell,
+// added last, holds it.
+Camera addSkyAndCamera(BuildingPlan& plan) {
   Bounds3 footprint;
-  for (const PlannedCell& cell : cells) footprint.extend(cell.box);
-  const size_t floorCells = floor.cells.size();
-
-  SceneStoreWriter writer(storeDirectory);
-  writer.setMeta("generator", preset.name);
-  writer.setMeta("seed", std::to_string(seed));
-  writer.setMeta("floors", std::to_string(preset.floors));
-  writer.setMeta("furnishing", preset.style == furniture::Style::Regular ? "regular" : "hand-made");
-  const FurnitureMaterials materials = addMaterials(writer);
-
-  // The camera looks down on the top floor from the south; the sky holds it.
+  for (const PlannedCell& cell : plan.cells) footprint.extend(cell.box);
   Camera camera;
-  const Vec3 centre((footprint.lo.x + footprint.hi.x) * 0.5f, top - kStorey, (footprint.lo.z + footprint.hi.z) * 0.5f);
+  const Vec3 centre((footprint.lo.x + footprint.hi.x) * 0.5f, plan.top - kStorey, (footprint.lo.z + footprint.hi.z) * 0.5f);
   const float scale = 1.1f * std::max((footprint.hi.x - footprint.lo.x) / 14.0f, (footprint.hi.z - footprint.lo.z) / 10.0f);
   camera.origin = centre + Vec3(0.0f, 16.0f * scale, -10.0f * scale);
   camera.target = centre;
@@ -437,47 +438,55 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
   PlannedCell sky;
   sky.kind = CellKind::Sky;
   sky.name = "sky";
-  sky.box = Bounds3(Vec3(footprint.lo.x - 2, top, footprint.lo.z - 2), Vec3(footprint.hi.x + 2, top + kSkyHeight, footprint.hi.z + 2));
+  sky.box = Bounds3(Vec3(footprint.lo.x - 2, plan.top, footprint.lo.z - 2),
+                    Vec3(footprint.hi.x + 2, plan.top + kSkyHeight, footprint.hi.z + 2));
   sky.box.extend(Bounds3(camera.origin - Vec3(1), camera.origin + Vec3(1)));
-  cells.push_back(std::move(sky));
-  const uint32_t skyId = uint32_t(cells.size() - 1);
-  camera.cell = skyId;
-  writer.setCamera(camera);
+  plan.cells.push_back(std::move(sky));
+  plan.skyId = uint32_t(plan.cells.size() - 1);
+  camera.cell = plan.skyId;
+  return camera;
+}
 
-  std::vector<std::vector<Vec3>> portalPolygons;   // by portal id
-  // Portals: the floor's own, stairs between floors, windows, and the sky.
+// Portals: the floor's own, stairs between floors, windows, and the sky.
+void addPortals(const BuildingPreset& preset, const FloorTemplate& floor, BuildingPlan& plan, SceneStoreWriter& writer) {
   const auto addPortal = [&](uint32_t a, uint32_t b, const std::vector<Vec3>& polygon) {
     const uint32_t id = writer.addPortal(a, b, polygon);
-    portalPolygons.push_back(polygon);
-    cells[a].portals.push_back(id);
-    cells[b].portals.push_back(id);
-    return id;
+    plan.portalPolygons.push_back(polygon);
+    plan.cells[a].portals.push_back(id);
+    plan.cells[b].portals.push_back(id);
   };
   const auto lifted = [](std::vector<Vec3> polygon, float y) {
     for (Vec3& v : polygon) v.y += y;
     return polygon;
   };
   for (uint32_t f = 0; f < preset.floors; ++f) {
-    const uint32_t base = uint32_t(f * floorCells);
+    const uint32_t base = uint32_t(f * plan.floorCells);
     const float y = kStorey * float(f);
     for (const TemplatePortal& p : floor.portals) addPortal(base + uint32_t(p.a), base + uint32_t(p.b), lifted(p.polygon, y));
-    for (const Window& w : floor.windows) addPortal(base + uint32_t(w.room), uint32_t(firstFacade + w.facade), lifted(w.polygon, y));
+    for (const Window& w : floor.windows)
+      addPortal(base + uint32_t(w.room), uint32_t(plan.firstFacade + w.facade), lifted(w.polygon, y));
     if (f + 1 < preset.floors)
       for (size_t j : floor.junctions) {
         const FloorRect& o = floor.cells[j].stair.opening;
         const float up = kStorey * float(f + 1);
-        addPortal(base + uint32_t(j), base + uint32_t(floorCells + j),
+        addPortal(base + uint32_t(j), base + uint32_t(plan.floorCells + j),
                   {Vec3(o.x0, up, o.z0), Vec3(o.x1, up, o.z0), Vec3(o.x1, up, o.z1), Vec3(o.x0, up, o.z1)});
       }
   }
-  for (uint32_t id = 0; id < skyId; ++id) {
-    if (cells[id].box.hi.y < top - 1e-3f) continue;   // only the top floor and the facades reach the sky
-    const Bounds3& b = cells[id].box;
-    addPortal(id, skyId, {Vec3(b.lo.x, top, b.lo.z), Vec3(b.hi.x, top, b.lo.z), Vec3(b.hi.x, top, b.hi.z), Vec3(b.lo.x, top, b.hi.z)});
+  const float top = plan.top;
+  for (uint32_t id = 0; id < plan.skyId; ++id) {
+    if (plan.cells[id].box.hi.y < top - 1e-3f) continue;   // only the top floor and the facades reach the sky
+    const Bounds3& b = plan.cells[id].box;
+    addPortal(id, plan.skyId,
+              {Vec3(b.lo.x, top, b.lo.z), Vec3(b.hi.x, top, b.lo.z), Vec3(b.hi.x, top, b.hi.z), Vec3(b.lo.x, top, b.hi.z)});
   }
+}
 
-  // Lights by floor area over the rooms, corridors and junctions (some
-  // rooms get none when there are fewer lights than rooms: lit through doors).
+// Lights by floor area over the rooms, corridors and junctions (some rooms
+// get none when there are fewer lights than rooms: lit through doors).
+// Returns how many.
+uint32_t addLights(const BuildingPreset& preset, BuildingPlan& plan, SceneStoreWriter& writer) {
+  std::vector<PlannedCell>& cells = plan.cells;
   std::vector<double> lightWeights(cells.size(), 0.0);
   std::vector<uint64_t> lightCaps(cells.size(), 0);
   for (size_t i = 0; i < cells.size(); ++i)
@@ -494,57 +503,41 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
     cells[i].lights = lightGrid(shrunk, cells[i].box.lo.y + kCeiling, uint32_t(lightCounts[i]), uint32_t(i));
     for (AreaLight& light : cells[i].lights) light.id = writer.addLight(light), ++lightTotal;
   }
+  return lightTotal;
+}
 
-  // The geometry of a cell except its furniture.
-  const auto shell = [&](const PlannedCell& cell, MeshBuilder& mesh) {
-    if (!cell.source) return;
-    const Bounds3& box = cell.box;
-    std::vector<PlaneRect> holes[3][2];
-    for (uint32_t p : cell.portals)
-      if (auto hole = holeOf(box, portalPolygons[p])) holes[hole->axis][hole->high].push_back(hole->rect);
-    const uint32_t floorMaterial = cell.kind == CellKind::Room ? materials.roomFloor : materials.corridorFloor;
-    mesh.addAxisRectangle(1, box.lo.y, true, PlaneRect{box.lo.z, box.hi.z, box.lo.x, box.hi.x}, floorMaterial, holes[1][0]);
-    mesh.addAxisRectangle(1, box.lo.y + kCeiling, false, PlaneRect{box.lo.z, box.hi.z, box.lo.x, box.hi.x},
-                          materials.ceiling, holes[1][1]);
-    const PlaneRect zWall{box.lo.x, box.hi.x, box.lo.y, box.hi.y};
-    mesh.addAxisRectangle(2, box.lo.z, true, zWall, materials.wall, holes[2][0]);
-    mesh.addAxisRectangle(2, box.hi.z, false, zWall, materials.wall, holes[2][1]);
-    const PlaneRect xWall{box.lo.y, box.hi.y, box.lo.z, box.hi.z};
-    mesh.addAxisRectangle(0, box.lo.x, true, xWall, materials.wall, holes[0][0]);
-    mesh.addAxisRectangle(0, box.hi.x, false, xWall, materials.wall, holes[0][1]);
-    for (const AreaLight& light : cell.lights) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
-    if (cell.stairUp)
-      for (const Bounds3& step : cell.source->stair.steps)
-        mesh.addBox(Bounds3(step.lo + Vec3(0, box.lo.y, 0), step.hi + Vec3(0, box.lo.y, 0)), materials.stair, false);
-  };
-  GeneratedBuildingStats stats;
-  const auto write = [&](uint32_t id, MeshBuilder& mesh) {
-    CellContent content;
-    content.id = id;
-    content.name = cells[id].name;
-    content.bounds = cells[id].box;
-    mesh.moveInto(content);
-    stats.triangles += content.indices.size() / 3;
-    writer.writeCell(content);
-  };
+// The geometry of a cell except its furniture: floor, ceiling and walls
+// with the holes of its portals, its lamps, and its stair.
+void addShell(const PlannedCell& cell, const BuildingPlan& plan, const FurnitureMaterials& materials, MeshBuilder& mesh) {
+  if (!cell.source) return;
+  const Bounds3& box = cell.box;
+  std::vector<PlaneRect> holes[3][2];
+  for (uint32_t p : cell.portals)
+    if (auto hole = holeOf(box, plan.portalPolygons[p])) holes[hole->axis][hole->high].push_back(hole->rect);
+  const uint32_t floorMaterial = cell.kind == CellKind::Room ? materials.roomFloor : materials.corridorFloor;
+  mesh.addAxisRectangle(1, box.lo.y, true, PlaneRect{box.lo.z, box.hi.z, box.lo.x, box.hi.x}, floorMaterial, holes[1][0]);
+  mesh.addAxisRectangle(1, box.lo.y + kCeiling, false, PlaneRect{box.lo.z, box.hi.z, box.lo.x, box.hi.x},
+                        materials.ceiling, holes[1][1]);
+  const PlaneRect zWall{box.lo.x, box.hi.x, box.lo.y, box.hi.y};
+  mesh.addAxisRectangle(2, box.lo.z, true, zWall, materials.wall, holes[2][0]);
+  mesh.addAxisRectangle(2, box.hi.z, false, zWall, materials.wall, holes[2][1]);
+  const PlaneRect xWall{box.lo.y, box.hi.y, box.lo.z, box.hi.z};
+  mesh.addAxisRectangle(0, box.lo.x, true, xWall, materials.wall, holes[0][0]);
+  mesh.addAxisRectangle(0, box.hi.x, false, xWall, materials.wall, holes[0][1]);
+  for (const AreaLight& light : cell.lights) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
+  if (cell.stairUp)
+    for (const Bounds3& step : cell.source->stair.steps)
+      mesh.addBox(Bounds3(step.lo + Vec3(0, box.lo.y, 0), step.hi + Vec3(0, box.lo.y, 0)), materials.stair, false);
+}
 
-  // Everything but the rooms first: what they leave of the triangle budget
-  // goes to the rooms.
-  std::vector<uint32_t> rooms;
-  for (uint32_t id = 0; id < cells.size(); ++id) {
-    if (cells[id].kind == CellKind::Room) {
-      rooms.push_back(id);
-      continue;
-    }
-    MeshBuilder mesh;
-    shell(cells[id], mesh);
-    write(id, mesh);
-  }
-  const uint64_t roomBudget = preset.triangles > stats.triangles ? preset.triangles - stats.triangles : 0;
-  // The heaviest room gets the paper's maximum; the others share the rest
-  // by weight, each kept under 90 % of the maximum.
+// The rooms' triangle budgets, from what the other cells leave of the
+// preset's: the heaviest room gets the paper's maximum; the others share
+// the rest by weight, each kept under 90 % of the maximum.
+std::vector<uint64_t> roomBudgets(const BuildingPreset& preset, const BuildingPlan& plan,
+                                  const std::vector<uint32_t>& rooms, uint64_t otherTriangles) {
+  const uint64_t roomBudget = preset.triangles > otherTriangles ? preset.triangles - otherTriangles : 0;
   std::vector<double> weights;
-  for (uint32_t id : rooms) weights.push_back(cells[id].source->weight);
+  for (uint32_t id : rooms) weights.push_back(plan.cells[id].source->weight);
   const size_t heaviest = size_t(std::max_element(weights.begin(), weights.end()) - weights.begin());
   const uint64_t heaviestBudget = std::min(roomBudget, preset.maxTrianglesPerCell);
   std::vector<double> otherWeights = weights;
@@ -552,12 +545,40 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
   std::vector<uint64_t> caps(rooms.size(), uint64_t(0.9 * double(preset.maxTrianglesPerCell)));
   std::vector<uint64_t> budgets = largestRemainderShares(roomBudget - heaviestBudget, otherWeights, caps);
   budgets[heaviest] = heaviestBudget;
+  return budgets;
+}
 
+// Writes every cell's geometry: everything but the rooms first, then the
+// rooms, furnished for what the others leave of the triangle budget.
+// Returns the triangles written.
+uint64_t writeCells(const BuildingPreset& preset, uint64_t seed, const BuildingPlan& plan,
+                    const FurnitureMaterials& materials, SceneStoreWriter& writer) {
+  uint64_t triangles = 0;
+  const auto write = [&](uint32_t id, MeshBuilder& mesh) {
+    CellContent content;
+    content.id = id;
+    content.name = plan.cells[id].name;
+    content.bounds = plan.cells[id].box;
+    mesh.moveInto(content);
+    triangles += content.indices.size() / 3;
+    writer.writeCell(content);
+  };
+  std::vector<uint32_t> rooms;
+  for (uint32_t id = 0; id < plan.cells.size(); ++id) {
+    if (plan.cells[id].kind == CellKind::Room) {
+      rooms.push_back(id);
+      continue;
+    }
+    MeshBuilder mesh;
+    addShell(plan.cells[id], plan, materials, mesh);
+    write(id, mesh);
+  }
+  const std::vector<uint64_t> budgets = roomBudgets(preset, plan, rooms, triangles);
   for (size_t k = 0; k < rooms.size(); ++k) {
     const uint32_t id = rooms[k];
-    const PlannedCell& cell = cells[id];
+    const PlannedCell& cell = plan.cells[id];
     MeshBuilder mesh;
-    shell(cell, mesh);
+    addShell(cell, plan, materials, mesh);
     const uint64_t shellTriangles = mesh.triangleCount();
     std::vector<furniture::PlacedPiece> pieces =
         furniture::arrangeRoom(cell.source->rect, cell.box.lo.y, cell.source->keepOut, preset.style, mix64(seed ^ mix64(id)));
@@ -566,11 +587,34 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
     furniture::emitRoom(mesh, pieces, materials.pieces, detail);
     write(id, mesh);
   }
+  return triangles;
+}
 
+}  // namespace
+
+GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory) {
+  const auto start = std::chrono::steady_clock::now();
+  if (preset.floors == 0 || preset.cells == 0) throw std::runtime_error("preset " + preset.name + ": no floors or cells");
+  DemoRandom random(seed);
+  FloorPlanner planner(preset, random);
+  const FloorTemplate floor = planner.plan(roomsPerWing(preset));
+  BuildingPlan plan;
+  planCells(preset, floor, plan);
+
+  SceneStoreWriter writer(storeDirectory);
+  writer.setMeta("generator", preset.name);
+  writer.setMeta("seed", std::to_string(seed));
+  writer.setMeta("floors", std::to_string(preset.floors));
+  writer.setMeta("furnishing", preset.style == furniture::Style::Regular ? "regular" : "hand-made");
+  const FurnitureMaterials materials = addMaterials(writer);
+  writer.setCamera(addSkyAndCamera(plan));
+  addPortals(preset, floor, plan, writer);
+  GeneratedBuildingStats stats;
+  stats.lights = addLights(preset, plan, writer);
+  stats.triangles = writeCells(preset, seed, plan, materials, writer);
   writer.commit();
-  stats.cells = uint32_t(cells.size());
-  stats.portals = uint32_t(portalPolygons.size());
-  stats.lights = lightTotal;
+  stats.cells = uint32_t(plan.cells.size());
+  stats.portals = uint32_t(plan.portalPolygons.size());
   stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
