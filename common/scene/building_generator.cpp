@@ -12,6 +12,7 @@
 
 #include "common/rng.h"
 #include "common/scene/demo_furniture.h"
+#include "common/scene/material_palette.h"
 #include "common/scene/mesh_builder.h"
 #include "common/scene/scene_store.h"
 #include "common/util/apportion.h"
@@ -30,7 +31,6 @@ constexpr float kWindowSill = 0.9f, kWindowTop = 2.2f;
 constexpr float kFacadeDepth = 1.0f;     // the strip of outside air along a wing
 constexpr float kOpeningHeight = 2.5f;   // corridor ends into junctions
 constexpr float kStairWidth = 1.2f, kStairOpening = 3.0f, kStairRun = 3.0f;
-constexpr Vec3 kLightRadiance(12.0f, 11.0f, 9.5f);
 constexpr float kSkyHeight = 60.0f;
 
 enum class CellKind : uint8_t { Room, Corridor, Junction, Facade, Sky };
@@ -302,26 +302,22 @@ struct FurnitureMaterials {
 
 FurnitureMaterials addMaterials(SceneStoreWriter& writer) {
   FurnitureMaterials m{};
-  m.wall = writer.addMaterial("wall-white", Vec3(0.75f, 0.74f, 0.70f));
-  m.roomFloor = writer.addMaterial("floor-wood", Vec3(0.55f, 0.42f, 0.30f));
-  m.corridorFloor = writer.addMaterial("floor-tiles", Vec3(0.45f, 0.45f, 0.43f));
-  m.ceiling = writer.addMaterial("ceiling", Vec3(0.80f), Vec3(0.0f), /*hiddenFromCamera=*/true);
-  m.light = writer.addMaterial("light", Vec3(0.0f), kLightRadiance, /*hiddenFromCamera=*/true);
-  m.stair = writer.addMaterial("concrete", Vec3(0.55f, 0.54f, 0.52f));
+  m.wall = palette::add(writer, palette::kWallWhite);
+  m.roomFloor = palette::add(writer, palette::kFloorWood);
+  m.corridorFloor = palette::add(writer, palette::kFloorTiles);
+  m.ceiling = palette::add(writer, palette::kCeiling);
+  m.light = palette::add(writer, palette::kLight);
+  m.stair = palette::add(writer, palette::kConcrete);
   furniture::Materials& p = m.pieces;
-  p.wood = writer.addMaterial("wood", Vec3(0.50f, 0.36f, 0.22f));
-  p.darkWood = writer.addMaterial("dark-wood", Vec3(0.30f, 0.20f, 0.12f));
-  p.metal = writer.addMaterial("metal-grey", Vec3(0.50f, 0.50f, 0.52f));
-  p.white = writer.addMaterial("laminate-white", Vec3(0.78f, 0.77f, 0.74f));
-  p.screen = writer.addMaterial("screen", Vec3(0.04f, 0.04f, 0.05f));
-  p.fabrics[0] = writer.addMaterial("fabric-red", Vec3(0.65f, 0.18f, 0.16f));
-  p.fabrics[1] = writer.addMaterial("fabric-blue", Vec3(0.18f, 0.28f, 0.60f));
-  p.fabrics[2] = writer.addMaterial("fabric-cream", Vec3(0.80f, 0.76f, 0.66f));
-  p.books[0] = writer.addMaterial("book-green", Vec3(0.20f, 0.45f, 0.25f));
-  p.books[1] = writer.addMaterial("book-yellow", Vec3(0.80f, 0.65f, 0.20f));
-  p.books[2] = writer.addMaterial("book-red", Vec3(0.55f, 0.12f, 0.10f));
-  p.leaf = writer.addMaterial("leaf", Vec3(0.16f, 0.42f, 0.14f));
-  p.pot = writer.addMaterial("terracotta", Vec3(0.62f, 0.33f, 0.22f));
+  p.wood = palette::add(writer, palette::kWood);
+  p.darkWood = palette::add(writer, palette::kDarkWood);
+  p.metal = palette::add(writer, palette::kMetalGrey);
+  p.white = palette::add(writer, palette::kLaminateWhite);
+  p.screen = palette::add(writer, palette::kScreen);
+  for (int k = 0; k < 3; ++k) p.fabrics[k] = palette::add(writer, palette::kFabrics[k]);
+  for (int k = 0; k < 3; ++k) p.books[k] = palette::add(writer, palette::kBooks[k]);
+  p.leaf = palette::add(writer, palette::kLeaf);
+  p.pot = palette::add(writer, palette::kTerracotta);
   return m;
 }
 
@@ -343,7 +339,7 @@ std::vector<AreaLight> lightGrid(const FloorRect& r, float ceilingY, uint32_t n,
     light.corner = Vec3(cx - 0.5f * size, ceilingY - 0.001f, cz - 0.5f * size);
     light.edge1 = Vec3(size, 0, 0);   // cross(x, z) = -y: facing down
     light.edge2 = Vec3(0, 0, size);
-    light.radiance = kLightRadiance;
+    light.radiance = palette::kLightRadiance;
     lights.push_back(light);
   }
   return lights;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/scene/demo_furniture.h"
+#include "common/scene/material_palette.h"
 #include "common/scene/mesh_builder.h"
 #include "common/scene/scene_store.h"
 
@@ -36,7 +37,6 @@ constexpr float kCorridorLightSize = 0.8f;
 constexpr float kSkyHeight = 50.0f;
 constexpr float kSkyMargin = 2.0f;
 constexpr float kDoorClearance = 1.3f;   // furniture-free strip inside each door
-constexpr Vec3 kLightRadiance(12.0f, 11.0f, 9.5f);   // warm white
 
 // The fixed floor plan; the seed varies everything inside it.
 struct RoomPlan {
@@ -77,26 +77,20 @@ struct Materials : DemoMaterials {
 
 Materials addMaterials(SceneStoreWriter& writer) {
   Materials m{};
-  m.roomFloor = writer.addMaterial("floor-wood", Vec3(0.55f, 0.42f, 0.30f));
-  m.corridorFloor = writer.addMaterial("floor-tiles", Vec3(0.45f, 0.45f, 0.43f));
-  m.wall = writer.addMaterial("wall-white", Vec3(0.75f, 0.74f, 0.70f));
-  m.accentWalls[0] = writer.addMaterial("wall-blue", Vec3(0.42f, 0.52f, 0.70f));
-  m.accentWalls[1] = writer.addMaterial("wall-terracotta", Vec3(0.72f, 0.45f, 0.34f));
-  m.accentWalls[2] = writer.addMaterial("wall-sage", Vec3(0.52f, 0.64f, 0.50f));
-  m.wood = writer.addMaterial("wood", Vec3(0.50f, 0.36f, 0.22f));
-  m.darkWood = writer.addMaterial("dark-wood", Vec3(0.30f, 0.20f, 0.12f));
-  m.cabinet = writer.addMaterial("cabinet-white", Vec3(0.78f, 0.77f, 0.74f));
-  m.metal = writer.addMaterial("metal-grey", Vec3(0.50f, 0.50f, 0.52f));
-  m.fabrics[0] = writer.addMaterial("fabric-red", Vec3(0.65f, 0.18f, 0.16f));
-  m.fabrics[1] = writer.addMaterial("fabric-blue", Vec3(0.18f, 0.28f, 0.60f));
-  m.fabrics[2] = writer.addMaterial("fabric-cream", Vec3(0.80f, 0.76f, 0.66f));
-  m.books[0] = writer.addMaterial("book-green", Vec3(0.20f, 0.45f, 0.25f));
-  m.books[1] = writer.addMaterial("book-yellow", Vec3(0.80f, 0.65f, 0.20f));
-  m.books[2] = writer.addMaterial("book-red", Vec3(0.55f, 0.12f, 0.10f));
-  // Hidden from the camera: the view from above looks through the ceilings
-  // and their lamps into the rooms, which they still light.
-  m.light = writer.addMaterial("light", Vec3(0.0f), kLightRadiance, /*hiddenFromCamera=*/true);
-  m.ceiling = writer.addMaterial("ceiling", Vec3(0.80f, 0.80f, 0.80f), Vec3(0.0f), /*hiddenFromCamera=*/true);
+  m.roomFloor = palette::add(writer, palette::kFloorWood);
+  m.corridorFloor = palette::add(writer, palette::kFloorTiles);
+  m.wall = palette::add(writer, palette::kWallWhite);
+  m.accentWalls[0] = palette::add(writer, palette::kWallBlue);
+  m.accentWalls[1] = palette::add(writer, palette::kWallTerracotta);
+  m.accentWalls[2] = palette::add(writer, palette::kWallSage);
+  m.wood = palette::add(writer, palette::kWood);
+  m.darkWood = palette::add(writer, palette::kDarkWood);
+  m.cabinet = palette::add(writer, palette::kCabinetWhite);
+  m.metal = palette::add(writer, palette::kMetalGrey);
+  for (int k = 0; k < 3; ++k) m.fabrics[k] = palette::add(writer, palette::kFabrics[k]);
+  for (int k = 0; k < 3; ++k) m.books[k] = palette::add(writer, palette::kBooks[k]);
+  m.light = palette::add(writer, palette::kLight);
+  m.ceiling = palette::add(writer, palette::kCeiling);
   return m;
 }
 
@@ -129,7 +123,7 @@ AreaLight ceilingLight(uint32_t cell, float x, float z, float size) {
   light.corner = Vec3(x - 0.5f * size, kLightY, z - 0.5f * size);
   light.edge1 = Vec3(size, 0.0f, 0.0f);
   light.edge2 = Vec3(0.0f, 0.0f, size);
-  light.radiance = kLightRadiance;
+  light.radiance = palette::kLightRadiance;
   return light;
 }
 
