@@ -19,7 +19,7 @@
 #include "common/scene/building_importer.h"
 #include "common/scene/demo_generator.h"
 #include "common/scene/scene_store.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "common/scene/cell_geometry.h"
 #include "common/scene/scene_store.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {

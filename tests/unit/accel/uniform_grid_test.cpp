@@ -15,7 +15,7 @@
 
 #include "common/accel/accelerator.h"
 #include "common/accel/brute_force.h"
-#include "tests/unit/accel_test_scenes.h"
+#include "tests/unit/accel/accel_test_scenes.h"
 
 namespace portico {
 namespace {

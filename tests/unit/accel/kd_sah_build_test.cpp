@@ -18,7 +18,7 @@
 
 #include "common/accel/kd_build.h"
 #include "common/accel/kd_tree.h"
-#include "tests/unit/accel_test_scenes.h"
+#include "tests/unit/accel/accel_test_scenes.h"
 
 namespace portico {
 namespace {

@@ -17,7 +17,7 @@
 #include "common/scene/portal_geometry.h"
 #include "common/scene/scene_store.h"
 #include "common/util/sqlite.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {

@@ -20,7 +20,7 @@
 #include "common/scene/quad_light.h"
 #include "common/scene/scene_store.h"
 #include "common/triangle_box_overlap.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {

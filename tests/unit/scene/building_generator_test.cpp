@@ -17,7 +17,7 @@
 #include "common/scene/furniture_library.h"
 #include "common/scene/room_furnisher.h"
 #include "common/scene/scene_store.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {

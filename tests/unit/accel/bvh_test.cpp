@@ -14,7 +14,7 @@
 #include "common/accel/brute_force.h"
 #include "common/accel/bvh_traverse_avx2.h"
 #include "common/accel/triangle_intersect.h"
-#include "tests/unit/accel_test_scenes.h"
+#include "tests/unit/accel/accel_test_scenes.h"
 
 namespace portico {
 namespace {

@@ -19,7 +19,7 @@
 #include "common/scene/cell_geometry.h"
 #include "common/util/sqlite.h"
 #include "proto/scene.capnp.h"
-#include "tests/unit/scene_test_support.h"
+#include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {
 namespace {
