@@ -29,7 +29,7 @@
 #include "common/accel/accelerator.h"
 #include "common/accel/embree_accelerator.h"
 #include "common/rng.h"
-#include "common/scene/furnished_hall.h"
+#include "common/scene/generator/furnished_hall.h"
 #include "coordinator/cli/accel_measure.h"
 #include "coordinator/cli/bench_plot.h"
 #include "coordinator/cli/csv_field.h"

@@ -33,11 +33,11 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/scene/building_generator.h"
-#include "common/scene/building_importer.h"
-#include "common/scene/building_presets.h"
-#include "common/scene/cell_geometry.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/import/building_importer.h"
+#include "common/scene/generator/building_presets.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/store/scene_store.h"
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/accel_measure.h"
 #include "coordinator/cli/bench_plot.h"

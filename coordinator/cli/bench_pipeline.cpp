@@ -35,9 +35,9 @@
 #include <string>
 #include <vector>
 
-#include "common/scene/building_generator.h"
-#include "common/scene/building_presets.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/generator/building_presets.h"
+#include "common/scene/store/scene_store.h"
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/incore_photon_tracer.h"

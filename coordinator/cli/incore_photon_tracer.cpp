@@ -18,7 +18,7 @@
 
 #include "common/accel/embree_accelerator.h"  // FlushDenormalsScope
 #include "common/rng.h"
-#include "common/scene/cell_geometry.h"
+#include "common/scene/store/cell_geometry.h"
 #include "common/transport/photon_map.h"  // StoredPhoton: the record a deposit appends
 #include "common/transport/sampling.h"
 

@@ -4,7 +4,7 @@
 
 #include <iostream>
 
-#include "common/scene/building_importer.h"
+#include "common/scene/import/building_importer.h"
 #include "coordinator/cli/bench_calibrate.h"
 #include "coordinator/cli/bench_paper.h"
 #include "coordinator/cli/bench_quality.h"

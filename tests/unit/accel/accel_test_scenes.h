@@ -18,7 +18,7 @@
 #include "common/accel/accelerator.h"
 #include "common/mesh_view.h"
 #include "common/ray.h"
-#include "common/scene/furnished_hall.h"
+#include "common/scene/generator/furnished_hall.h"
 
 namespace portico::accel_test {
 

@@ -15,10 +15,10 @@
 #include "common/accel/brute_force.h"
 #include "common/accel/triangle_intersect.h"
 #include "common/rng.h"
-#include "common/scene/cell_geometry.h"
-#include "common/scene/building_importer.h"
-#include "common/scene/demo_generator.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/import/building_importer.h"
+#include "common/scene/generator/demo_generator.h"
+#include "common/scene/store/scene_store.h"
 #include "tests/unit/scene/scene_test_support.h"
 
 namespace portico {

@@ -59,7 +59,7 @@ TEST(LightSampler, LightsThatCannotContributeAreNeverChosen) {
 #include <filesystem>
 #include <unistd.h>
 
-#include "common/scene/building_importer.h"
+#include "common/scene/import/building_importer.h"
 
 namespace portico {
 namespace {
