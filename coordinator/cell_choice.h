@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "common/scene/scene_types.h"
+#include "common/scene/store/scene_types.h"
 #include "coordinator/job_store.h"
 #include "coordinator/worker_registry.h"
 

@@ -17,7 +17,7 @@
 #include "common/net/message.h"
 #include "common/net/role.h"
 #include "common/util/log_throttle.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "coordinator/job_store.h"
 #include "coordinator/router_security.h"
 #include "coordinator/worker_registry.h"

@@ -24,6 +24,6 @@ constexpr uint64_t kMaxImagePixels = uint64_t(1) << 28;   // 16384 x 16384
 constexpr uint64_t kMaxCameraSamples = uint64_t(1) << 36;
 constexpr int kMaxLightHops = 1 << 20;      // -1: every light; -2: the store's default
 constexpr double kMinExposure = 1e-9, kMaxExposure = 1e9;
-// Portals of one cell: kMaxPortalsPerCell in common/scene/portal_geometry.h.
+// Portals of one cell: kMaxPortalsPerCell in common/scene/store/portal_geometry.h.
 
 }  // namespace portico::limits

@@ -11,7 +11,7 @@
 #include "common/accel/accelerator.h"
 #include "common/net/message.h"
 #include "common/transport/photon_shares.h"
-#include "common/scene/portal_geometry.h"
+#include "common/scene/store/portal_geometry.h"
 #include "common/transport/sampling.h"
 #include "coordinator/job_limits.h"
 
@@ -26,7 +26,7 @@ void requireAtMost(const char* what, T value, T most) {
 // Every portal is tested by every ray in its cells: a cell with too many
 // (a door repeated a million times) makes leases that never end. Counting
 // is linear and needs a counter per cell; duplicates are found at import
-// and by `scene info` (common/scene/scene_validation.h).
+// and by `scene info` (common/scene/store/scene_validation.h).
 void checkPortalsPerCell(const SceneStore& scene) {
   std::vector<uint32_t> perCell(scene.cells().size(), 0);
   for (const Portal& portal : scene.portals())

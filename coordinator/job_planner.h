@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <string>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "coordinator/job_store.h"
 #include "proto/wire.capnp.h"
 

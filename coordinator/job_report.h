@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "coordinator/job_store.h"
 #include "coordinator/worker_registry.h"
 #include "proto/wire.capnp.h"

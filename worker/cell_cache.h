@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/scene/cell_geometry.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/store/scene_store.h"
 #include "common/transport/cell_tracer.h"
 #include "common/transport/indirect_light.h"
 

@@ -15,7 +15,7 @@
 #include <set>
 #include <string>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "proto/wire.capnp.h"
 
 namespace portico {

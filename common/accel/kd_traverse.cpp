@@ -41,6 +41,34 @@ namespace {
 constexpr int kStackSize = 64;
 static_assert(kStackSize > kKdMaxDepthLimit);
 
+// Per-ray constants of one axis.
+struct RayAxis {
+  float planeNear;  // split + planeNear = split - origin + margin, toward the far side
+  float planeFar;   // split + planeFar = split - origin - margin
+  float inverse;    // of the direction
+  uint32_t nearIsAbove;  // the near child is the one above the plane (direction's sign bit set)
+};
+
+// Clips [tNear, tFar] to the root box grown by the margin, and sets the
+// axes' plane offsets. False when nothing of the ray is left.
+[[gnu::always_inline]] inline bool clipToRootBox(const float origin[3], const float direction[3],
+                                                 const Bounds3& box, float margin, RayAxis axes[3], float& tNear,
+                                                 float& tFar) {
+  for (int axis = 0; axis < 3; ++axis) {
+    const float signedMargin = std::copysign(margin, direction[axis]);
+    axes[axis].planeNear = signedMargin - origin[axis];
+    axes[axis].planeFar = -signedMargin - origin[axis];
+    const bool nearIsAbove = axes[axis].nearIsAbove;
+    const float nearFace = nearIsAbove ? box.hi[axis] : box.lo[axis];
+    const float farFace = nearIsAbove ? box.lo[axis] : box.hi[axis];
+    const float tEnter = ((nearFace - origin[axis]) - signedMargin) * axes[axis].inverse;
+    const float tExit = ((farFace - origin[axis]) + signedMargin) * axes[axis].inverse;
+    if (tEnter > tNear) tNear = tEnter;  // NaN (origin on a face, direction 0): no limit
+    if (tExit < tFar) tFar = tExit;
+  }
+  return tNear <= tFar;
+}
+
 }  // namespace
 
 template <bool AnyHit>
@@ -66,40 +94,19 @@ template <bool AnyHit>
   const float direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
   if (direction[0] == 0.0f && direction[1] == 0.0f && direction[2] == 0.0f) return false;
 
-  // Per-ray constants, per axis: the reciprocal of the direction, whether
-  // the near child is the one above the plane (direction's sign bit set),
-  // and the margin: 2^-16 of the reach R, plus 16 ulps of the origin's
-  // largest coordinate for the rounding of planeNear and planeFar.
-  struct Axis {
-    float planeNear;  // split + planeNear = split - origin + margin, toward the far side
-    float planeFar;   // split + planeFar = split - origin - margin
-    float inverse;
-    uint32_t nearIsAbove;
-  } axes[3];
-  const Bounds3& box = tree_.bounds;
+  // Per-ray constants, per axis, and the margin: 2^-16 of the reach R, plus
+  // 16 ulps of the origin's largest coordinate for the rounding of
+  // planeNear and planeFar.
+  RayAxis axes[3];
   for (int axis = 0; axis < 3; ++axis) {
     axes[axis].inverse = 1.0f / direction[axis];
     if (direction[axis] != 0.0f && !std::isfinite(axes[axis].inverse))
       return testEveryTriangle<AnyHit>(ray, best);
     axes[axis].nearIsAbove = std::signbit(direction[axis]) ? 1 : 0;
   }
-  const float margin = traversalMargin(box, origin);
-
-  // Clip [tMin, tMax] to the root box, grown by the margin.
+  const float margin = traversalMargin(tree_.bounds, origin);
   float tNear = ray.tMin, tFar = ray.tMax;
-  for (int axis = 0; axis < 3; ++axis) {
-    const float signedMargin = std::copysign(margin, direction[axis]);
-    axes[axis].planeNear = signedMargin - origin[axis];
-    axes[axis].planeFar = -signedMargin - origin[axis];
-    const bool nearIsAbove = axes[axis].nearIsAbove;
-    const float nearFace = nearIsAbove ? box.hi[axis] : box.lo[axis];
-    const float farFace = nearIsAbove ? box.lo[axis] : box.hi[axis];
-    const float tEnter = ((nearFace - origin[axis]) - signedMargin) * axes[axis].inverse;
-    const float tExit = ((farFace - origin[axis]) + signedMargin) * axes[axis].inverse;
-    if (tEnter > tNear) tNear = tEnter;  // NaN (origin on a face, direction 0): no limit
-    if (tExit < tFar) tFar = tExit;
-  }
-  if (!(tNear <= tFar)) return false;
+  if (!clipToRootBox(origin, direction, tree_.bounds, margin, axes, tNear, tFar)) return false;
 
   // Nodes are handled as 64-bit words (payload low, bits high), so that
   // they stay in integer registers.
@@ -129,7 +136,7 @@ template <bool AnyHit>
     // Both children are loaded (they share a cache line) while the plane is
     // being intersected, so the next step does not wait for its load.
     while ((bitsOf(node) & 3) != KdNode::kLeafTag) {
-      const Axis& axis = axes[bitsOf(node) & 3];
+      const RayAxis& axis = axes[bitsOf(node) & 3];
       const uint32_t firstChild = bitsOf(node) >> 2;
       const uint64_t below = load(firstChild), above = load(firstChild + 1);
       // Both children's own children, one step ahead of the choice (for a

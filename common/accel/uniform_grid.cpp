@@ -207,34 +207,110 @@ using grid_traversal::PacketBoxes4;
 using grid_traversal::TrianglePacket;
 using grid_traversal::TriangleVoxelOverlap;
 
-}  // namespace
+// floor((coordinate - low) * inverse) clamped to [0, last], by truncation
+// of the clamped value (the same for values >= 0; cheaper than floor).
+[[gnu::always_inline]] inline uint32_t voxelIndex(double coordinate, double low, double inverse, double last) {
+  return static_cast<uint32_t>(std::min(std::max((coordinate - low) * inverse, 0.0), last));
+}
 
-UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options,
-                         std::string_view spec)
-    : mesh_(mesh) {
-  const auto start = std::chrono::steady_clock::now();
-  if (mesh.triangleCount >= kNoPrimitive)
-    throw std::invalid_argument("grid: " + std::to_string(mesh.triangleCount) +
-                                " triangles exceed the 32-bit primitive ids; split the cell");
-  const uint32_t triangleCount = static_cast<uint32_t>(mesh.triangleCount);
+// x rounded to float, up (roundUp) or down (roundDown).
+inline float roundUp(double x) {
+  const float f = float(x);
+  return double(f) < x ? std::nextafter(f, kInfinity) : f;
+}
+inline float roundDown(double x) {
+  const float f = float(x);
+  return double(f) > x ? std::nextafter(f, -kInfinity) : f;
+}
 
-  // The grid's box holds every triangle that can be placed (triangles with
-  // a non-finite vertex cannot be, and are left out: such input should be
-  // refused at import): the bounds of the vertices' finite coordinates.
-  // (meshBounds_, over the placed triangles alone, comes with pass 1.)
-  const Bounds3 vertexBounds =
-      triangleCount == 0 ? Bounds3() : finiteCoordinateBounds(mesh.positions, mesh.vertexCount);
+// A box on a voxel's lattice, as the bytes of VoxelRow::low and high: the
+// low bounds rounded down, the high bounds up, clamped to the lattice
+// (truncation is floor for the clamped values, which are >= 0). In single
+// precision, all six at once: the bounds are measured from lattice origins
+// rounded to float away from the box (the low bounds' origin up, the high
+// bounds' down), so the rounding only grows the box but for the
+// subtraction's and the scaling's own, ~1e-7 of the grid or of a step,
+// nothing beside the margin (see the top of the file).
+class LatticeRounding {
+ public:
+  explicit LatticeRounding(const std::array<double, 3>& latticeStep)
+      : inverseStep4_(_mm_setr_ps(float(1.0 / latticeStep[0]), float(1.0 / latticeStep[1]),
+                                  float(1.0 / latticeStep[2]), 0.0f)) {}
 
-  stats_.spec = std::string(spec);
-  if (vertexBounds.empty()) {
-    stats_.bytes = sizeof(*this);
-    stats_.buildMs =
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    return;
+  // Bytes 0-3: the low bounds' steps, 4-7: the high bounds'.
+  [[gnu::always_inline]] __m128i box(const Vec3& low, const Vec3& high, __m128 originLow, __m128 originHigh) const {
+    const __m128 zero4 = _mm_setzero_ps(), top4 = _mm_set1_ps(float(kLatticeSteps));
+    const __m128 a = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(low.x, low.y, low.z, 0.0f), originLow), inverseStep4_), zero4),
+        top4);
+    const __m128 b = _mm_min_ps(
+        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(high.x, high.y, high.z, 0.0f), originHigh), inverseStep4_), zero4),
+        top4);
+    const __m128i highFloor = _mm_cvttps_epi32(b);
+    // Where b is not whole its truncation is one short: subtract the all-ones mask.
+    const __m128i highSteps = _mm_sub_epi32(highFloor, _mm_castps_si128(_mm_cmplt_ps(_mm_cvtepi32_ps(highFloor), b)));
+    return _mm_packus_epi16(_mm_packs_epi32(_mm_cvttps_epi32(a), highSteps), _mm_setzero_si128());
   }
 
-  // Grid box: the bounds padded on every axis, so flat bounds get a
-  // thickness and no triangle touches a face of the grid.
+ private:
+  __m128 inverseStep4_;
+};
+
+// Writes a lattice box (LatticeRounding::box) as packet `packet`'s box.
+inline void setPacketBox(PacketBoxes4* packetBoxes, uint32_t packet, __m128i box) {
+  const uint64_t bytes = uint64_t(_mm_cvtsi128_si64(box));
+  PacketBoxes4& boxes = packetBoxes[packet / 4];
+  for (int axis = 0; axis < 3; ++axis) {
+    boxes.low[axis][packet % 4] = uint8_t(bytes >> (8 * axis));
+    boxes.high[axis][packet % 4] = uint8_t(bytes >> (32 + 8 * axis));
+  }
+}
+
+}  // namespace
+
+// The build's passes, in order; each leaves in the builder what the next
+// one reads, and writes the grid's own arrays as it goes.
+class UniformGrid::Builder {
+ public:
+  Builder(UniformGrid& grid, const MeshView& mesh)
+      : grid_(grid), mesh_(mesh), triangleCount_(static_cast<uint32_t>(mesh.triangleCount)) {}
+
+  void placeGrid(const Bounds3& vertexBounds, const UniformGridOptions& options);
+  void listReferences();
+  void rankVoxels();
+  void sortByVoxel();
+  void writePackets();
+  void recordStats();
+
+ private:
+  __m128i writeVoxelPackets(uint32_t reference, uint32_t end, __m128 originLow, __m128 originHigh,
+                            const LatticeRounding& lattice, TrianglePacket*& packet, Vec3& packetLow,
+                            Vec3& packetHigh);
+
+  UniformGrid& grid_;
+  const MeshView& mesh_;
+  const uint32_t triangleCount_;
+  double margin_ = 0;  // the reference margin (see the top of the file)
+  uint64_t voxelCount_ = 0;
+  // Per voxel: its references (listReferences), then its first place in
+  // sorted_ (rankVoxels), then its end there (sortByVoxel).
+  std::vector<uint32_t> counts_;
+  // Each reference is its voxel, flagged (kFirstVoxel) where a triangle's
+  // references begin: the primitive ids follow from the order, with the
+  // triangles left out (not finite, or in no voxel) listed apart.
+  std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> references_;
+  size_t referenceCount_ = 0;
+  std::vector<uint32_t> leftOut_;
+  std::vector<uint32_t> sorted_;  // the primitives, by voxel
+  uint64_t packetTotal_ = 0;      // at most; shared packets leave some unused
+  uint32_t occupiedTotal_ = 0;
+};
+
+// The grid's box: the bounds padded on every axis, so flat bounds get a
+// thickness and no triangle touches a face of the grid; its resolution, and
+// the lattice of the rows' content boxes.
+void UniformGrid::Builder::placeGrid(const Bounds3& vertexBounds, const UniformGridOptions& options) {
+  UniformGrid& grid = grid_;
   const Vec3 extent = vertexBounds.diagonal();
   double scale = maxComponent(extent);
   if (scale == 0.0) {
@@ -244,52 +320,54 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
   }
   const double padding = kGridPadding * scale;
   for (int axis = 0; axis < 3; ++axis) {
-    low_[axis] = double(vertexBounds.lo[axis]) - padding;
-    high_[axis] = double(vertexBounds.hi[axis]) + padding;
+    grid.low_[axis] = double(vertexBounds.lo[axis]) - padding;
+    grid.high_[axis] = double(vertexBounds.hi[axis]) + padding;
   }
-  const std::array<double, 3> gridExtent{high_[0] - low_[0], high_[1] - low_[1],
-                                         high_[2] - low_[2]};
-  resolution_ = options.resolution > 0
-                    ? resolutionFromLongestAxis(gridExtent, options.resolution)
-                    : automaticGridResolution(gridExtent, triangleCount, options.density);
+  const std::array<double, 3> gridExtent{grid.high_[0] - grid.low_[0], grid.high_[1] - grid.low_[1],
+                                         grid.high_[2] - grid.low_[2]};
+  grid.resolution_ = options.resolution > 0
+                         ? resolutionFromLongestAxis(gridExtent, options.resolution)
+                         : automaticGridResolution(gridExtent, triangleCount_, options.density);
   for (int axis = 0; axis < 3; ++axis) {
-    voxelSize_[axis] = gridExtent[axis] / resolution_[axis];
-    inverseVoxelSize_[axis] = resolution_[axis] / gridExtent[axis];
+    grid.voxelSize_[axis] = gridExtent[axis] / grid.resolution_[axis];
+    grid.inverseVoxelSize_[axis] = grid.resolution_[axis] / gridExtent[axis];
   }
-  const double margin = kReferenceMargin * std::max({gridExtent[0], gridExtent[1], gridExtent[2]});
-  const Double3 voxelHalfSize{0.5 * voxelSize_[0] + margin, 0.5 * voxelSize_[1] + margin,
-                              0.5 * voxelSize_[2] + margin};
-  contentMargin_ = 2 * margin;
-  for (int axis = 0; axis < 3; ++axis) latticeStep_[axis] = (voxelSize_[axis] + 2 * contentMargin_) / kLatticeSteps;
+  margin_ = kReferenceMargin * std::max({gridExtent[0], gridExtent[1], gridExtent[2]});
+  grid.contentMargin_ = 2 * margin_;
+  for (int axis = 0; axis < 3; ++axis)
+    grid.latticeStep_[axis] = (grid.voxelSize_[axis] + 2 * grid.contentMargin_) / kLatticeSteps;
+  voxelCount_ = uint64_t(grid.resolution_[0]) * grid.resolution_[1] * grid.resolution_[2];
+}
 
-  const uint64_t voxelCount = uint64_t(resolution_[0]) * resolution_[1] * resolution_[2];
-  const uint32_t strideY = uint32_t(resolution_[0]);
-  const uint32_t strideZ = uint32_t(resolution_[0]) * uint32_t(resolution_[1]);
-  const double lowX = low_[0], lowY = low_[1], lowZ = low_[2];
-  const double inverseX = inverseVoxelSize_[0], inverseY = inverseVoxelSize_[1], inverseZ = inverseVoxelSize_[2];
-  const double lastX = resolution_[0] - 1, lastY = resolution_[1] - 1, lastZ = resolution_[2] - 1;
-  // floor((coordinate - low) * inverse) clamped to [0, last], by truncation
-  // of the clamped value (the same for values >= 0; cheaper than floor).
-  const auto voxelIndex = [](double coordinate, double low, double inverse, double last) {
-    return static_cast<uint32_t>(std::min(std::max((coordinate - low) * inverse, 0.0), last));
-  };
+// Pass 1: the voxels of every triangle, in increasing primitive order,
+// counted per voxel. A triangle is referenced in every voxel its bounding
+// box, grown by the margin, touches; where that box spans more than
+// kBoxOnlyVoxels voxels and at least two axes, only in those the triangle
+// itself (grown by the margin) overlaps. Referencing more voxels than the
+// triangle touches costs only tests, never exactness (see the top of the
+// file). Locals rather than members in the loop: they stay in registers.
+void UniformGrid::Builder::listReferences() {
+  const UniformGrid& grid = grid_;
+  const MeshView& mesh = mesh_;
+  const uint32_t triangleCount = triangleCount_;
+  const double margin = margin_;
+  const Double3 voxelHalfSize{0.5 * grid.voxelSize_[0] + margin, 0.5 * grid.voxelSize_[1] + margin,
+                              0.5 * grid.voxelSize_[2] + margin};
+  const uint32_t strideY = uint32_t(grid.resolution_[0]);
+  const uint32_t strideZ = uint32_t(grid.resolution_[0]) * uint32_t(grid.resolution_[1]);
+  const double lowX = grid.low_[0], lowY = grid.low_[1], lowZ = grid.low_[2];
+  const double inverseX = grid.inverseVoxelSize_[0], inverseY = grid.inverseVoxelSize_[1],
+               inverseZ = grid.inverseVoxelSize_[2];
+  const double lastX = grid.resolution_[0] - 1, lastY = grid.resolution_[1] - 1, lastZ = grid.resolution_[2] - 1;
 
-  // Pass 1: the voxels of every triangle, in increasing primitive order,
-  // counted per voxel. A triangle is referenced in every voxel its bounding
-  // box, grown by the margin, touches; where that box spans more than
-  // kBoxOnlyVoxels voxels and at least two axes, only in those the triangle
-  // itself (grown by the margin) overlaps. Referencing more voxels than the
-  // triangle touches costs only tests, never exactness (see the top of the
-  // file). Each reference is its voxel, flagged (kFirstVoxel) where a
-  // triangle's references begin: the primitive ids follow from the order,
-  // with the triangles left out (not finite, or in no voxel) listed apart.
-  std::vector<uint32_t> counts(voxelCount, 0);
+  std::vector<uint32_t> counts(voxelCount_, 0);
   // Uninitialised, grown by hand: push_back's checks cost more than the rest
   // of a one-voxel triangle's work.
   std::vector<uint32_t, grid_traversal::LargeArrayAllocator<uint32_t>> references;
   std::vector<uint32_t> leftOut;
   size_t referenceCount = 0;
   references.resize(2 * size_t(triangleCount) + 1024);
+  Bounds3 meshBounds;
   uint32_t first = kFirstVoxel;  // the flag for the triangle's next reference
   const auto add = [&](uint32_t voxel) {
     if (referenceCount == references.size()) [[unlikely]]
@@ -305,7 +383,7 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     mesh.triangle(primitive, v0, v1, v2);
     const Vec3 lo = min(v0, min(v1, v2)), hi = max(v0, max(v1, v2));
     if (!finite(lo, hi)) continue;
-    meshBounds_.extend(Bounds3(lo, hi));
+    meshBounds.extend(Bounds3(lo, hi));
     const uint32_t x0 = voxelIndex(double(lo.x) - margin, lowX, inverseX, lastX);
     const uint32_t x1 = voxelIndex(double(hi.x) + margin, lowX, inverseX, lastX);
     const uint32_t y0 = voxelIndex(double(lo.y) - margin, lowY, inverseY, lastY);
@@ -328,27 +406,35 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     }
     const TriangleVoxelOverlap overlap(v0, v1, v2, voxelHalfSize);
     for (uint32_t z = z0; z <= z1; ++z) {
-      const double centerZ = lowZ + (z + 0.5) * voxelSize_[2];
+      const double centerZ = lowZ + (z + 0.5) * grid.voxelSize_[2];
       for (uint32_t y = y0; y <= y1; ++y) {
-        const double centerY = lowY + (y + 0.5) * voxelSize_[1];
+        const double centerY = lowY + (y + 0.5) * grid.voxelSize_[1];
         for (uint32_t x = x0; x <= x1; ++x)
-          if (overlap.overlaps(lowX + (x + 0.5) * voxelSize_[0], centerY, centerZ))
+          if (overlap.overlaps(lowX + (x + 0.5) * grid.voxelSize_[0], centerY, centerZ))
             add(x + strideY * y + strideZ * z);
       }
     }
   }
   if (first != 0 && triangleCount > 0) leftOut.push_back(triangleCount - 1);
+  grid_.meshBounds_ = meshBounds;
+  counts_ = std::move(counts);
+  references_ = std::move(references);
+  referenceCount_ = referenceCount;
+  leftOut_ = std::move(leftOut);
+}
 
-  // The occupancy bits and the rows' ranks; counts[voxel] becomes the
-  // voxel's first place in `sorted` below.
-  const uint64_t total = referenceCount;
-  if (total > std::numeric_limits<uint32_t>::max())
+// The occupancy bits and the rows' ranks: counts_[voxel] becomes the
+// voxel's first place in sorted_.
+void UniformGrid::Builder::rankVoxels() {
+  if (referenceCount_ > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle references; use a lower res");
-  occupied_.assign((voxelCount + 63) / 64, 0);
+  std::vector<uint64_t>& occupied = grid_.occupied_;
+  occupied.assign((voxelCount_ + 63) / 64, 0);
+  uint32_t* const counts = counts_.data();
   uint64_t packetTotal = 0;
   uint32_t referenceTotal = 0, occupiedTotal = 0;
-  for (uint64_t word = 0; word < occupied_.size(); ++word) {
-    const uint64_t end = std::min<uint64_t>(voxelCount, (word + 1) * 64);
+  for (uint64_t word = 0; word < occupied.size(); ++word) {
+    const uint64_t end = std::min<uint64_t>(voxelCount_, (word + 1) * 64);
     uint64_t bits = 0;
     for (uint64_t voxel = word * 64; voxel < end; ++voxel) {
       const uint32_t count = counts[voxel];
@@ -357,19 +443,26 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       referenceTotal += count;
       packetTotal += (count + 3) / 4;
     }
-    occupied_[word] = bits;
+    occupied[word] = bits;
     occupiedTotal += uint32_t(std::popcount(bits));
   }
   if (packetTotal > std::numeric_limits<uint32_t>::max())
     throw std::invalid_argument("grid: more than 2^32 triangle packets; use a lower res");
+  packetTotal_ = packetTotal;
+  occupiedTotal_ = occupiedTotal;
+}
 
-  // Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
-  // array small enough to stay in cache). References come in increasing
-  // primitive order, so each voxel's list is increasing. After it, counts[v]
-  // is voxel v's end in `sorted`.
+// Pass 2, a counting sort: the primitives by voxel (4-byte writes to an
+// array small enough to stay in cache). References come in increasing
+// primitive order, so each voxel's list is increasing. After it,
+// counts_[v] is voxel v's end in sorted_.
+void UniformGrid::Builder::sortByVoxel() {
+  const uint64_t total = referenceCount_;
   std::vector<uint32_t> sorted(total);
-  leftOut.push_back(kNoPrimitive);  // a sentinel: no placed primitive has that id
-  const uint32_t* nextLeftOut = leftOut.data();
+  uint32_t* const counts = counts_.data();
+  const uint32_t* const references = references_.data();
+  leftOut_.push_back(kNoPrimitive);  // a sentinel: no placed primitive has that id
+  const uint32_t* nextLeftOut = leftOut_.data();
   uint32_t primitive = kNoPrimitive;  // + 1 wraps to 0 at the first reference
   for (uint64_t r = 0; r < total; ++r) {
     const uint32_t reference = references[r];
@@ -377,86 +470,54 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
     while (primitive == *nextLeftOut) [[unlikely]] ++primitive, ++nextLeftOut;
     sorted[counts[reference & ~kFirstVoxel]++] = primitive;
   }
+  sorted_ = std::move(sorted);
+}
 
-  // Pass 3: the rows and the packets, written in order, voxel by voxel; each
-  // voxel's last packet padded with copies of its last triangle (tested
-  // once: the mailbox). A packet's box: the union of its triangles'
-  // bounding boxes grown by contentMargin_, clipped to the voxel grown by as
-  // much (the ends of the lattice), rounded outwards to the lattice; the
-  // row's box, the union of its packets'. A voxel whose triangles fit in one
-  // packet and are those of the voxel before it (a run of voxels along a
-  // floor, a wall or a ceiling: most of the occupied voxels of a room) shares
-  // that voxel's packet, whose box then spans the whole lattice (the rows'
-  // boxes, each on its own voxel's lattice, do the culling).
-  const double inverseStep[3] = {1.0 / latticeStep_[0], 1.0 / latticeStep_[1], 1.0 / latticeStep_[2]};
-  // A box on a voxel's lattice, as the bytes of VoxelRow::low and high: the
-  // low bounds rounded down, the high bounds up, clamped to the lattice
-  // (truncation is floor for the clamped values, which are >= 0). In single
-  // precision, all six at once: the bounds are measured from lattice origins
-  // rounded to float away from the box (the low bounds' origin up, the high
-  // bounds' down), so the rounding only grows the box but for the
-  // subtraction's and the scaling's own, ~1e-7 of the grid or of a step,
-  // nothing beside the margin (see the top of the file).
-  const __m128 inverseStep4 = _mm_setr_ps(float(inverseStep[0]), float(inverseStep[1]), float(inverseStep[2]), 0.0f);
-  const __m128 zero4 = _mm_setzero_ps(), top4 = _mm_set1_ps(float(kLatticeSteps));
-  const auto latticeBox = [&](const Vec3& low, const Vec3& high, __m128 originLow, __m128 originHigh) {
-    const __m128 a = _mm_min_ps(
-        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(low.x, low.y, low.z, 0.0f), originLow), inverseStep4), zero4),
-        top4);
-    const __m128 b = _mm_min_ps(
-        _mm_max_ps(_mm_mul_ps(_mm_sub_ps(_mm_setr_ps(high.x, high.y, high.z, 0.0f), originHigh), inverseStep4), zero4),
-        top4);
-    const __m128i highFloor = _mm_cvttps_epi32(b);
-    // Where b is not whole its truncation is one short: subtract the all-ones mask.
-    const __m128i highSteps = _mm_sub_epi32(highFloor, _mm_castps_si128(_mm_cmplt_ps(_mm_cvtepi32_ps(highFloor), b)));
-    return _mm_packus_epi16(_mm_packs_epi32(_mm_cvttps_epi32(a), highSteps), _mm_setzero_si128());
-  };
-  const auto roundUp = [](double x) {
-    const float f = float(x);
-    return double(f) < x ? std::nextafter(f, kInfinity) : f;
-  };
-  const auto roundDown = [](double x) {
-    const float f = float(x);
-    return double(f) > x ? std::nextafter(f, -kInfinity) : f;
-  };
+// Pass 3: the rows and the packets, written in order, voxel by voxel; each
+// voxel's last packet padded with copies of its last triangle (tested
+// once: the mailbox). A packet's box: the union of its triangles'
+// bounding boxes grown by contentMargin_, clipped to the voxel grown by as
+// much (the ends of the lattice), rounded outwards to the lattice; the
+// row's box, the union of its packets'. A voxel whose triangles fit in one
+// packet and are those of the voxel before it (a run of voxels along a
+// floor, a wall or a ceiling: most of the occupied voxels of a room) shares
+// that voxel's packet, whose box then spans the whole lattice (the rows'
+// boxes, each on its own voxel's lattice, do the culling).
+void UniformGrid::Builder::writePackets() {
+  UniformGrid& grid = grid_;
+  const LatticeRounding lattice(grid.latticeStep_);
   // One row per voxel, indexed by the voxel: an empty voxel's row is never
   // read (its occupancy bit is clear), so it is left unwritten.
-  rows_.resize(voxelCount);
-  // At most packetTotal packets; the shared ones are left off at the end.
+  grid.rows_.resize(voxelCount_);
+  // At most packetTotal_ packets; the shared ones are left off at the end.
   // Boxes of packets beyond the last are zeros (never read: masked off).
-  packets_.resize(packetTotal);
-  packetBoxes_.resize((packetTotal + 3) / 4);
-  std::memset(static_cast<void*>(packetBoxes_.data()), 0, packetBoxes_.size() * sizeof(PacketBoxes4));
-  PacketBoxes4* const packetBoxes = packetBoxes_.data();
-  const auto setPacketBox = [packetBoxes](uint32_t packet, __m128i box) {
-    const uint64_t bytes = uint64_t(_mm_cvtsi128_si64(box));
-    PacketBoxes4& boxes = packetBoxes[packet / 4];
-    for (int axis = 0; axis < 3; ++axis) {
-      boxes.low[axis][packet % 4] = uint8_t(bytes >> (8 * axis));
-      boxes.high[axis][packet % 4] = uint8_t(bytes >> (32 + 8 * axis));
-    }
-  };
-  // Bytes 0-3: low bounds, 4-7: high bounds (the row's box, and the mask
-  // that keeps the minima of the first and the maxima of the second).
-  const __m128i lowHalf = _mm_set_epi32(0, 0, 0, -1);
+  grid.packets_.resize(packetTotal_);
+  grid.packetBoxes_.resize((packetTotal_ + 3) / 4);
+  std::memset(static_cast<void*>(grid.packetBoxes_.data()), 0, grid.packetBoxes_.size() * sizeof(PacketBoxes4));
+  PacketBoxes4* const packetBoxes = grid.packetBoxes_.data();
   const __m128i wholeLattice = _mm_set_epi32(0, 0, 0x00ffffff, 0);
-  TrianglePacket* const firstPacket = packets_.data();
+  const uint32_t strideY = uint32_t(grid.resolution_[0]);
+  const uint32_t strideZ = uint32_t(grid.resolution_[0]) * uint32_t(grid.resolution_[1]);
+  const uint32_t* const sorted = sorted_.data();
+  const uint32_t* const counts = counts_.data();
+  TrianglePacket* const firstPacket = grid.packets_.data();
   TrianglePacket* packet = firstPacket;
-  VoxelRow* const rows = rows_.data();
+  VoxelRow* const rows = grid.rows_.data();
   VoxelRow* previousRow = nullptr;
   uint32_t reference = 0, previousReference = 0;
   Vec3 packetLow, packetHigh;  // the last packet's bounds
-  for (uint64_t word = 0; word < occupied_.size(); ++word) {
-    for (uint64_t bits = occupied_[word]; bits != 0; bits &= bits - 1) {
+  for (uint64_t word = 0; word < grid.occupied_.size(); ++word) {
+    for (uint64_t bits = grid.occupied_[word]; bits != 0; bits &= bits - 1) {
       const uint32_t voxel = uint32_t(word * 64 + uint64_t(std::countr_zero(bits)));
       VoxelRow* const row = rows + voxel;
       const uint32_t end = counts[voxel];
-      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(resolution_[1]), voxel / strideZ};
+      // The voxel's lattice origins, rounded away from its boxes.
+      const uint32_t cell[3] = {voxel % strideY, voxel / strideY % uint32_t(grid.resolution_[1]), voxel / strideZ};
       float originLow[4] = {}, originHigh[4] = {};
       for (int axis = 0; axis < 3; ++axis) {
-        const double latticeLow = low_[axis] + cell[axis] * voxelSize_[axis] - contentMargin_;
-        originLow[axis] = roundUp(latticeLow + contentMargin_);
-        originHigh[axis] = roundDown(latticeLow - contentMargin_);
+        const double latticeLow = grid.low_[axis] + cell[axis] * grid.voxelSize_[axis] - grid.contentMargin_;
+        originLow[axis] = roundUp(latticeLow + grid.contentMargin_);
+        originHigh[axis] = roundDown(latticeLow - grid.contentMargin_);
       }
       const __m128 low4 = _mm_loadu_ps(originLow), high4 = _mm_loadu_ps(originHigh);
       const uint32_t count = end - reference;
@@ -466,30 +527,11 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
         // Shared with the occupied voxel before, whose packet was the last written.
         row->firstPacket = previousRow->firstPacket;
         row->endPacket = previousRow->endPacket;
-        setPacketBox(row->firstPacket, wholeLattice);
-        rowBox = latticeBox(packetLow, packetHigh, low4, high4);
+        setPacketBox(packetBoxes, row->firstPacket, wholeLattice);
+        rowBox = lattice.box(packetLow, packetHigh, low4, high4);
       } else {
         row->firstPacket = uint32_t(packet - firstPacket);
-        __m128i rowLow = _mm_set1_epi8(char(0xff)), rowHigh = _mm_setzero_si128();
-        for (uint32_t r = reference; r < end; r += 4, ++packet) {
-          packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
-          for (uint32_t lane = 0; lane < 4; ++lane) {
-            const uint32_t primitive = sorted[std::min(r + lane, end - 1)];
-            Vec3 v0, v1, v2;
-            mesh.triangle(primitive, v0, v1, v2);
-            packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
-            packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
-            packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
-            packet->primitive[lane] = primitive;
-            packetLow = min(packetLow, min(v0, min(v1, v2)));
-            packetHigh = max(packetHigh, max(v0, max(v1, v2)));
-          }
-          const __m128i box = latticeBox(packetLow, packetHigh, low4, high4);
-          setPacketBox(uint32_t(packet - firstPacket), box);
-          rowLow = _mm_min_epu8(rowLow, box);
-          rowHigh = _mm_max_epu8(rowHigh, box);
-        }
-        rowBox = _mm_or_si128(_mm_and_si128(lowHalf, rowLow), _mm_andnot_si128(lowHalf, rowHigh));
+        rowBox = writeVoxelPackets(reference, end, low4, high4, lattice, packet, packetLow, packetHigh);
         row->endPacket = uint32_t(packet - firstPacket);
       }
       _mm_storel_epi64(reinterpret_cast<__m128i*>(row->low), rowBox);
@@ -498,28 +540,354 @@ UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options
       reference = end;
     }
   }
-  packets_.resize(size_t(packet - packets_.data()));
-  packetBoxes_.resize((packets_.size() + 3) / 4);
+  grid.packets_.resize(size_t(packet - firstPacket));
+  grid.packetBoxes_.resize((grid.packets_.size() + 3) / 4);
+}
 
-  stats_.leaves = occupiedTotal;
-  stats_.nodes = voxelCount;
-  stats_.emptyLeaves = voxelCount - stats_.leaves;
-  stats_.triangleReferences = total;
-  stats_.averageDepth = 1;
-  stats_.maxDepth = 1;
+// The packets of one voxel, sorted_[reference .. end), from `packet` on
+// (left after them), with their boxes; returns the row's box, and leaves
+// the last packet's bounds in packetLow and packetHigh.
+inline __m128i UniformGrid::Builder::writeVoxelPackets(uint32_t reference, uint32_t end, __m128 originLow,
+                                                       __m128 originHigh, const LatticeRounding& lattice,
+                                                       TrianglePacket*& packet, Vec3& packetLow, Vec3& packetHigh) {
+  const MeshView& mesh = mesh_;
+  const uint32_t* const sorted = sorted_.data();
+  const TrianglePacket* const firstPacket = grid_.packets_.data();
+  PacketBoxes4* const packetBoxes = grid_.packetBoxes_.data();
+  __m128i rowLow = _mm_set1_epi8(char(0xff)), rowHigh = _mm_setzero_si128();
+  for (uint32_t r = reference; r < end; r += 4, ++packet) {
+    packetLow = Vec3(kInfinity), packetHigh = Vec3(-kInfinity);
+    for (uint32_t lane = 0; lane < 4; ++lane) {
+      const uint32_t primitive = sorted[std::min(r + lane, end - 1)];
+      Vec3 v0, v1, v2;
+      mesh.triangle(primitive, v0, v1, v2);
+      packet->v[0][0][lane] = v0.x, packet->v[0][1][lane] = v0.y, packet->v[0][2][lane] = v0.z;
+      packet->v[1][0][lane] = v1.x, packet->v[1][1][lane] = v1.y, packet->v[1][2][lane] = v1.z;
+      packet->v[2][0][lane] = v2.x, packet->v[2][1][lane] = v2.y, packet->v[2][2][lane] = v2.z;
+      packet->primitive[lane] = primitive;
+      packetLow = min(packetLow, min(v0, min(v1, v2)));
+      packetHigh = max(packetHigh, max(v0, max(v1, v2)));
+    }
+    const __m128i box = lattice.box(packetLow, packetHigh, originLow, originHigh);
+    setPacketBox(packetBoxes, uint32_t(packet - firstPacket), box);
+    rowLow = _mm_min_epu8(rowLow, box);
+    rowHigh = _mm_max_epu8(rowHigh, box);
+  }
+  // Bytes 0-3: low bounds, 4-7: high bounds (the minima of the first, the maxima of the second).
+  const __m128i lowHalf = _mm_set_epi32(0, 0, 0, -1);
+  return _mm_or_si128(_mm_and_si128(lowHalf, rowLow), _mm_andnot_si128(lowHalf, rowHigh));
+}
+
+void UniformGrid::Builder::recordStats() {
+  UniformGrid& grid = grid_;
+  AcceleratorStats& stats = grid.stats_;
+  stats.leaves = occupiedTotal_;
+  stats.nodes = voxelCount_;
+  stats.emptyLeaves = voxelCount_ - stats.leaves;
+  stats.triangleReferences = referenceCount_;
+  stats.averageDepth = 1;
+  stats.maxDepth = 1;
   // (The packets' and their boxes' capacity beyond their size, left by
   // shared packets, is never touched, so never resident.)
-  stats_.bytes = sizeof(*this) + occupied_.capacity() * sizeof(uint64_t) + rows_.capacity() * sizeof(VoxelRow) +
-                 packets_.size() * sizeof(TrianglePacket) + packetBoxes_.size() * sizeof(PacketBoxes4);
-  stats_.buildMs =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  stats.bytes = sizeof(grid) + grid.occupied_.capacity() * sizeof(uint64_t) +
+                grid.rows_.capacity() * sizeof(VoxelRow) + grid.packets_.size() * sizeof(TrianglePacket) +
+                grid.packetBoxes_.size() * sizeof(PacketBoxes4);
+}
+
+UniformGrid::UniformGrid(const MeshView& mesh, const UniformGridOptions& options, std::string_view spec)
+    : mesh_(mesh) {
+  const auto start = std::chrono::steady_clock::now();
+  if (mesh.triangleCount >= kNoPrimitive)
+    throw std::invalid_argument("grid: " + std::to_string(mesh.triangleCount) +
+                                " triangles exceed the 32-bit primitive ids; split the cell");
+  stats_.spec = std::string(spec);
+  // The grid's box holds every triangle that can be placed (triangles with
+  // a non-finite vertex cannot be, and are left out: such input should be
+  // refused at import): the bounds of the vertices' finite coordinates.
+  // (meshBounds_, over the placed triangles alone, comes with pass 1.)
+  const Bounds3 vertexBounds =
+      mesh.triangleCount == 0 ? Bounds3() : finiteCoordinateBounds(mesh.positions, mesh.vertexCount);
+  if (vertexBounds.empty()) {
+    stats_.bytes = sizeof(*this);
+  } else {
+    Builder builder(*this, mesh);
+    builder.placeGrid(vertexBounds, options);
+    builder.listReferences();
+    builder.rankVoxels();
+    builder.sortByVoxel();
+    builder.writePackets();
+    builder.recordStats();
+  }
+  stats_.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 // ---------------------------------------------------------------------------
 // Traversal
 
-// Flattened: the triangle test is inlined into the walk (GCC otherwise calls
-// it), which keeps the walk's state in registers.
+namespace {
+
+// Clips [tEnter, tExit] to the grid box [low, high] (slabs), with the
+// inverse direction. An axis the ray runs parallel to only decides whether
+// the ray is inside the slab at all. False when nothing of the ray is left.
+[[gnu::always_inline]] inline bool clipToGrid(const double origin[3], const double direction[3],
+                                              const double inverse[3], const std::array<double, 3>& low,
+                                              const std::array<double, 3>& high, double& tEnter, double& tExit) {
+  if (!(tEnter < tExit)) return false;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (direction[axis] == 0.0) {
+      if (origin[axis] < low[axis] || origin[axis] > high[axis]) return false;
+      continue;
+    }
+    const double a = (low[axis] - origin[axis]) * inverse[axis], b = (high[axis] - origin[axis]) * inverse[axis];
+    tEnter = std::max(tEnter, std::min(a, b));
+    tExit = std::min(tExit, std::max(a, b));
+  }
+  return tEnter <= tExit;
+}
+
+// Fetches the first cache lines of a voxel's packets and of their boxes.
+[[gnu::always_inline]] inline void prefetchVoxel(const TrianglePacket* packets, const PacketBoxes4* packetBoxes,
+                                                 uint32_t first, uint32_t end) {
+  const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first / 4);
+  const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + (end + 3) / 4) - 1;
+  for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
+  const char* const line = reinterpret_cast<const char*>(packets + first);
+  const char* const last = reinterpret_cast<const char*>(packets + end) - 1;
+  for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
+}
+
+// The occupied voxels the walk gathered ahead of the tests (one slot more:
+// the walk records every voxel it enters, and keeps the occupied ones).
+struct AheadVoxels {
+  uint32_t index[kWalkAhead + 1];
+  int64_t enter[kWalkAhead + 1], exit[kWalkAhead + 1];  // fixed point (VoxelWalk)
+  uint32_t left[kWalkAhead + 1];                        // packed as VoxelWalk::left
+};
+
+}  // namespace
+
+// The 3D-DDA. It runs on 64-bit integers: distances beyond tEnter in units
+// of 2^-60 of the ray's stretch in the grid (a resolution ~2^-60 of it, far
+// finer than double's own after a few hundred additions), because integer
+// compares and adds make each step's dependency chain about half as long as
+// in double. Distances beyond 2^61 units (a boundary the ray meets only
+// after leaving the grid, or never) are held at 2^61: never stepped to, and
+// sums stay below 2^63. Scalar members only, so that the compiler keeps
+// them in registers.
+struct UniformGrid::VoxelWalk {
+  static constexpr double kUnits = 0x1p60, kFar = 0x1p61;
+
+  VoxelWalk(const UniformGrid& grid, const double origin[3], const double direction[3], const double inverse[3],
+            double tEnter, double tExit, int32_t axisStep[3]);
+
+  int64_t toFixed(double t) const { return int64_t(std::clamp((t - tEnter) * scale, -kFar, kFar)); }
+  double distance(int64_t fixed) const { return tEnter + double(fixed) * unit; }
+
+  // Walks on until it has gathered kWalkAhead occupied voxels or left the
+  // grid (then `walking` turns false); returns how many it gathered.
+  [[gnu::always_inline]] int gather(const uint64_t* occupied, const VoxelRow* rows, const int32_t axisStep[3],
+                                    AheadVoxels& ahead, bool& walking);
+
+  double tEnter, scale, unit;
+  int32_t index = 0;
+  // The steps left per axis, ten bits each (x, y, z from bit 0): at most
+  // 511, and 0 for an axis never stepped. One register and one store a
+  // step instead of three.
+  uint32_t left = 0;
+  int64_t tx, ty, tz;                 // the next boundary per axis
+  int64_t deltaX, deltaY, deltaZ;     // between boundaries
+  int64_t fixedExit;                  // where the walk ends
+  int64_t fixedVoxelEnter = 0;        // the current voxel's entry
+};
+
+// Set-up: the voxel at the entry point, and per axis the distance to the
+// next voxel boundary (tNext), between boundaries (tDelta), the step of the
+// voxel index (axisStep), and the steps left before the ray leaves the grid.
+inline UniformGrid::VoxelWalk::VoxelWalk(const UniformGrid& grid, const double origin[3], const double direction[3],
+                                         const double inverse[3], double tEnter, double tExit, int32_t axisStep[3])
+    : tEnter(tEnter) {
+  const int32_t strides[3] = {1, grid.resolution_[0], grid.resolution_[0] * grid.resolution_[1]};
+  int32_t stepsLeft[3];
+  double tNext[3], tDelta[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const double entry = origin[axis] + tEnter * direction[axis];
+    // floor, clamped to the grid, as truncation of the clamped value (the
+    // same for values >= 0; std::floor is a library call on baseline x86-64).
+    const double cell = (entry - grid.low_[axis]) * grid.inverseVoxelSize_[axis];
+    const int voxel = static_cast<int>(std::clamp(cell, 0.0, double(grid.resolution_[axis] - 1)));
+    index += voxel * strides[axis];
+    if (direction[axis] > 0.0) {
+      axisStep[axis] = strides[axis];
+      stepsLeft[axis] = grid.resolution_[axis] - 1 - voxel;
+      tNext[axis] = (grid.low_[axis] + (voxel + 1) * grid.voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = grid.voxelSize_[axis] * inverse[axis];
+    } else if (direction[axis] < 0.0) {
+      axisStep[axis] = -strides[axis];
+      stepsLeft[axis] = voxel;
+      tNext[axis] = (grid.low_[axis] + voxel * grid.voxelSize_[axis] - origin[axis]) * inverse[axis];
+      tDelta[axis] = -grid.voxelSize_[axis] * inverse[axis];
+    } else {
+      axisStep[axis] = 0;
+      stepsLeft[axis] = std::numeric_limits<int32_t>::max();  // never stepped
+      tNext[axis] = std::numeric_limits<double>::infinity();
+      tDelta[axis] = 0.0;
+    }
+  }
+  scale = kUnits / std::max(tExit - tEnter, 1e-280);
+  unit = 1.0 / scale;
+  tx = toFixed(tNext[0]), ty = toFixed(tNext[1]), tz = toFixed(tNext[2]);
+  deltaX = int64_t(std::min(tDelta[0] * scale, kFar));
+  deltaY = int64_t(std::min(tDelta[1] * scale, kFar));
+  deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
+  // The walk needs no check that it stays in the grid: along an axis, the
+  // boundary `left` steps on is the grid's face (integer sums are exact),
+  // so ending the walk there at the latest ends it in the last voxel. (The
+  // set-up's rounding may put that face a little before tExit.)
+  const auto face = [](int64_t next, int64_t delta, int32_t steps) {
+    if (steps == std::numeric_limits<int32_t>::max()) return int64_t(kFar);  // never stepped
+    return int64_t(std::min<__int128>(__int128(next) + __int128(steps) * delta, __int128(kFar)));
+  };
+  fixedExit = std::min({toFixed(tExit), face(tx, deltaX, stepsLeft[0]), face(ty, deltaY, stepsLeft[1]),
+                        face(tz, deltaZ, stepsLeft[2])});
+  const auto leftField = [](int32_t steps) {
+    return steps == std::numeric_limits<int32_t>::max() ? 0u : uint32_t(steps);
+  };
+  left = leftField(stepsLeft[0]) | leftField(stepsLeft[1]) << 10 | leftField(stepsLeft[2]) << 20;
+}
+
+inline int UniformGrid::VoxelWalk::gather(const uint64_t* occupied, const VoxelRow* rows, const int32_t axisStep[3],
+                                          AheadVoxels& ahead, bool& walking) {
+  constexpr uint32_t axisUnit[3] = {1u, 1u << 10, 1u << 20};
+  int count = 0;
+  for (;;) {
+    // The axis whose boundary comes first (ties: x, then y), by
+    // conditional moves and masks rather than branches; its boundary is
+    // the voxel's exit. (Two compares and selects: half the instructions
+    // of masks from three compares, and the walk is bound by them.)
+    const bool yBeforeZ = ty <= tz;
+    const int64_t exitYZ = yBeforeZ ? ty : tz;
+    const bool xFirst = tx <= exitYZ;
+    const int64_t fixedVoxelExit = xFirst ? tx : exitYZ;
+    const int64_t maskX = -int64_t(xFirst);
+    const int64_t maskY = ~maskX & -int64_t(yBeforeZ);
+    const int64_t maskZ = ~(maskX | maskY);
+    // Recorded always, kept only if occupied: no branch to mispredict.
+    ahead.index[count] = uint32_t(index);
+    ahead.enter[count] = fixedVoxelEnter;
+    ahead.exit[count] = fixedVoxelExit;
+    ahead.left[count] = left;
+    const uint32_t isOccupied = uint32_t(occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1;
+    // The row of an occupied voxel, fetched now: it is read once the walk
+    // has gathered its voxels. (An empty voxel's points at the first row.)
+    __builtin_prefetch(rows + (uint32_t(index) & -isOccupied));
+    count += int(isOccupied);
+    if (fixedVoxelExit >= fixedExit) {
+      walking = false;
+      return count;
+    }
+    // By table: GCC turns a select among three into a branch.
+    const unsigned axis = unsigned(!xFirst) << unsigned(!yBeforeZ);  // 0, 1 or 2
+    index += axisStep[axis];
+    tx += deltaX & maskX;
+    ty += deltaY & maskY;
+    tz += deltaZ & maskZ;
+    left -= axisUnit[axis];
+    fixedVoxelEnter = fixedVoxelExit;
+    if (count == kWalkAhead) return count;
+  }
+}
+
+// Content boxes (VoxelRow): along each axis, the ray meets the first plane
+// of the current voxel's lattice at latticeOrigin + left * latticeStride
+// (left: the walk's steps left along the axis, which number the voxel's
+// layer), and each lattice step after it latticeStep later. In single
+// precision, four lanes x, y, z and a fourth that carries the voxel's span
+// (-inf or +inf, no step). A ray parallel to an axis never meets its
+// planes: it tests no boxes (rare; the packets decide alone, as they may).
+struct UniformGrid::ContentBoxes {
+  using Float4 = grid_traversal::PacketRay::Float4;
+
+  ContentBoxes(const UniformGrid& grid, const double origin[3], const double direction[3], const double inverse[3]);
+
+  // The clip of a voxel's packets' boxes to the part of the ray in the
+  // voxel, before tExit, within the row's box; false when that part is
+  // empty (the ray misses the row's box there).
+  [[gnu::always_inline]] bool clip(const VoxelRow& row, uint32_t packedLeft, double voxelEnter, double voxelExit,
+                                   double tExit, grid_traversal::PacketBoxClip& clip) const;
+
+  static Float4 broadcast(float x) { return Float4{x, x, x, x}; }
+
+  bool testBoxes;
+  __m128 originLow, originHigh, stride4, step4;
+  // The packets' boxes: the same lattice (grid_traversal.h).
+  Float4 packetStep[3];
+};
+
+inline UniformGrid::ContentBoxes::ContentBoxes(const UniformGrid& grid, const double origin[3],
+                                               const double direction[3], const double inverse[3])
+    : testBoxes(direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0) {
+  float latticeOrigin[3], latticeStride[3], latticeStep[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    // The layer: resolution - 1 - left going up the axis, left going down.
+    const double layer = direction[axis] > 0.0 ? grid.resolution_[axis] - 1 : 0.0;
+    const double stride = (direction[axis] > 0.0 ? -grid.voxelSize_[axis] : grid.voxelSize_[axis]) * inverse[axis];
+    latticeOrigin[axis] = float((grid.low_[axis] - grid.contentMargin_ - origin[axis]) * inverse[axis] +
+                                layer * grid.voxelSize_[axis] * inverse[axis]);
+    latticeStride[axis] = float(stride);
+    latticeStep[axis] = float(grid.latticeStep_[axis] * inverse[axis]);
+  }
+  originLow = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], -kInfinity);
+  originHigh = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], kInfinity);
+  stride4 = _mm_setr_ps(latticeStride[0], latticeStride[1], latticeStride[2], 0.0f);
+  step4 = _mm_setr_ps(latticeStep[0], latticeStep[1], latticeStep[2], 0.0f);
+  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? latticeStep[axis] : 0.0f);
+}
+
+inline bool UniformGrid::ContentBoxes::clip(const VoxelRow& row, uint32_t packedLeft, double voxelEnter,
+                                            double voxelExit, double tExit,
+                                            grid_traversal::PacketBoxClip& clip) const {
+  if (testBoxes) {
+    const __m128i layerLeft =
+        _mm_setr_epi32(int(packedLeft & 1023), int(packedLeft >> 10 & 1023), int(packedLeft >> 20), 0);
+    const __m128 layers = _mm_mul_ps(_mm_cvtepi32_ps(layerLeft), stride4);
+    const __m128 startLow = _mm_add_ps(originLow, layers), startHigh = _mm_add_ps(originHigh, layers);
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i bytes = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row.low)), zero);
+    const __m128 a = _mm_add_ps(startLow, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(bytes, zero)), step4));
+    const __m128 b = _mm_add_ps(startHigh, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(bytes, zero)), step4));
+    // The latest entry and the earliest exit over the axes.
+    __m128 enterAll = _mm_min_ps(a, b), exitAll = _mm_max_ps(a, b);
+    enterAll = _mm_max_ps(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 0, 3, 2)));
+    exitAll = _mm_min_ps(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 0, 3, 2)));
+    enterAll = _mm_max_ss(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 1, 1, 1)));
+    exitAll = _mm_min_ss(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 1, 1, 1)));
+    const float lower = std::max(_mm_cvtss_f32(enterAll), float(voxelEnter));
+    const float upper = std::min(_mm_cvtss_f32(exitAll), float(std::min(voxelExit, tExit)));
+    if (!(lower <= upper)) return false;
+    // The packets' boxes lie in the row's: only [lower, upper] counts.
+    alignas(16) float start[4];
+    _mm_store_ps(start, startLow);
+    for (int axis = 0; axis < 3; ++axis) clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(start[axis]);
+    clip.lower = broadcast(lower);
+    clip.upper = broadcast(upper);
+  } else {
+    for (int axis = 0; axis < 3; ++axis) {
+      clip.planeLow[axis] = broadcast(-kInfinity);
+      clip.planeHigh[axis] = broadcast(kInfinity);
+    }
+    clip.lower = broadcast(-kInfinity);
+    clip.upper = broadcast(kInfinity);
+  }
+  for (int axis = 0; axis < 3; ++axis) clip.step[axis] = packetStep[axis];
+  return true;
+}
+
+// The walk runs ahead of the tests: it gathers the next few occupied
+// voxels along the ray, keeps those whose content box the ray crosses and
+// prefetches their triangles, so that their cache misses overlap instead of
+// following one another (the triangles are tested in the walk's order all
+// the same). Flattened: the triangle test is inlined into the walk (GCC
+// otherwise calls it), which keeps the walk's state in registers.
 template <bool AnyHit>
 [[gnu::flatten]] bool UniformGrid::traverse(const Ray& ray, Hit& best) const {
   if (packets_.empty() || !hasFiniteOriginAndDirection(ray)) return false;
@@ -530,114 +898,12 @@ template <bool AnyHit>
   // division per axis); they differ from quotients by an ulp, far below the
   // reference margin (see the top of the file).
   const double inverse[3] = {1.0 / direction[0], 1.0 / direction[1], 1.0 / direction[2]};
-
-  // Clip [tMin, tMax] to the grid box (slabs). An axis the ray runs parallel
-  // to only decides whether the ray is inside the slab at all.
   double tEnter = ray.tMin, tExit = ray.tMax;
-  if (!(tEnter < tExit)) return false;
-  for (int axis = 0; axis < 3; ++axis) {
-    if (direction[axis] == 0.0) {
-      if (origin[axis] < low_[axis] || origin[axis] > high_[axis]) return false;
-      continue;
-    }
-    const double a = (low_[axis] - origin[axis]) * inverse[axis], b = (high_[axis] - origin[axis]) * inverse[axis];
-    tEnter = std::max(tEnter, std::min(a, b));
-    tExit = std::min(tExit, std::max(a, b));
-  }
-  if (!(tEnter <= tExit)) return false;
+  if (!clipToGrid(origin, direction, inverse, low_, high_, tEnter, tExit)) return false;
 
-  // DDA set-up: the voxel at the entry point, and per axis the distance to
-  // the next voxel boundary (tNext), between boundaries (tDelta), the step
-  // of the voxel index, and the steps left before the ray leaves the grid.
-  const int32_t strides[3] = {1, resolution_[0], resolution_[0] * resolution_[1]};
-  int32_t indexStep[3], stepsLeft[3];
-  double tNext[3], tDelta[3];
-  int32_t index = 0;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double entry = origin[axis] + tEnter * direction[axis];
-    // floor, clamped to the grid, as truncation of the clamped value (the
-    // same for values >= 0; std::floor is a library call on baseline x86-64).
-    const double cell = (entry - low_[axis]) * inverseVoxelSize_[axis];
-    const int voxel = static_cast<int>(std::clamp(cell, 0.0, double(resolution_[axis] - 1)));
-    index += voxel * strides[axis];
-    if (direction[axis] > 0.0) {
-      indexStep[axis] = strides[axis];
-      stepsLeft[axis] = resolution_[axis] - 1 - voxel;
-      tNext[axis] = (low_[axis] + (voxel + 1) * voxelSize_[axis] - origin[axis]) * inverse[axis];
-      tDelta[axis] = voxelSize_[axis] * inverse[axis];
-    } else if (direction[axis] < 0.0) {
-      indexStep[axis] = -strides[axis];
-      stepsLeft[axis] = voxel;
-      tNext[axis] = (low_[axis] + voxel * voxelSize_[axis] - origin[axis]) * inverse[axis];
-      tDelta[axis] = -voxelSize_[axis] * inverse[axis];
-    } else {
-      indexStep[axis] = 0;
-      stepsLeft[axis] = std::numeric_limits<int32_t>::max();  // never stepped
-      tNext[axis] = std::numeric_limits<double>::infinity();
-      tDelta[axis] = 0.0;
-    }
-  }
-  // The walk runs on 64-bit integers: distances beyond tEnter in units of
-  // 2^-60 of the ray's stretch in the grid (a resolution ~2^-60 of it, far
-  // finer than double's own after a few hundred additions), because integer
-  // compares and adds make each step's dependency chain about half as long
-  // as in double. Distances beyond 2^61 units (a boundary the ray meets
-  // only after leaving the grid, or never) are held at 2^61: never stepped
-  // to, and sums stay below 2^63.
-  constexpr double kUnits = 0x1p60, kFar = 0x1p61;
-  const double scale = kUnits / std::max(tExit - tEnter, 1e-280), unit = 1.0 / scale;
-  const auto toFixed = [&](double t) { return int64_t(std::clamp((t - tEnter) * scale, -kFar, kFar)); };
-  int64_t tx = toFixed(tNext[0]), ty = toFixed(tNext[1]), tz = toFixed(tNext[2]);
-  const int64_t deltaX = int64_t(std::min(tDelta[0] * scale, kFar));
-  const int64_t deltaY = int64_t(std::min(tDelta[1] * scale, kFar));
-  const int64_t deltaZ = int64_t(std::min(tDelta[2] * scale, kFar));
-  int64_t fixedExit = toFixed(tExit);
-  const int32_t axisStep[3] = {indexStep[0], indexStep[1], indexStep[2]};
-  const uint32_t axisUnit[3] = {1u, 1u << 10, 1u << 20};
-  // The walk needs no check that it stays in the grid: along an axis, the
-  // boundary `left` steps on is the grid's face (integer sums are exact),
-  // so ending the walk there at the latest ends it in the last voxel. (The
-  // set-up's rounding may put that face a little before tExit.)
-  const auto face = [](int64_t next, int64_t delta, int32_t left) {
-    if (left == std::numeric_limits<int32_t>::max()) return int64_t(kFar);  // never stepped
-    return int64_t(std::min<__int128>(__int128(next) + __int128(left) * delta, __int128(kFar)));
-  };
-  fixedExit = std::min({fixedExit, face(tx, deltaX, stepsLeft[0]), face(ty, deltaY, stepsLeft[1]),
-                        face(tz, deltaZ, stepsLeft[2])});
-  // The steps left per axis, ten bits each (x, y, z from bit 0): at most
-  // 511, and 0 for an axis never stepped. One register and one store a
-  // step instead of three.
-  const auto leftField = [](int32_t left) { return left == std::numeric_limits<int32_t>::max() ? 0u : uint32_t(left); };
-  uint32_t left = leftField(stepsLeft[0]) | leftField(stepsLeft[1]) << 10 | leftField(stepsLeft[2]) << 20;
-
-  // Content boxes (VoxelRow): along each axis, the ray meets the first plane
-  // of the current voxel's lattice at latticeOrigin + left * latticeStride
-  // (left: the walk's steps left along the axis, which number the voxel's
-  // layer), and each lattice step after it latticeStep later. In single
-  // precision, four lanes x, y, z and a fourth that carries the voxel's span
-  // (-inf or +inf, no step). A ray parallel to an axis never meets its
-  // planes: it tests no boxes (rare; the packets decide alone, as they may).
-  const bool testBoxes = direction[0] != 0.0 && direction[1] != 0.0 && direction[2] != 0.0;
-  float latticeOrigin[3], latticeStride[3], latticeStep[3];
-  for (int axis = 0; axis < 3; ++axis) {
-    // The layer: resolution - 1 - left going up the axis, left going down.
-    const double layer = direction[axis] > 0.0 ? resolution_[axis] - 1 : 0.0;
-    const double stride = (direction[axis] > 0.0 ? -voxelSize_[axis] : voxelSize_[axis]) * inverse[axis];
-    latticeOrigin[axis] = float((low_[axis] - contentMargin_ - origin[axis]) * inverse[axis] +
-                                layer * voxelSize_[axis] * inverse[axis]);
-    latticeStride[axis] = float(stride);
-    latticeStep[axis] = float(latticeStep_[axis] * inverse[axis]);
-  }
-  const __m128 originLow = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], -kInfinity);
-  const __m128 originHigh = _mm_setr_ps(latticeOrigin[0], latticeOrigin[1], latticeOrigin[2], kInfinity);
-  const __m128 stride4 = _mm_setr_ps(latticeStride[0], latticeStride[1], latticeStride[2], 0.0f);
-  const __m128 step4 = _mm_setr_ps(latticeStep[0], latticeStep[1], latticeStep[2], 0.0f);
-  // The packets' boxes: the same lattice (grid_traversal.h).
-  using Float4 = grid_traversal::PacketRay::Float4;
-  const auto broadcast = [](float x) { return Float4{x, x, x, x}; };
-  Float4 packetStep[3];
-  for (int axis = 0; axis < 3; ++axis) packetStep[axis] = broadcast(testBoxes ? latticeStep[axis] : 0.0f);
-
+  int32_t axisStep[3];
+  VoxelWalk walk(*this, origin, direction, inverse, tEnter, tExit, axisStep);
+  const ContentBoxes contentBoxes(*this, origin, direction, inverse);
   const WatertightRay frame(ray.direction);
   const grid_traversal::PacketRay packetRay(frame, ray);
   grid_traversal::Mailbox<kMailboxSlots> mailbox;
@@ -646,54 +912,10 @@ template <bool AnyHit>
   const uint64_t* const occupied = occupied_.data();
   const VoxelRow* const rows = rows_.data();
 
-  // The walk runs ahead of the tests: it gathers the next few occupied
-  // voxels along the ray, keeps those whose content box the ray crosses and
-  // prefetches their triangles, so that their cache misses overlap instead
-  // of following one another (the triangles are tested in the walk's order
-  // all the same).
-  uint32_t aheadIndex[kWalkAhead + 1];
-  int64_t aheadEnter[kWalkAhead + 1], aheadExit[kWalkAhead + 1];
-  uint32_t aheadLeft[kWalkAhead + 1];  // packed as `left`
-  int64_t fixedVoxelEnter = 0;
+  AheadVoxels ahead;
   bool walking = true;
   while (walking) {
-    int count = 0;
-    for (;;) {
-      // The axis whose boundary comes first (ties: x, then y), by
-      // conditional moves and masks rather than branches; its boundary is
-      // the voxel's exit. (Two compares and selects: half the instructions
-      // of masks from three compares, and the walk is bound by them.)
-      const bool yBeforeZ = ty <= tz;
-      const int64_t exitYZ = yBeforeZ ? ty : tz;
-      const bool xFirst = tx <= exitYZ;
-      const int64_t fixedVoxelExit = xFirst ? tx : exitYZ;
-      const int64_t maskX = -int64_t(xFirst);
-      const int64_t maskY = ~maskX & -int64_t(yBeforeZ);
-      const int64_t maskZ = ~(maskX | maskY);
-      // Recorded always, kept only if occupied: no branch to mispredict.
-      aheadIndex[count] = uint32_t(index);
-      aheadEnter[count] = fixedVoxelEnter;
-      aheadExit[count] = fixedVoxelExit;
-      aheadLeft[count] = left;
-      const uint32_t isOccupied = uint32_t(occupied[uint32_t(index) / 64] >> (uint32_t(index) % 64)) & 1;
-      // The row of an occupied voxel, fetched now: it is read once the walk
-      // has gathered its voxels. (An empty voxel's points at the first row.)
-      __builtin_prefetch(rows + (uint32_t(index) & -isOccupied));
-      count += int(isOccupied);
-      if (fixedVoxelExit >= fixedExit) {
-        walking = false;
-        break;
-      }
-      // By table: GCC turns a select among three into a branch.
-      const unsigned axis = unsigned(!xFirst) << unsigned(!yBeforeZ);  // 0, 1 or 2
-      index += axisStep[axis];
-      tx += deltaX & maskX;
-      ty += deltaY & maskY;
-      tz += deltaZ & maskZ;
-      left -= axisUnit[axis];
-      fixedVoxelEnter = fixedVoxelExit;
-      if (count == kWalkAhead) break;
-    }
+    const int count = walk.gather(occupied, rows, axisStep, ahead, walking);
     // The rows, and the content-box test: the part of the ray in the voxel
     // and before the best hit so far must cross the box.
     uint32_t first[kWalkAhead], end[kWalkAhead];
@@ -701,54 +923,14 @@ template <bool AnyHit>
     grid_traversal::PacketBoxClip clips[kWalkAhead];
     int kept = 0;
     for (int k = 0; k < count; ++k) {
-      const uint32_t voxel = aheadIndex[k];
-      const VoxelRow& row = rows[voxel];
-      const double voxelEnter = tEnter + double(aheadEnter[k]) * unit;
-      const double voxelExit = tEnter + double(aheadExit[k]) * unit;
-      grid_traversal::PacketBoxClip& clip = clips[kept];
-      if (testBoxes) {
-        const uint32_t packed = aheadLeft[k];
-        const __m128i layerLeft = _mm_setr_epi32(int(packed & 1023), int(packed >> 10 & 1023), int(packed >> 20), 0);
-        const __m128 layers = _mm_mul_ps(_mm_cvtepi32_ps(layerLeft), stride4);
-        const __m128 startLow = _mm_add_ps(originLow, layers), startHigh = _mm_add_ps(originHigh, layers);
-        const __m128i zero = _mm_setzero_si128();
-        const __m128i bytes = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(row.low)), zero);
-        const __m128 a = _mm_add_ps(startLow, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpacklo_epi16(bytes, zero)), step4));
-        const __m128 b = _mm_add_ps(startHigh, _mm_mul_ps(_mm_cvtepi32_ps(_mm_unpackhi_epi16(bytes, zero)), step4));
-        // The latest entry and the earliest exit over the axes.
-        __m128 enterAll = _mm_min_ps(a, b), exitAll = _mm_max_ps(a, b);
-        enterAll = _mm_max_ps(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 0, 3, 2)));
-        exitAll = _mm_min_ps(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 0, 3, 2)));
-        enterAll = _mm_max_ss(enterAll, _mm_shuffle_ps(enterAll, enterAll, _MM_SHUFFLE(1, 1, 1, 1)));
-        exitAll = _mm_min_ss(exitAll, _mm_shuffle_ps(exitAll, exitAll, _MM_SHUFFLE(1, 1, 1, 1)));
-        const float lower = std::max(_mm_cvtss_f32(enterAll), float(voxelEnter));
-        const float upper = std::min(_mm_cvtss_f32(exitAll), float(std::min(voxelExit, tExit)));
-        if (!(lower <= upper)) continue;
-        // The packets' boxes lie in the row's: only [lower, upper] counts.
-        alignas(16) float start[4];
-        _mm_store_ps(start, startLow);
-        for (int axis = 0; axis < 3; ++axis) clip.planeLow[axis] = clip.planeHigh[axis] = broadcast(start[axis]);
-        clip.lower = broadcast(lower);
-        clip.upper = broadcast(upper);
-      } else {
-        for (int axis = 0; axis < 3; ++axis) {
-          clip.planeLow[axis] = broadcast(-kInfinity);
-          clip.planeHigh[axis] = broadcast(kInfinity);
-        }
-        clip.lower = broadcast(-kInfinity);
-        clip.upper = broadcast(kInfinity);
-      }
-      for (int axis = 0; axis < 3; ++axis) clip.step[axis] = packetStep[axis];
+      const VoxelRow& row = rows[ahead.index[k]];
+      const double voxelEnter = walk.distance(ahead.enter[k]), voxelExit = walk.distance(ahead.exit[k]);
+      if (!contentBoxes.clip(row, ahead.left[k], voxelEnter, voxelExit, tExit, clips[kept])) continue;
       first[kept] = row.firstPacket;
       end[kept] = row.endPacket;
       enter[kept] = voxelEnter;
       exit[kept] = voxelExit;
-      const char* const boxLine = reinterpret_cast<const char*>(packetBoxes + first[kept] / 4);
-      const char* const lastBox = reinterpret_cast<const char*>(packetBoxes + (end[kept] + 3) / 4) - 1;
-      for (int l = 0; l < kPrefetchBoxLines && boxLine + 64 * l <= lastBox; ++l) __builtin_prefetch(boxLine + 64 * l);
-      const char* const line = reinterpret_cast<const char*>(packets + first[kept]);
-      const char* const last = reinterpret_cast<const char*>(packets + end[kept]) - 1;
-      for (int l = 0; l < kPrefetchLines && line + 64 * l <= last; ++l) __builtin_prefetch(line + 64 * l);
+      prefetchVoxel(packets, packetBoxes, first[kept], end[kept]);
       ++kept;
     }
     for (int k = 0; k < kept; ++k) {
@@ -768,7 +950,7 @@ template <bool AnyHit>
     if constexpr (!AnyHit) {
       if (best.found() && double(best.t) < tExit) {
         tExit = double(best.t);
-        fixedExit = std::min(fixedExit, toFixed(tExit));
+        walk.fixedExit = std::min(walk.fixedExit, walk.toFixed(tExit));
       }
     }
   }

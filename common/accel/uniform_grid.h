@@ -79,6 +79,11 @@ class UniformGrid final : public Accelerator {
   std::array<double, 3> voxelSize() const { return voxelSize_; }
 
  private:
+  // The build's passes, and traversal's steps (uniform_grid.cpp).
+  class Builder;
+  struct VoxelWalk;
+  struct ContentBoxes;
+
   template <bool AnyHit>
   bool traverse(const Ray& ray, Hit& best) const;
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "common/scene/scene_types.h"
+#include "common/scene/store/scene_types.h"
 
 namespace portico {
 

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_tracer.h"
 #include "common/transport/film.h"

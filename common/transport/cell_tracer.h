@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/scene/cell_geometry.h"
+#include "common/scene/store/cell_geometry.h"
 
 namespace portico {
 

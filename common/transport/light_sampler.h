@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/scene/scene_store.h"
-#include "common/scene/scene_types.h"
+#include "common/scene/store/scene_store.h"
+#include "common/scene/store/scene_types.h"
 
 namespace portico {
 

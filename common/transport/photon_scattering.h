@@ -12,7 +12,7 @@
 
 #include "common/mesh_view.h"
 #include "common/rng.h"
-#include "common/scene/scene_types.h"
+#include "common/scene/store/scene_types.h"
 #include "common/transport/photon_map.h"
 #include "common/transport/ray_state.h"
 #include "common/transport/sampling.h"

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/scene/scene_types.h"
+#include "common/scene/store/scene_types.h"
 
 namespace portico {
 

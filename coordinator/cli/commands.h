@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "common/scene/building_importer.h"
+#include "common/scene/import/building_importer.h"
 
 namespace portico::cli {
 

@@ -2,7 +2,7 @@
 
 #include <memory>
 
-#include "common/scene/cell_geometry.h"
+#include "common/scene/store/cell_geometry.h"
 
 namespace portico::cli {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 
 namespace portico::cli {
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "common/scene/building_importer.h"
+#include "common/scene/import/building_importer.h"
 #include "coordinator/cli/command_table.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/scene_export.h"

@@ -8,12 +8,12 @@
 #include <iostream>
 #include <optional>
 
-#include "common/scene/building_generator.h"
-#include "common/scene/building_importer.h"
-#include "common/scene/demo_generator.h"
-#include "common/scene/floor_levels.h"
-#include "common/scene/scene_store.h"
-#include "common/scene/scene_validation.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/import/building_importer.h"
+#include "common/scene/generator/demo_generator.h"
+#include "common/scene/store/floor_levels.h"
+#include "common/scene/store/scene_store.h"
+#include "common/scene/store/scene_validation.h"
 #include "coordinator/cli/compressed_size.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/ifc_conversion.h"

@@ -8,8 +8,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "common/scene/cell_geometry.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/store/scene_store.h"
 
 namespace portico::cli {
 

@@ -10,8 +10,8 @@
 #include <stdexcept>
 
 #include "common/rng.h"
-#include "common/scene/floor_levels.h"
-#include "common/scene/portal_geometry.h"
+#include "common/scene/store/floor_levels.h"
+#include "common/scene/store/portal_geometry.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/plan_walls.h"
 

@@ -1,5 +1,5 @@
 // `portico scene plan`: top-down floor plans of a scene store, so people can
-// see the layout. One panel per floor (floors as in common/scene/
+// see the layout. One panel per floor (floors as in common/scene/store/
 // floor_levels.h), panels in a grid; x to the right, z downwards (the view
 // from above, +y towards the viewer).
 //
@@ -15,7 +15,7 @@
 //  * Lights: small yellow squares at their centres.
 #pragma once
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "coordinator/cli/png_canvas.h"
 
 namespace portico::cli {

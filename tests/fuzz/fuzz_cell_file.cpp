@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/scene/cell_geometry.h"
+#include "common/scene/store/cell_geometry.h"
 
 using namespace portico;
 

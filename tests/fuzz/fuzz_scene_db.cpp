@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 
 using namespace portico;
 namespace fs = std::filesystem;

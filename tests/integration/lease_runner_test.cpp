@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "common/scene/scene_store.h"
+#include "common/scene/store/scene_store.h"
 #include "common/transport/photon_record.h"
 #include "tests/integration/service_harness.h"
 #include "worker/lease_runner.h"

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/scene/furnished_hall.h"
+#include "common/scene/generator/furnished_hall.h"
 
 namespace portico::cli {
 

@@ -31,7 +31,7 @@
 #include "common/accel/accelerator.h"
 #include "common/accel/embree_accelerator.h"
 #include "common/rng.h"
-#include "common/scene/furnished_hall.h"
+#include "common/scene/generator/furnished_hall.h"
 #include "coordinator/cli/bench/accel_measure.h"
 #include "coordinator/cli/bench/bench_plot.h"
 #include "coordinator/cli/bench/csv_field.h"

@@ -21,10 +21,10 @@
 #include <vector>
 
 #include "common/accel/cost_model.h"
-#include "common/scene/building_presets.h"
-#include "common/scene/building_generator.h"
-#include "common/scene/cell_geometry.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/generator/building_presets.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/store/scene_store.h"
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/bench/accel_measure.h"
 #include "coordinator/cli/bench/bench_calibrate.h"

@@ -37,9 +37,9 @@
 #include <string>
 #include <vector>
 
-#include "common/scene/building_generator.h"
-#include "common/scene/building_presets.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/generator/building_presets.h"
+#include "common/scene/store/scene_store.h"
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/bench/incore_photon_tracer.h"
 #include "coordinator/cli/bench/accel_measure.h"

@@ -15,7 +15,7 @@
 
 #include "common/accel/embree_accelerator.h"  // FlushDenormalsScope
 #include "common/accel/embree_device.h"
-#include "common/scene/cell_geometry.h"
+#include "common/scene/store/cell_geometry.h"
 #include "common/transport/photon_map.h"  // StoredPhoton: the record a deposit appends
 #include "common/transport/photon_scattering.h"
 #include "coordinator/cli/bench/accel_measure.h"  // Clock, secondsSince

@@ -7,10 +7,10 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "common/scene/building_generator.h"
-#include "common/scene/building_importer.h"
-#include "common/scene/building_presets.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/generator/building_generator.h"
+#include "common/scene/import/building_importer.h"
+#include "common/scene/generator/building_presets.h"
+#include "common/scene/store/scene_store.h"
 
 namespace portico::cli::paper {
 

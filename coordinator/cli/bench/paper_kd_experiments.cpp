@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "common/accel/accelerator.h"
-#include "common/scene/cell_geometry.h"
-#include "common/scene/scene_store.h"
+#include "common/scene/store/cell_geometry.h"
+#include "common/scene/store/scene_store.h"
 #include "coordinator/cli/bench/paper_experiments.h"
 #include "coordinator/cli/bench/paper_output.h"
 

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "common/scene/building_presets.h"
+#include "common/scene/generator/building_presets.h"
 
 namespace portico::cli::paper {
 

@@ -1,0 +1,300 @@
+// The building importer: reads a building.json or mesh files into an
+// ImportedScene (every check done here, before the store exists), then
+// writes it with the given cells or as voxel cells.
+#include "common/scene/import/building_importer.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+
+#include "common/scene/import/building_json.h"
+#include "common/scene/import/store_scene_reader.h"
+#include "common/scene/import/imported_scene.h"
+#include "common/scene/import/mesh_loader.h"
+#include "common/scene/import/quad_light.h"
+#include "common/scene/store/scene_store.h"
+#include "common/scene/import/voxel_cells.h"
+
+namespace portico {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float kCellPadding = 1e-3f;        // 1 mm around the scene for a cell we make
+constexpr float kCellTolerance = 1e-3f;      // triangles may stick out of their cell by this much of the scene size
+const char* const kSingleCellName = "building";
+
+std::string formatVec(const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
+
+bool isBuildingJson(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".json";
+}
+
+Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
+
+// Materials, one per distinct (albedo, emission); the first name wins.
+class MaterialTable {
+ public:
+  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out) {
+    const std::array<float, 6> key{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
+    auto [it, inserted] = ids_.emplace(key, static_cast<uint32_t>(out.size()));
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false});
+    return it->second;
+  }
+
+ private:
+  std::map<std::array<float, 6>, uint32_t> ids_;
+};
+
+void appendPart(const MeshFilePart& part, ImportedObject& object) {
+  const auto offset = static_cast<uint32_t>(object.positions.size() / 3);
+  object.positions.insert(object.positions.end(), part.positions.begin(), part.positions.end());
+  for (uint32_t index : part.indices) object.indices.push_back(offset + index);
+}
+
+void extendBounds(Bounds3& bounds, const ImportedObject& object) {
+  for (size_t v = 0; v < object.positions.size() / 3; ++v) bounds.extend(object.vertex(static_cast<uint32_t>(v)));
+}
+
+// The smallest of `cells` containing p (cells may touch), if any.
+std::optional<uint32_t> smallestCellContaining(const std::vector<ImportedCell>& cells, const Vec3& p) {
+  std::optional<uint32_t> best;
+  float bestVolume = kInfinity;
+  for (uint32_t c = 0; c < cells.size(); ++c) {
+    if (!cells[c].bounds.contains(p)) continue;
+    const Vec3 d = cells[c].bounds.diagonal();
+    if (d.x * d.y * d.z < bestVolume) {
+      bestVolume = d.x * d.y * d.z;
+      best = c;
+    }
+  }
+  return best;
+}
+
+const BuildingCamera& chooseCamera(const BuildingDescription& building, const std::string& name) {
+  if (name.empty()) return building.cameras.front();
+  std::string known;
+  for (const BuildingCamera& camera : building.cameras) {
+    if (camera.name == name) return camera;
+    known += (known.empty() ? "" : ", ") + camera.name;
+  }
+  throw std::runtime_error(fmt::format("{}: no camera named '{}' (known: {})", building.path, name, known));
+}
+
+// Every triangle of every object within its cell's box (grown by the tolerance).
+void checkObjectsInCells(const ImportedScene& scene, const std::string& path) {
+  const float tolerance = kCellTolerance * std::max(1.0f, maxComponent(scene.bounds.diagonal()));
+  for (const ImportedObject& object : scene.objects) {
+    const ImportedCell& cell = scene.cells[object.cell];
+    const Bounds3 grown(cell.bounds.lo - Vec3(tolerance), cell.bounds.hi + Vec3(tolerance));
+    for (uint32_t index : object.indices) {
+      const Vec3 p = object.vertex(index);
+      if (!grown.contains(p))
+        throw std::runtime_error(fmt::format("{}: {}: vertex {} lies outside the aabb of its cell '{}' ({} - {})", path,
+                                             object.label, formatVec(p), cell.name, formatVec(cell.bounds.lo),
+                                             formatVec(cell.bounds.hi)));
+    }
+  }
+}
+
+ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options) {
+  const BuildingDescription building = readBuildingJson(path);
+  auto fail = [&](const std::string& problem) {
+    throw std::runtime_error(fmt::format("{}: {}", path, problem));
+  };
+  const BuildingCamera& chosen = chooseCamera(building, options.camera);
+  const bool givenCells = building.cells.has_value();
+  const bool checkCells = givenCells && options.gridResolution == 0;
+
+  ImportedScene scene;
+  std::map<std::string, uint32_t> cellIds;
+  if (givenCells) {
+    for (const BuildingCell& cell : *building.cells) {
+      cellIds[cell.name] = static_cast<uint32_t>(scene.cells.size());
+      scene.cells.push_back(ImportedCell{cell.name, cell.bounds});
+    }
+  } else {
+    scene.cells.push_back(ImportedCell{kSingleCellName, Bounds3()});   // bounds once the meshes are read
+  }
+  for (const BuildingPortal& portal : building.portals)
+    scene.portals.push_back(ImportedPortal{cellIds.at(portal.cellA), cellIds.at(portal.cellB), portal.polygon});
+
+  MaterialTable materials;
+  for (const BuildingObject& entry : building.objects) {
+    LoadedMeshFile mesh;
+    try {
+      mesh = loadMeshFile(entry.meshPath);
+    } catch (const std::runtime_error& e) {
+      fail(fmt::format("{}: {}", entry.label(), e.what()));
+    }
+    scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
+    ImportedObject object;
+    object.label = entry.label();
+    object.cell = givenCells ? cellIds.at(entry.cell) : 0;
+    for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
+    object.material = materials.add(entry.name, entry.albedo, entry.emission, scene.materials);
+    if (maxComponent(entry.emission) > 0.0f) {
+      std::string problem;
+      const std::optional<Parallelogram> shape = parallelogramFromTriangles(object.positions, object.indices, problem);
+      if (!shape)
+        fail(fmt::format(
+            "emissive object '{}' (objects[{}]) is not a parallelogram ({}); only quad lights are supported",
+            entry.name, entry.index, problem));
+      scene.lights.push_back(ImportedLight{entry.label(), object.cell, *shape, entry.emission});
+    }
+    scene.objects.push_back(std::move(object));
+    if (options.onMeshRead) options.onMeshRead(scene.objects.size(), building.objects.size());
+  }
+
+  for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
+  for (const BuildingCamera& camera : building.cameras) scene.bounds.extend(camera.camera.origin);
+  for (const ImportedCell& cell : scene.cells)
+    if (!cell.bounds.empty()) scene.bounds.extend(cell.bounds);
+  if (!givenCells) scene.cells[0].bounds = padded(scene.bounds);
+
+  if (checkCells) checkObjectsInCells(scene, path);
+  // Every camera is checked, so that any of them can be chosen later.
+  for (const BuildingCamera& camera : building.cameras) {
+    const std::optional<uint32_t> cell = options.gridResolution > 0
+                                             ? std::optional<uint32_t>(0)
+                                             : smallestCellContaining(scene.cells, camera.camera.origin);
+    if (!cell)
+      fail(fmt::format("camera '{}': origin {} lies outside every cell; move it into a cell or add a cell around it",
+                       camera.name, formatVec(camera.camera.origin)));
+    if (&camera == &chosen) {
+      scene.camera = camera.camera;
+      scene.camera.cell = *cell;
+    }
+  }
+  return scene;
+}
+
+ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
+  ImportedScene scene;
+  MaterialTable materials;
+  for (const std::string& path : paths) {
+    const LoadedMeshFile mesh = loadMeshFile(path);
+    scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
+    for (const MeshFilePart& part : mesh.parts) {
+      const MeshFileMaterial& source = mesh.materials[part.material];
+      const std::string label = fmt::format("mesh file '{}': part '{}'", path, part.name);
+      if (!isFinite(source.diffuse) || !isFinite(source.emissive))
+        throw std::runtime_error(fmt::format("{}: material '{}' has a colour that is not finite", label, source.name));
+      const Vec3 albedo = min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
+      const Vec3 emission = max(source.emissive, Vec3(0.0f));
+      ImportedObject object;
+      object.label = label;
+      appendPart(part, object);
+      object.material = materials.add(source.name, albedo, emission, scene.materials);
+      if (maxComponent(emission) > 0.0f) {
+        std::string problem;
+        const std::optional<Parallelogram> shape =
+            parallelogramFromTriangles(object.positions, object.indices, problem);
+        if (!shape)
+          throw std::runtime_error(fmt::format(
+              "mesh file '{}': emissive part '{}' is not a parallelogram ({}); only quad lights are supported", path,
+              part.name, problem));
+        scene.lights.push_back(ImportedLight{label, 0, *shape, emission});
+      }
+      scene.objects.push_back(std::move(object));
+    }
+  }
+  for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
+  scene.cells.push_back(ImportedCell{kSingleCellName, padded(scene.bounds)});
+  // A default view: from the middle of everything, looking down -z.
+  scene.camera.origin = scene.bounds.center();
+  scene.camera.target = scene.camera.origin - Vec3(0.0f, 0.0f, 1.0f);
+  scene.camera.up = Vec3(0.0f, 1.0f, 0.0f);
+  scene.camera.fovYDegrees = 60.0f;
+  scene.camera.width = 512;
+  scene.camera.height = 384;
+  scene.camera.cell = 0;
+  return scene;
+}
+
+void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
+  for (const ImportedPortal& portal : scene.portals) writer.addPortal(portal.cellA, portal.cellB, portal.polygon);
+  for (const ImportedLight& light : scene.lights) {
+    AreaLight area;
+    area.cell = light.cell;
+    area.corner = light.shape.corner;
+    area.edge1 = light.shape.edge1;
+    area.edge2 = light.shape.edge2;
+    area.radiance = light.radiance;
+    writer.addLight(area);
+  }
+  writer.setCamera(scene.camera);
+  // One output cell in memory at a time.
+  for (uint32_t id = 0; id < scene.cells.size(); ++id) {
+    CellContent cell;
+    cell.id = id;
+    cell.name = scene.cells[id].name;
+    cell.bounds = scene.cells[id].bounds;
+    for (const ImportedObject& object : scene.objects) {
+      if (object.cell != id) continue;
+      const auto offset = static_cast<uint32_t>(cell.positions.size() / 3);
+      cell.positions.insert(cell.positions.end(), object.positions.begin(), object.positions.end());
+      for (uint32_t index : object.indices) cell.indices.push_back(offset + index);
+      cell.materials.insert(cell.materials.end(), object.triangleCount(), object.material);
+    }
+    writer.writeCell(cell);
+  }
+}
+
+}  // namespace
+
+ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,
+                             const ImportOptions& options) {
+  if (inputs.empty()) throw std::runtime_error("scene import: no input (a building.json, or mesh files)");
+  if (options.gridResolution > kMaxImportGridResolution)
+    throw std::runtime_error(fmt::format("scene import: --grid {} is above the maximum of {}", options.gridResolution,
+                                         kMaxImportGridResolution));
+  const bool building = isBuildingJson(inputs.front());
+  for (const std::string& input : inputs)
+    if (isBuildingJson(input) && inputs.size() > 1)
+      throw std::runtime_error(fmt::format(
+          "scene import: {} is a building.json; it must be the only input (it names its own meshes)", input));
+  if (!building && !options.camera.empty())
+    throw std::runtime_error("scene import: a camera name needs a building.json with \"cameras\"");
+
+  // A scene store as input: re-cut a generated or imported building (--grid).
+  const bool store = inputs.size() == 1 && isSceneStore(inputs.front());
+  if (store && options.gridResolution == 0)
+    throw std::runtime_error(fmt::format("scene import: {} is already a scene store; give --grid RG to re-cut it "
+                                         "into uniform cells", inputs.front()));
+  const ImportedScene scene = store      ? sceneFromStore(inputs.front())
+                              : building ? sceneFromBuildingJson(inputs.front(), options)
+                                         : sceneFromMeshFiles(inputs);
+
+  nlohmann::json sources = nlohmann::json::array();
+  for (const std::string& input : inputs) sources.push_back(fs::absolute(input).lexically_normal().string());
+  SceneStoreWriter writer(storeDirectory);
+  writer.setMeta("generator", "import");
+  writer.setMeta("source", sources.dump());
+  writer.setMeta("degenerate_triangles_dropped", std::to_string(scene.degenerateTrianglesDropped));
+  writer.setMeta("cells",
+                 options.gridResolution > 0
+                     ? fmt::format("grid {}^3", options.gridResolution)
+                     : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
+  for (const ImportedMaterial& material : scene.materials)
+    writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+  if (options.gridResolution > 0)
+    writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
+  else
+    writeGivenCells(scene, writer);
+  writer.commit();
+  return ImportSummary{scene.triangleCount(), scene.degenerateTrianglesDropped};
+}
+
+}  // namespace portico

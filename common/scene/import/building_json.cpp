@@ -1,0 +1,387 @@
+// building.json -> BuildingDescription. Every key is checked: known keys
+// strictly, descriptive ones (the reference scenes carry descriptions,
+// derived camera vectors, triangle counts) and '_'-prefixed ones are
+// ignored, any other is refused by name. Every error is one line that
+// starts with the file and names what is wrong.
+#include "common/scene/import/building_json.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+#include "common/scene/store/portal_geometry.h"
+
+namespace portico {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// JSON has no NaN or infinity, but Python's json module (and others) write
+// NaN, Infinity and -Infinity. They are turned into marker strings before
+// parsing, so the error can name the field instead of a character offset.
+constexpr const char* kNonFiniteMarker = "\x01non-finite:";
+
+std::string markNonFiniteLiterals(const std::string& text) {
+  static const char* const kLiterals[] = {"-Infinity", "Infinity", "NaN", "-inf", "inf", "-nan", "nan"};
+  std::string out;
+  out.reserve(text.size());
+  bool inString = false;
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (inString) {
+      out += c;
+      if (c == '\\' && i + 1 < text.size()) {
+        out += text[++i];
+      } else if (c == '"') {
+        inString = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      inString = true;
+      out += c;
+      continue;
+    }
+    bool replaced = false;
+    for (const char* literal : kLiterals) {
+      const std::string_view word(literal);
+      if (text.compare(i, word.size(), word) != 0) continue;
+      const size_t end = i + word.size();
+      if (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '_')) continue;
+      out += fmt::format("\"\\u0001non-finite:{}\"", word);   // parses to kNonFiniteMarker + word
+      i = end - 1;
+      replaced = true;
+      break;
+    }
+    if (!replaced) out += c;
+  }
+  return out;
+}
+
+// Keys that describe rather than define (the reference scenes carry them):
+// accepted anywhere and ignored, like every key starting with '_'.
+constexpr std::string_view kDescriptiveKeys[] = {
+    "description", "note", "notes", "comment", "triangles", "area_m2", "camera_derived", "camera_model",
+    "coordinate_system", "emission_model", "material_model", "geometry", "pixel_values", "room_aabb"};
+
+bool isDescriptiveKey(const std::string& key) {
+  return key.rfind('_', 0) == 0 ||
+         std::find(std::begin(kDescriptiveKeys), std::end(kDescriptiveKeys), key) != std::end(kDescriptiveKeys);
+}
+
+class Reader {
+ public:
+  explicit Reader(std::string path) : path_(std::move(path)) {}
+
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw std::runtime_error(fmt::format("{}: {}", path_, problem));
+  }
+
+  float number(const json& value, const std::string& what) const {
+    if (value.is_string()) {
+      const std::string text = value.get<std::string>();
+      if (text.rfind(kNonFiniteMarker, 0) == 0)
+        fail(fmt::format("{} is {}, not a finite number", what, text.substr(std::string(kNonFiniteMarker).size())));
+    }
+    if (!value.is_number()) fail(fmt::format("{} must be a number, not {}", what, value.type_name()));
+    const double number = value.get<double>();
+    if (!std::isfinite(number) || !std::isfinite(static_cast<float>(number)))
+      fail(fmt::format("{} = {} is not a finite number", what, number));
+    return static_cast<float>(number);
+  }
+
+  Vec3 vec3(const json& value, const std::string& what) const {
+    if (!value.is_array() || value.size() != 3) fail(fmt::format("{} must be an array of 3 numbers", what));
+    return Vec3(number(value[0], what + "[0]"), number(value[1], what + "[1]"), number(value[2], what + "[2]"));
+  }
+
+  std::string string(const json& value, const std::string& what) const {
+    if (!value.is_string()) fail(fmt::format("{} must be a string, not {}", what, value.type_name()));
+    return value.get<std::string>();
+  }
+
+  uint32_t positiveInteger(const json& value, const std::string& what, uint32_t maximum) const {
+    const float number = this->number(value, what);
+    if (number != std::floor(number) || number < 1 || number > maximum)
+      fail(fmt::format("{} = {} must be a whole number in [1, {}]", what, number, maximum));
+    return static_cast<uint32_t>(number);
+  }
+
+  // Refuses a key of `object` that is neither in `known` nor descriptive
+  // (see kDescriptiveKeys): a misspelt "emision" would otherwise silently
+  // turn a light off.
+  void requireKnownKeys(const json& object, const std::string& what,
+                        std::initializer_list<std::string_view> known) const {
+    for (const auto& [key, value] : object.items()) {
+      if (std::find(known.begin(), known.end(), key) != known.end() || isDescriptiveKey(key)) continue;
+      std::string names;
+      for (std::string_view name : known) names += fmt::format("{}{}", names.empty() ? "" : ", ", name);
+      fail(fmt::format("{}: unknown key \"{}\" (known: {}; keys starting with '_' are ignored)", what, key, names));
+    }
+  }
+
+  const json* member(const json& object, const char* key) const {
+    auto it = object.find(key);
+    return it == object.end() ? nullptr : &*it;
+  }
+  const json& required(const json& object, const char* key, const std::string& what) const {
+    const json* value = member(object, key);
+    if (value == nullptr) fail(fmt::format("{} has no \"{}\"", what, key));
+    return *value;
+  }
+
+ private:
+  std::string path_;
+};
+
+json parseFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot be opened", path));
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return json::parse(markNonFiniteLiterals(text.str()));
+  } catch (const json::parse_error& e) {
+    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path, e.what()));
+  }
+}
+
+void readUnits(const Reader& reader, const json& root) {
+  const json* units = reader.member(root, "units");
+  if (units == nullptr) return;
+  const std::string value = reader.string(*units, "\"units\"");
+  static const std::set<std::string> kMetres{"m", "metre", "metres", "meter", "meters"};
+  if (!kMetres.count(value))
+    reader.fail(fmt::format("\"units\" is '{}'; portico reads metres only (scale the meshes to metres)", value));
+}
+
+std::vector<BuildingCell> readCells(const Reader& reader, const json& list) {
+  if (!list.is_array()) reader.fail("\"cells\" must be an array");
+  std::vector<BuildingCell> cells;
+  std::set<std::string> names;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const json& entry = list[i];
+    std::string what = fmt::format("cells[{}]", i);
+    if (!entry.is_object()) reader.fail(what + " must be an object");
+    BuildingCell cell;
+    cell.name = reader.string(reader.required(entry, "name", what), what + ".name");
+    if (cell.name.empty()) reader.fail(what + ".name is empty");
+    what = fmt::format("cell '{}'", cell.name);
+    if (!names.insert(cell.name).second) reader.fail(fmt::format("{} is defined twice", what));
+    reader.requireKnownKeys(entry, what, {"name", "aabb"});
+    const json& aabb = reader.required(entry, "aabb", what);
+    if (!aabb.is_object()) reader.fail(what + ": \"aabb\" must be an object with \"min\" and \"max\"");
+    reader.requireKnownKeys(aabb, what + " aabb", {"min", "max"});
+    cell.bounds.lo = reader.vec3(reader.required(aabb, "min", what + " aabb"), what + " aabb.min");
+    cell.bounds.hi = reader.vec3(reader.required(aabb, "max", what + " aabb"), what + " aabb.max");
+    for (int axis = 0; axis < 3; ++axis)
+      if (!(cell.bounds.lo[axis] < cell.bounds.hi[axis]))
+        reader.fail(fmt::format("{}: aabb.min[{}] = {} is not below aabb.max[{}] = {}", what, axis,
+                                cell.bounds.lo[axis], axis, cell.bounds.hi[axis]));
+    cells.push_back(std::move(cell));
+  }
+  if (cells.empty()) reader.fail("\"cells\" is empty (leave it out for one cell around the whole scene)");
+  return cells;
+}
+
+const BuildingCell* findCell(const std::optional<std::vector<BuildingCell>>& cells, const std::string& name) {
+  if (!cells) return nullptr;
+  for (const BuildingCell& cell : *cells)
+    if (cell.name == name) return &cell;
+  return nullptr;
+}
+
+std::string knownCells(const std::optional<std::vector<BuildingCell>>& cells) {
+  if (!cells) return "the file has no \"cells\"";
+  std::string names;
+  for (const BuildingCell& cell : *cells) names += (names.empty() ? "" : ", ") + cell.name;
+  return "known: " + names;
+}
+
+std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, const fs::path& baseDirectory,
+                                        const std::optional<std::vector<BuildingCell>>& cells) {
+  const json& list = reader.required(root, "objects", "the file");
+  if (!list.is_array() || list.empty()) reader.fail("\"objects\" must be a non-empty array");
+  std::vector<BuildingObject> objects;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const json& entry = list[i];
+    BuildingObject object;
+    object.index = i;
+    std::string what = fmt::format("objects[{}]", i);
+    if (!entry.is_object()) reader.fail(what + " must be an object");
+    const json* obj = reader.member(entry, "obj");
+    const json* mesh = reader.member(entry, "mesh");
+    if (obj && mesh) reader.fail(what + " has both \"obj\" and \"mesh\"; give one mesh file");
+    if (!obj && !mesh) reader.fail(what + " has no mesh file (\"obj\" or \"mesh\")");
+    const std::string file = reader.string(obj ? *obj : *mesh, what + (obj ? ".obj" : ".mesh"));
+    if (file.empty()) reader.fail(what + ": the mesh file name is empty");
+    const fs::path meshPath(file);
+    object.meshPath = (meshPath.is_absolute() ? meshPath : baseDirectory / meshPath).lexically_normal().string();
+    if (const json* name = reader.member(entry, "name"))
+      object.name = reader.string(*name, what + ".name");
+    if (object.name.empty()) object.name = meshPath.stem().string();
+    what = object.label();
+    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission"});
+
+    if (const json* cell = reader.member(entry, "cell")) {
+      object.cell = reader.string(*cell, what + ".cell");
+      if (!findCell(cells, object.cell))
+        reader.fail(fmt::format("{}: unknown cell '{}' ({})", what, object.cell, knownCells(cells)));
+    } else if (cells) {
+      reader.fail(fmt::format("{} has no \"cell\" (every object needs one when \"cells\" is given)", what));
+    }
+
+    object.albedo = reader.vec3(reader.required(entry, "albedo", what), what + " albedo");
+    if (std::min({object.albedo.x, object.albedo.y, object.albedo.z}) < 0.0f || maxComponent(object.albedo) > 1.0f)
+      reader.fail(fmt::format("{}: albedo [{}, {}, {}] must lie within [0, 1] (it is a reflectance)", what,
+                              object.albedo.x, object.albedo.y, object.albedo.z));
+    const json* emission = reader.member(entry, "emission");
+    if (emission && !emission->is_null()) {
+      object.emission = reader.vec3(*emission, what + " emission");
+      if (std::min({object.emission.x, object.emission.y, object.emission.z}) < 0.0f)
+        reader.fail(fmt::format("{}: emission [{}, {}, {}] must not be negative", what, object.emission.x,
+                                object.emission.y, object.emission.z));
+    }
+    objects.push_back(std::move(object));
+  }
+  return objects;
+}
+
+std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
+                                        const std::optional<std::vector<BuildingCell>>& cells) {
+  if (!list.is_array()) reader.fail("\"portals\" must be an array");
+  if (!list.empty() && !cells) reader.fail("\"portals\" needs \"cells\" to join");
+  std::vector<BuildingPortal> portals;
+  // Where each (pair of cells, polygon) was first given, and portals per cell.
+  std::map<std::tuple<std::string, std::string, std::vector<float>>, size_t> firstGiven;
+  std::map<std::string, uint32_t> perCell;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const json& entry = list[i];
+    const std::string what = fmt::format("portals[{}]", i);
+    if (!entry.is_object()) reader.fail(what + " must be an object");
+    BuildingPortal portal;
+    portal.index = i;
+    reader.requireKnownKeys(entry, what, {"between", "polygon"});
+    const json& between = reader.required(entry, "between", what);
+    if (!between.is_array() || between.size() != 2)
+      reader.fail(what + ": \"between\" must be an array of two cell names");
+    portal.cellA = reader.string(between[0], what + ".between[0]");
+    portal.cellB = reader.string(between[1], what + ".between[1]");
+    for (const std::string& name : {portal.cellA, portal.cellB})
+      if (!findCell(cells, name)) reader.fail(fmt::format("{}: unknown cell '{}' ({})", what, name, knownCells(cells)));
+    if (portal.cellA == portal.cellB) reader.fail(fmt::format("{} joins cell '{}' to itself", what, portal.cellA));
+    const std::string label = fmt::format("{} ({} - {})", what, portal.cellA, portal.cellB);
+    const json& polygon = reader.required(entry, "polygon", label);
+    if (!polygon.is_array()) reader.fail(label + ": \"polygon\" must be an array of [x, y, z] points");
+    for (size_t p = 0; p < polygon.size(); ++p)
+      portal.polygon.push_back(reader.vec3(polygon[p], fmt::format("{} polygon[{}]", label, p)));
+    if (std::string problem = portalShapeProblem(portal.polygon); !problem.empty())
+      reader.fail(fmt::format("{}: polygon {}", label, problem));
+    // A portal is where its two cells meet: it must lie on a face of both boxes.
+    for (const std::string& name : {portal.cellA, portal.cellB})
+      if (std::string problem = portalBoundaryProblem(findCell(cells, name)->bounds, portal.polygon); !problem.empty())
+        reader.fail(fmt::format("{}: polygon is not on the boundary of cell '{}': {}", label, name, problem));
+    std::vector<float> corners;
+    for (const Vec3& p : portal.polygon) corners.insert(corners.end(), {p.x, p.y, p.z});
+    const auto [first, fresh] = firstGiven.emplace(
+        std::make_tuple(std::min(portal.cellA, portal.cellB), std::max(portal.cellA, portal.cellB), corners), i);
+    if (!fresh) reader.fail(fmt::format("{}: duplicates portals[{}]", label, first->second));
+    for (const std::string& name : {portal.cellA, portal.cellB})
+      if (++perCell[name] > kMaxPortalsPerCell)
+        reader.fail(fmt::format("{}: cell '{}' has more than {} portals", label, name, kMaxPortalsPerCell));
+    portals.push_back(std::move(portal));
+  }
+  return portals;
+}
+
+BuildingCamera readCamera(const Reader& reader, const json& entry, const std::string& what) {
+  if (!entry.is_object()) reader.fail(what + " must be an object");
+  reader.requireKnownKeys(entry, what, {"name", "origin", "target", "up", "fov_y_deg", "width", "height"});
+  BuildingCamera result;
+  Camera& camera = result.camera;
+  camera.origin = reader.vec3(reader.required(entry, "origin", what), what + ".origin");
+  camera.target = reader.vec3(reader.required(entry, "target", what), what + ".target");
+  if (const json* up = reader.member(entry, "up")) camera.up = reader.vec3(*up, what + ".up");
+  camera.fovYDegrees = 60.0f;
+  if (const json* fov = reader.member(entry, "fov_y_deg"))
+    camera.fovYDegrees = reader.number(*fov, what + ".fov_y_deg");
+  camera.width = 512;
+  camera.height = 384;
+  if (const json* width = reader.member(entry, "width"))
+    camera.width = reader.positiveInteger(*width, what + ".width", 65536);
+  if (const json* height = reader.member(entry, "height"))
+    camera.height = reader.positiveInteger(*height, what + ".height", 65536);
+  if (!(camera.fovYDegrees > 0.0f && camera.fovYDegrees < 180.0f))
+    reader.fail(fmt::format("{}: fov_y_deg = {} must lie in (0, 180) (the full vertical field of view)", what,
+                            camera.fovYDegrees));
+  if (camera.origin == camera.target) reader.fail(what + ": origin and target are the same point");
+  if (length(cross(camera.target - camera.origin, camera.up)) == 0.0f)
+    reader.fail(what + ": up is parallel to the viewing direction (or zero)");
+  return result;
+}
+
+std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) {
+  const json* single = reader.member(root, "camera");
+  const json* list = reader.member(root, "cameras");
+  if (single && list) reader.fail("has both \"camera\" and \"cameras\"; give one of them");
+  std::vector<BuildingCamera> cameras;
+  if (single) {
+    cameras.push_back(readCamera(reader, *single, "camera"));
+    cameras.back().name = "camera";
+  } else if (list) {
+    if (!list->is_array() || list->empty()) reader.fail("\"cameras\" must be a non-empty array");
+    std::set<std::string> names;
+    for (size_t i = 0; i < list->size(); ++i) {
+      const std::string what = fmt::format("cameras[{}]", i);
+      BuildingCamera camera = readCamera(reader, (*list)[i], what);
+      camera.name = std::to_string(i);
+      if (const json* name = reader.member((*list)[i], "name")) camera.name = reader.string(*name, what + ".name");
+      if (!names.insert(camera.name).second)
+        reader.fail(fmt::format("{}: camera name '{}' is used twice", what, camera.name));
+      cameras.push_back(std::move(camera));
+    }
+  } else {
+    reader.fail("has no \"camera\" (origin, target, up, fov_y_deg, width, height)");
+  }
+  return cameras;
+}
+
+}  // namespace
+
+std::string BuildingObject::label() const { return fmt::format("objects[{}] ('{}')", index, name); }
+
+BuildingDescription readBuildingJson(const std::string& path) {
+  const json root = parseFile(path);
+  const Reader reader(path);
+  if (!root.is_object()) reader.fail("the top level must be a JSON object");
+  reader.requireKnownKeys(root, "top level", {"name", "units", "objects", "cells", "portals", "camera", "cameras"});
+  BuildingDescription building;
+  building.path = path;
+  building.name = fs::path(path).stem().string();
+  if (const json* name = reader.member(root, "name")) building.name = reader.string(*name, "\"name\"");
+  readUnits(reader, root);
+  if (const json* cells = reader.member(root, "cells")) building.cells = readCells(reader, *cells);
+  building.objects = readObjects(reader, root, fs::path(path).parent_path(), building.cells);
+  if (const json* portals = reader.member(root, "portals"))
+    building.portals = readPortals(reader, *portals, building.cells);
+  building.cameras = readCameras(reader, root);
+  return building;
+}
+
+}  // namespace portico

@@ -1,0 +1,72 @@
+// What the building importer has read and checked, before any of it is
+// written: the input meshes (held in memory), materials, lights, the given
+// cells and portals, the camera. Written either as its own cells
+// (building_importer.cpp) or cut into voxel cells (voxel_cells.h).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/math.h"
+#include "common/scene/import/quad_light.h"
+#include "common/scene/store/scene_types.h"
+
+namespace portico {
+
+struct ImportedMaterial {
+  std::string name;
+  Vec3 albedo;
+  Vec3 emission;
+  bool hiddenFromCamera = false;   // kept when a scene store is re-cut
+};
+
+// One object of a building.json, or one part of a mesh file.
+struct ImportedObject {
+  std::string label;                // how messages name it
+  uint32_t cell = 0;                // index into ImportedScene::cells
+  uint32_t material = 0;            // index into ImportedScene::materials
+  std::vector<float> positions;     // xyz per vertex
+  std::vector<uint32_t> indices;    // 3 per triangle, front = cross(v1 - v0, v2 - v0)
+  size_t triangleCount() const { return indices.size() / 3; }
+  Vec3 vertex(uint32_t i) const {
+    const float* p = &positions[3 * size_t{i}];
+    return {p[0], p[1], p[2]};
+  }
+};
+
+// An emissive object: a parallelogram whose triangles are also in `objects`.
+struct ImportedLight {
+  std::string label;
+  uint32_t cell = 0;                // index into ImportedScene::cells
+  Parallelogram shape;
+  Vec3 radiance;
+};
+
+struct ImportedCell {
+  std::string name;
+  Bounds3 bounds;
+};
+
+struct ImportedPortal {
+  uint32_t cellA = 0, cellB = 0;
+  std::vector<Vec3> polygon;
+};
+
+struct ImportedScene {
+  std::vector<ImportedMaterial> materials;
+  std::vector<ImportedObject> objects;
+  std::vector<ImportedCell> cells;       // the given cells, or one around everything
+  std::vector<ImportedPortal> portals;
+  std::vector<ImportedLight> lights;
+  Camera camera;                         // cell: index into cells
+  Bounds3 bounds;                        // triangles, camera origins and given cells, not padded
+  uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
+  uint64_t triangleCount() const {
+    uint64_t count = 0;
+    for (const ImportedObject& object : objects) count += object.triangleCount();
+    return count;
+  }
+};
+
+}  // namespace portico

@@ -1,0 +1,152 @@
+// Assimp -> MeshFilePart lists: walks the node tree, applies each node's
+// accumulated transform, keeps triangles with their winding.
+#include "common/scene/import/mesh_loader.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+
+namespace portico {
+
+namespace {
+
+// Assimp's messages may span lines; ours are one line.
+std::string oneLine(std::string text) {
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  std::replace(text.begin(), text.end(), '\r', ' ');
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& problem) {
+  throw std::runtime_error(fmt::format("mesh file '{}': {}", path, problem));
+}
+
+MeshFileMaterial readMaterial(const aiMaterial& source, size_t index) {
+  MeshFileMaterial material;
+  aiString name;
+  material.name = source.Get(AI_MATKEY_NAME, name) == aiReturn_SUCCESS && name.length > 0
+                      ? std::string(name.C_Str())
+                      : fmt::format("material-{}", index);
+  aiColor4D colour;
+  // glTF's base colour when present (Assimp also maps it to the diffuse
+  // colour, but not for every version), otherwise the classic diffuse colour.
+  if (source.Get(AI_MATKEY_BASE_COLOR, colour) == aiReturn_SUCCESS ||
+      source.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == aiReturn_SUCCESS)
+    material.diffuse = Vec3(colour.r, colour.g, colour.b);
+  if (source.Get(AI_MATKEY_COLOR_EMISSIVE, colour) == aiReturn_SUCCESS) {
+    material.emissive = Vec3(colour.r, colour.g, colour.b);
+    float strength = 1.0f;   // KHR_materials_emissive_strength
+    if (source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == aiReturn_SUCCESS) material.emissive *= strength;
+  }
+  return material;
+}
+
+// Zero area: a repeated corner, or corners on one line so exactly that the
+// cross product of the edges is zero in float. Such a triangle has no normal
+// (normalising gives NaN) and can never be hit, so it is dropped.
+bool isDegenerate(const std::vector<float>& positions, uint32_t a, uint32_t b, uint32_t c) {
+  if (a == b || b == c || a == c) return true;
+  const auto at = [&](uint32_t i) {
+    const float* p = &positions[3 * size_t{i}];
+    return Vec3(p[0], p[1], p[2]);
+  };
+  return !(length(cross(at(b) - at(a), at(c) - at(a))) > 0.0f);
+}
+
+class PartCollector {
+ public:
+  PartCollector(const aiScene& scene, LoadedMeshFile& file) : scene_(scene), file_(file) {}
+
+  void visit(const aiNode& node, const aiMatrix4x4& parentTransform, const std::string& parentPath) {
+    const aiMatrix4x4 transform = parentTransform * node.mTransformation;
+    const std::string path = parentPath.empty() ? std::string(node.mName.C_Str())
+                                                : parentPath + "/" + node.mName.C_Str();
+    for (unsigned i = 0; i < node.mNumMeshes; ++i) addPart(*scene_.mMeshes[node.mMeshes[i]], transform, path);
+    for (unsigned i = 0; i < node.mNumChildren; ++i) visit(*node.mChildren[i], transform, path);
+  }
+
+ private:
+  void addPart(const aiMesh& mesh, const aiMatrix4x4& transform, const std::string& nodePath) {
+    MeshFilePart part;
+    part.name = mesh.mName.length > 0 ? fmt::format("{}/{}", nodePath, mesh.mName.C_Str()) : nodePath;
+    part.material = mesh.mMaterialIndex < file_.materials.size() ? mesh.mMaterialIndex : 0;
+    // A mirroring transform turns the winding around; swap two corners so
+    // the front stays the side the author meant (glTF 2.0, section 3.7.4).
+    const bool mirrors = transform.Determinant() < 0;
+    part.positions.reserve(3 * size_t{mesh.mNumVertices});
+    for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D& raw = mesh.mVertices[v];
+      if (!isFinite(Vec3(raw.x, raw.y, raw.z)))
+        fail(file_.path,
+             fmt::format("part '{}': vertex {} is not finite ({}, {}, {})", part.name, v, raw.x, raw.y, raw.z));
+      const aiVector3D p = transform * raw;
+      if (!isFinite(Vec3(p.x, p.y, p.z)))
+        fail(file_.path,
+             fmt::format("part '{}': vertex {} is not finite once placed by its node transforms", part.name, v));
+      part.positions.insert(part.positions.end(), {p.x, p.y, p.z});
+    }
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;   // points and lines
+      const uint32_t a = face.mIndices[0], b = face.mIndices[1], c = face.mIndices[2];
+      if (std::max({a, b, c}) >= mesh.mNumVertices)
+        fail(file_.path, fmt::format("part '{}': face {} uses vertex {}, but the part has {} vertices", part.name, f,
+                                     std::max({a, b, c}), mesh.mNumVertices));
+      if (isDegenerate(part.positions, a, b, c)) {
+        ++file_.degenerateTriangles;
+        continue;
+      }
+      if (mirrors)
+        part.indices.insert(part.indices.end(), {a, c, b});
+      else
+        part.indices.insert(part.indices.end(), {a, b, c});
+    }
+    if (!part.indices.empty()) file_.parts.push_back(std::move(part));
+  }
+
+  const aiScene& scene_;
+  LoadedMeshFile& file_;
+};
+
+}  // namespace
+
+size_t LoadedMeshFile::triangleCount() const {
+  size_t count = 0;
+  for (const MeshFilePart& part : parts) count += part.triangleCount();
+  return count;
+}
+
+LoadedMeshFile loadMeshFile(const std::string& path) {
+  std::error_code error;
+  if (!std::filesystem::exists(path, error)) fail(path, "does not exist");
+  if (!std::filesystem::is_regular_file(path, error)) fail(path, "is not a regular file");
+
+  Assimp::Importer importer;
+  // Only what every format needs: polygons to triangles, shared vertices.
+  // Deliberately absent: winding flips, left-handed conversion, generated or
+  // fixed normals, Assimp's degenerate removal (it would turn some triangles
+  // into lines and points silently; PartCollector drops and counts them).
+  const aiScene* scene = importer.ReadFile(path, aiProcess_Triangulate | aiProcess_JoinIdenticalVertices);
+  if (scene == nullptr) fail(path, fmt::format("cannot be read: {}", oneLine(importer.GetErrorString())));
+  if (scene->mRootNode == nullptr) fail(path, "cannot be read: the file has no scene");
+
+  LoadedMeshFile file;
+  file.path = path;
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m) file.materials.push_back(readMaterial(*scene->mMaterials[m], m));
+  if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
+  PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");
+  if (file.parts.empty())
+    fail(path, file.degenerateTriangles > 0
+                   ? fmt::format("has no triangles but {} degenerate (zero-area) ones", file.degenerateTriangles)
+                   : std::string("has no triangles"));
+  return file;
+}
+
+}  // namespace portico

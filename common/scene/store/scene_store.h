@@ -1,0 +1,91 @@
+// A scene store on disk: a directory holding scene.db (the catalogue, SQLite)
+// and one unpacked Cap'n Proto file per cell under cells/.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/scene/store/scene_types.h"
+
+namespace portico {
+
+// Read side: the catalogue, loaded whole (it is small: no triangles in it).
+class SceneStore {
+ public:
+  // Throws std::runtime_error naming the path and the problem.
+  static SceneStore open(const std::string& directory);
+
+  const std::string& directory() const { return directory_; }
+  const std::vector<CellInfo>& cells() const { return cells_; }        // indexed by cell id
+  const std::vector<Portal>& portals() const { return portals_; }      // indexed by portal id
+  const std::vector<Material>& materials() const { return materials_; } // indexed by material id
+  const std::vector<AreaLight>& lights() const { return lights_; }     // indexed by light id
+  const Camera& camera() const { return camera_; }
+  // Free-form facts about the store (format, generator, seed, ...).
+  const std::map<std::string, std::string>& meta() const { return meta_; }
+  std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
+  std::string cataloguePath() const;              // absolute path of scene.db
+  // The cell whose bounds contain p (the smallest, when several do); nullopt if none.
+  std::optional<uint32_t> locateCell(const Vec3& p) const;
+  uint64_t totalTriangles() const;
+
+ private:
+  std::string directory_;
+  std::vector<CellInfo> cells_;
+  std::vector<Portal> portals_;
+  std::vector<Material> materials_;
+  std::vector<AreaLight> lights_;
+  Camera camera_;
+  std::map<std::string, std::string> meta_;
+};
+
+// The geometry of one cell as written to its cell file.
+struct CellContent {
+  uint32_t id = 0;
+  std::string name;
+  Bounds3 bounds;
+  std::vector<float> positions;       // xyz per vertex
+  std::vector<uint32_t> indices;      // 3 per triangle
+  std::vector<uint32_t> materials;    // 1 per triangle
+};
+
+// Write side. Cells stream to disk one at a time (writeCell), so a building
+// larger than memory can be written. Nothing is visible at `directory` until
+// commit(): the store is built in a sibling temporary directory and renamed.
+class SceneStoreWriter {
+ public:
+  explicit SceneStoreWriter(std::string directory);
+  ~SceneStoreWriter();   // removes the temporary directory if not committed
+  SceneStoreWriter(const SceneStoreWriter&) = delete;
+  SceneStoreWriter& operator=(const SceneStoreWriter&) = delete;
+
+  // Bulk lists in cell files are cut into chunks of at most this many
+  // elements (default and maximum 2^28 - 1; whole vertices / triangles per
+  // chunk). Smaller values exist so tests can exercise multi-chunk cells.
+  void setMaxChunkElements(uint64_t elements);
+
+  // hiddenFromCamera: see Material (cut-away ceilings and their lamps).
+  uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0),
+                       bool hiddenFromCamera = false);
+  // Portals must be added before the cells they touch are written.
+  uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
+  uint32_t addLight(const AreaLight& light);  // id assigned
+  void setCamera(const Camera& camera);
+  void setMeta(const std::string& key, const std::string& value);
+  // Writes cells/<id>.cell with its triangles and the portals that touch it.
+  void writeCell(const CellContent& cell);
+  // Validates (every portal's cells written, camera cell exists, ...) and publishes.
+  // An existing directory is replaced only if it is empty or a scene store.
+  // Every error is a std::runtime_error naming the object and the problem,
+  // and leaves `directory` untouched.
+  void commit();
+
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+}  // namespace portico

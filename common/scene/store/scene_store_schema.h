@@ -1,0 +1,69 @@
+// The catalogue's SQLite schema, shared by SceneStore (reader) and
+// SceneStoreWriter. Private to common/scene/store: nothing else should depend on
+// table layouts; it goes through SceneStore.
+#pragma once
+
+#include <cstdint>
+#include <string_view>
+
+namespace portico::scene_schema {
+
+// PRAGMA user_version of scene.db. A reader refuses any other value: bump it
+// (and teach SceneStore::open to read the old one, or say how to regenerate)
+// whenever a table changes.
+//   1: first version.
+//   2: materials.hidden_from_camera (cut-away surfaces). Version 1 is still
+//      read, as if every material had hidden_from_camera = 0.
+constexpr int kVersion = 2;
+constexpr int kOldestReadableVersion = 1;
+
+constexpr std::string_view kDatabaseFile = "scene.db";
+constexpr std::string_view kCellDirectory = "cells";
+
+// Portal polygons are a BLOB of little-endian float32, xyz per vertex, in
+// order around the polygon: exact (no decimal round trip) and compact. All
+// other coordinates are REAL columns, which hold a float exactly.
+constexpr std::string_view kCreateTables = R"sql(
+CREATE TABLE meta(
+  key   TEXT PRIMARY KEY,
+  value TEXT NOT NULL);
+CREATE TABLE cells(
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  min_x REAL NOT NULL, min_y REAL NOT NULL, min_z REAL NOT NULL,
+  max_x REAL NOT NULL, max_y REAL NOT NULL, max_z REAL NOT NULL,
+  triangle_count INTEGER NOT NULL,
+  byte_count INTEGER NOT NULL,
+  file TEXT NOT NULL);
+CREATE TABLE portals(
+  id INTEGER PRIMARY KEY,
+  cell_a INTEGER NOT NULL REFERENCES cells(id),
+  cell_b INTEGER NOT NULL REFERENCES cells(id),
+  polygon BLOB NOT NULL);
+CREATE INDEX portals_by_cell_a ON portals(cell_a);
+CREATE INDEX portals_by_cell_b ON portals(cell_b);
+CREATE TABLE materials(
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  albedo_r REAL NOT NULL, albedo_g REAL NOT NULL, albedo_b REAL NOT NULL,
+  emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL,
+  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)));
+CREATE TABLE lights(
+  id INTEGER PRIMARY KEY,
+  cell INTEGER NOT NULL REFERENCES cells(id),
+  corner_x REAL NOT NULL, corner_y REAL NOT NULL, corner_z REAL NOT NULL,
+  edge1_x REAL NOT NULL, edge1_y REAL NOT NULL, edge1_z REAL NOT NULL,
+  edge2_x REAL NOT NULL, edge2_y REAL NOT NULL, edge2_z REAL NOT NULL,
+  radiance_r REAL NOT NULL, radiance_g REAL NOT NULL, radiance_b REAL NOT NULL);
+CREATE TABLE camera(
+  id INTEGER PRIMARY KEY CHECK (id = 0),
+  origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
+  target_x REAL NOT NULL, target_y REAL NOT NULL, target_z REAL NOT NULL,
+  up_x REAL NOT NULL, up_y REAL NOT NULL, up_z REAL NOT NULL,
+  fov_y_deg REAL NOT NULL,
+  width INTEGER NOT NULL,
+  height INTEGER NOT NULL,
+  cell INTEGER NOT NULL REFERENCES cells(id));
+)sql";
+
+}  // namespace portico::scene_schema

@@ -1,0 +1,85 @@
+#include "common/transport/light_sampler.h"
+
+#include <gtest/gtest.h>
+
+namespace portico {
+namespace {
+
+AreaLight ceilingLight(uint32_t id, Vec3 center, float size, float radiance) {
+  AreaLight light;
+  light.id = id;
+  // Facing down: cross(edge1, edge2) = -Y.
+  light.corner = center - Vec3(size / 2, 0, size / 2);
+  light.edge1 = {size, 0, 0};
+  light.edge2 = {0, 0, size};
+  light.radiance = Vec3(radiance);
+  return light;
+}
+
+TEST(LightSampler, ProbabilitiesMatchSelectionFrequencies) {
+  std::vector<AreaLight> lights{ceilingLight(0, {0, 3, 0}, 1, 10), ceilingLight(1, {4, 3, 0}, 1, 10),
+                                ceilingLight(2, {0, 3, 8}, 0.5f, 40)};
+  ASSERT_LT(lights[0].normal().y, 0);
+  LightSampler sampler(lights, LightSampler::allLights(lights));
+  const Vec3 point(1, 0, 1), normal(0, 1, 0);
+  std::vector<int> counts(3, 0);
+  std::vector<float> probability(3, 0);
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    const LightChoice c = sampler.choose(point, normal, (i + 0.5f) / n);
+    ASSERT_GT(c.probability, 0);
+    counts[c.light]++;
+    probability[c.light] = c.probability;
+  }
+  float total = 0;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(counts[i] / double(n), probability[i], 1e-3) << i;
+    total += probability[i];
+  }
+  EXPECT_NEAR(total, 1.0f, 1e-5f);
+  EXPECT_GT(probability[0], probability[1]);   // nearer light gets more samples
+}
+
+TEST(LightSampler, LightsThatCannotContributeAreNeverChosen) {
+  // Light 1 is below the shading point's floor plane and faces down, away.
+  std::vector<AreaLight> lights{ceilingLight(0, {0, 3, 0}, 1, 10), ceilingLight(1, {0, -2, 0}, 1, 10)};
+  LightSampler sampler(lights, LightSampler::allLights(lights));
+  for (int i = 0; i < 1000; ++i) {
+    const LightChoice c = sampler.choose({0, 0, 0}, {0, 1, 0}, i / 1000.0f);
+    EXPECT_EQ(c.light, 0u);
+    EXPECT_FLOAT_EQ(c.probability, 1.0f);
+  }
+  // A point above every light sees only their dark backs.
+  EXPECT_EQ(sampler.choose({0, 10, 0}, {0, 1, 0}, 0.3f).probability, 0.0f);
+}
+
+}  // namespace
+}  // namespace portico
+
+#include <filesystem>
+#include <unistd.h>
+
+#include "common/scene/import/building_importer.h"
+
+namespace portico {
+namespace {
+
+TEST(LightSampler, LightsNearFollowThePortalGraph) {
+  // two_rooms: roomA (the light) - door - roomB. From roomB the light is two
+  // portals away: hops 2 reaches it, hops 1 does not.
+  const auto store = std::filesystem::temp_directory_path() / ("portico-lights-near-" + std::to_string(getpid()));
+  std::filesystem::remove_all(store);
+  importBuilding({std::string(PORTICO_REFERENCE_DIR) + "/two_rooms/scene.json"}, store.string());
+  const SceneStore scene = SceneStore::open(store.string());
+  const uint32_t roomB = scene.camera().cell;
+  const uint32_t roomA = scene.lights()[0].cell;
+  EXPECT_EQ(LightSampler::lightsNear(scene, roomA, 0).size(), 1u);
+  EXPECT_TRUE(LightSampler::lightsNear(scene, roomB, 0).empty());
+  EXPECT_TRUE(LightSampler::lightsNear(scene, roomB, 1).empty());
+  EXPECT_EQ(LightSampler::lightsNear(scene, roomB, 2).size(), 1u);
+  EXPECT_EQ(LightSampler::lightsNear(scene, roomB, -1).size(), 1u);
+  std::filesystem::remove_all(store);
+}
+
+}  // namespace
+}  // namespace portico
