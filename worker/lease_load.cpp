@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/net/job_spec_wire.h"
 #include "common/transport/photon_record.h"
 #include "worker/lease_runner.h"
 
@@ -88,19 +89,10 @@ LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assig
   LoadedLease lease;
   lease.store = storeDirectory;
   lease.scene = &cache.scene(storeDirectory);
-  lease.parameters = parametersFromSpec(spec);
-  if (lease.parameters.lightHops == kAutomaticLightHops) {
-    // Lights a couple of rooms away matter; a couple of voxels away is no
-    // distance at all: voxel cells sample every light.
-    const auto cells = lease.scene->meta().find("cells");
-    lease.parameters.lightHops = cells != lease.scene->meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
-  }
+  // The coordinator resolved every automatic value (resolveJobSettings).
+  lease.parameters = jobSettingsFromWire(spec);
   lease.renderPhase = assign.getPhase() == wire::Phase::RENDER;
-  // Render leases may build another structure: they trace many rays per
-  // triangle, where one that costs more to build and less to trace pays.
-  lease.accel = lease.renderPhase && spec.getRenderAccel().size() ? spec.getRenderAccel().cStr()
-                : spec.getAccel().size()                         ? spec.getAccel().cStr()
-                                                                 : "grid";
+  lease.accel = lease.renderPhase ? lease.parameters.renderAccel : lease.parameters.accel;
   lease.cell = &cellWithAccelerator(cache, chooser, lease, cellId, assign.getCellWork(), lease.renderPhase);
   if (lease.renderPhase) {
     lease.indirect = cache.indirectLight(assign.getJob(), cellId);

@@ -10,23 +10,6 @@
 
 namespace portico {
 
-JobParameters parametersFromSpec(wire::JobSpec::Reader spec) {
-  JobParameters p;
-  p.seed = spec.getSeed();
-  p.spp = spec.getSpp();
-  p.width = spec.getWidth();
-  p.height = spec.getHeight();
-  p.lightSamples = spec.getLightSamples();
-  p.photonK = spec.getPhotonK();
-  p.photonRadius = spec.getPhotonRadius();
-  p.gather = spec.getGather();
-  p.lightHops = spec.getLightHops();
-  p.aov = static_cast<JobParameters::Aov>(spec.getAov());
-  p.irradiance = spec.getIrradiance() == wire::Irradiance::KNN ? JobParameters::Irradiance::Knn
-                                                                : JobParameters::Irradiance::Precomputed;
-  return p;
-}
-
 std::string photonTableOf(wire::PhotonsReply::Reader reply) {
   size_t size = 0;
   for (auto blob : reply.getBatches()) size += blob.size();

@@ -19,8 +19,6 @@
 
 namespace portico {
 
-JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
-
 // The photon table that arrived in a PhotonsReply: its batches' records, in
 // order, still encoded (runLease decodes them on its cell's PhotonFrame).
 std::string photonTableOf(wire::PhotonsReply::Reader reply);
