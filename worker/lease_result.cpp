@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 #include <deque>
 #include <string>
@@ -67,7 +68,10 @@ void encodeCounters(const KernelOutputs& out, const LeaseFigures& figures, wire:
   named.push_back({std::string_view(kLoadTimeCounter), std::llround(cache.loadMs * 1e3)});
   named.push_back({std::string_view(kTrianglesLoadedCounter), cache.trianglesLoaded});
   // The coordinator sizes this worker's leases from it (WorkerInfo::recordLease).
-  named.push_back({std::string_view(kLeaseTimeCounter), figures.leaseMicroseconds});
+  named.push_back({std::string_view(kLeaseTimeCounter),
+                   std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
+                                                                         figures.started)
+                       .count()});
   // Which structure each cell got (auto's choices): the job's statistics
   // list them per cell and count them per spec.
   std::deque<std::string> buildNames;   // owns the names `named` views

@@ -3,6 +3,7 @@
 
 #include <capnp/message.h>
 
+#include <chrono>
 #include <cstdint>
 #include <memory>
 
@@ -19,7 +20,9 @@ struct LeaseFigures {
   int64_t irradianceMicroseconds = 0;
   int64_t forwarded = 0;
   int64_t moreCells = 0;
-  int64_t leaseMicroseconds = 0;   // the lease's own time here, loads included
+  // When the lease began here: its own time, loads and encoding included,
+  // is counted as its counters are encoded.
+  std::chrono::steady_clock::time_point started;
 };
 
 std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(uint64_t lease, const KernelOutputs& out,

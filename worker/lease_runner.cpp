@@ -33,8 +33,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   figures.irradianceMicroseconds = lease.irradianceMicroseconds;
   figures.forwarded = traced.forwarded;
   figures.moreCells = int64_t(assign.getMoreCells().size());
-  figures.leaseMicroseconds =
-      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - started).count();
+  figures.started = started;
   auto message = encodeResult(assign.getLease(), traced.out, figures);
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
                 assign.getLease(), assign.getCell(), assign.getBatches().size(), traced.out.counters.photonDeposits,
