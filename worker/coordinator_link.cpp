@@ -73,8 +73,10 @@ LinkEvent CoordinatorLink::receive(int wakeFd, std::chrono::milliseconds wait) {
       if (!handleOwn(*event.message, event)) event.kind = LinkEvent::Kind::Message;
     } catch (const kj::Exception& e) {
       spdlog::warn("dropped a malformed message: {}", e.getDescription().cStr());
+      event = LinkEvent{};
     } catch (const std::exception& e) {
       spdlog::warn("dropped a message: {}", e.what());
+      event = LinkEvent{};
     }
     if (event.kind != LinkEvent::Kind::Idle) return event;
   }

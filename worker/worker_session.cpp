@@ -15,7 +15,6 @@
 #include <thread>
 #include <xmmintrin.h>
 #include <pmmintrin.h>
-#include <zmq.hpp>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
