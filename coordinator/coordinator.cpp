@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <set>
 
+#include "common/net/job_spec_wire.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
@@ -442,10 +443,13 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
   auto record = store_.job(job);
   if (!record) throw std::runtime_error(fmt::format("job {} does not exist", job));
   JobContext context;
-  context.spec = std::make_unique<capnp::MallocMessageBuilder>();
   net::PackedReader reader(record->spec.data(), record->spec.size());
-  context.spec->setRoot(reader.root<wire::JobSpec>());
-  context.scene = std::make_unique<SceneStore>(SceneStore::open(context.reader().getStore().cStr()));
+  const JobSettings stored = jobSettingsFromWire(reader.root<wire::JobSpec>());
+  context.scene = std::make_unique<SceneStore>(SceneStore::open(stored.store));
+  // Stored resolved; resolving again keeps a job that a coordinator with
+  // fewer automatic values stored complete too.
+  context.spec = std::make_unique<capnp::MallocMessageBuilder>();
+  toWire(resolveJobSettings(stored, *context.scene), context.spec->initRoot<wire::JobSpec>());
   return jobs_.emplace(job, std::move(context)).first->second;
 }
 
@@ -814,19 +818,20 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
   capnp::MallocMessageBuilder reply;
   auto answer = reply.initRoot<wire::Envelope>().initSubmitReply();
   try {
-    auto spec = std::make_unique<capnp::MallocMessageBuilder>();
-    spec->setRoot(submit.getSpec());
-    auto builder = spec->getRoot<wire::JobSpec>();
+    JobSettings settings = jobSettingsFromWire(submit.getSpec());
     // The store as the coordinator resolves it, once: what it serves and
     // workers read is that directory, whatever its path's links become.
     std::error_code unresolved;
-    const auto store = std::filesystem::canonical(builder.getStore().cStr(), unresolved);
-    if (unresolved)
-      throw std::runtime_error(fmt::format("scene store {}: {}", builder.getStore().cStr(), unresolved.message()));
-    builder.setStore(store.string());
-    checkOutputPath(builder.getOutput().cStr());
-    auto scene = std::make_unique<SceneStore>(SceneStore::open(builder.getStore().cStr()));
-    validateSpec(builder, *scene);
+    const auto store = std::filesystem::canonical(settings.store, unresolved);
+    if (unresolved) throw std::runtime_error(fmt::format("scene store {}: {}", settings.store, unresolved.message()));
+    settings.store = store.string();
+    checkOutputPath(settings.output);
+    auto scene = std::make_unique<SceneStore>(SceneStore::open(settings.store));
+    settings = resolveJobSettings(std::move(settings), *scene);
+    validateJobSettings(settings, *scene);
+    auto spec = std::make_unique<capnp::MallocMessageBuilder>();
+    toWire(settings, spec->initRoot<wire::JobSpec>());
+    auto builder = spec->getRoot<wire::JobSpec>();
     const std::string packed = net::packToString(*spec);
     uint64_t job;
     {

@@ -37,45 +37,60 @@ void checkPortalsPerCell(const SceneStore& scene) {
 }
 }  // namespace
 
-void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene) {
-  if (scene.lights().empty()) throw std::invalid_argument(fmt::format("scene {} has no lights", scene.directory()));
-  if (spec.getWidth() == 0 || spec.getHeight() == 0) {
-    spec.setWidth(scene.camera().width);
-    spec.setHeight(scene.camera().height);
+JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
+  const JobSettings defaults;
+  if (settings.width == 0 || settings.height == 0) {
+    settings.width = scene.camera().width;
+    settings.height = scene.camera().height;
   }
-  requireAtMost("image width", spec.getWidth(), limits::kMaxImageSide);
-  requireAtMost("image height", spec.getHeight(), limits::kMaxImageSide);
-  if (uint64_t(spec.getWidth()) * spec.getHeight() > limits::kMaxImagePixels)
-    throw std::invalid_argument(fmt::format("image {}x{} is too large: at most {} pixels", spec.getWidth(),
-                                            spec.getHeight(), limits::kMaxImagePixels));
-  if (spec.getSpp() == 0 || spec.getSpp() > limits::kMaxSpp)
-    throw std::invalid_argument(fmt::format("spp {} must be between 1 and {}", spec.getSpp(), limits::kMaxSpp));
-  if (uint64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() > limits::kMaxCameraSamples)
+  if (settings.accel.empty()) settings.accel = defaults.accel;
+  // Render leases may build another structure: they trace many rays per
+  // triangle, where one that costs more to build and less to trace pays.
+  if (settings.renderAccel.empty()) settings.renderAccel = settings.accel == "grid" ? "bvh" : settings.accel;
+  if (settings.lightHops == kAutomaticLightHops) {
+    // Lights a couple of rooms away matter; a couple of voxels away is no
+    // distance at all: voxel cells sample every light.
+    const auto cells = scene.meta().find("cells");
+    settings.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
+  }
+  if (settings.photonK == 0) settings.photonK = defaults.photonK;
+  if (settings.exposure == 0) settings.exposure = defaults.exposure;
+  return settings;
+}
+
+void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
+  if (scene.lights().empty()) throw std::invalid_argument(fmt::format("scene {} has no lights", scene.directory()));
+  requireAtMost("image width", settings.width, limits::kMaxImageSide);
+  requireAtMost("image height", settings.height, limits::kMaxImageSide);
+  const uint64_t pixels = uint64_t(settings.width) * settings.height;
+  if (pixels > limits::kMaxImagePixels)
+    throw std::invalid_argument(fmt::format("image {}x{} is too large: at most {} pixels", settings.width,
+                                            settings.height, limits::kMaxImagePixels));
+  if (settings.spp == 0 || settings.spp > limits::kMaxSpp)
+    throw std::invalid_argument(fmt::format("spp {} must be between 1 and {}", settings.spp, limits::kMaxSpp));
+  if (pixels * settings.spp > limits::kMaxCameraSamples)
     throw std::invalid_argument(fmt::format("{}x{} pixels at {} spp is too many camera samples: at most {}",
-                                            spec.getWidth(), spec.getHeight(), spec.getSpp(),
+                                            settings.width, settings.height, settings.spp,
                                             limits::kMaxCameraSamples));
-  if (spec.getPhotons() == 0 && spec.getAov() == wire::Aov::RADIANCE)
+  if (settings.photons == 0 && settings.aov == JobSettings::Aov::Radiance)
     throw std::invalid_argument("photons must be at least 1");
-  requireAtMost("photons", spec.getPhotons(), limits::kMaxPhotons);
-  requireAtMost("gather rays", spec.getGather(), limits::kMaxGather);
-  requireAtMost("light samples", spec.getLightSamples(), limits::kMaxLightSamples);
-  if (spec.getPhotonK() == 0) spec.setPhotonK(64);
-  requireAtMost("photon k", spec.getPhotonK(), limits::kMaxPhotonK);
-  if (!(spec.getPhotonRadius() > 0) || !(spec.getPhotonRadius() <= limits::kMaxPhotonRadius))
+  requireAtMost("photons", settings.photons, limits::kMaxPhotons);
+  requireAtMost("gather rays", settings.gather, limits::kMaxGather);
+  requireAtMost("light samples", settings.lightSamples, limits::kMaxLightSamples);
+  requireAtMost("photon k", settings.photonK, limits::kMaxPhotonK);
+  if (!(settings.photonRadius > 0) || !(settings.photonRadius <= limits::kMaxPhotonRadius))
     throw std::invalid_argument(fmt::format("photon radius {} must be a number above 0 and at most {} m",
-                                            spec.getPhotonRadius(), limits::kMaxPhotonRadius));
-  if (spec.getLightHops() < -2 || spec.getLightHops() > limits::kMaxLightHops)
+                                            settings.photonRadius, limits::kMaxPhotonRadius));
+  if (settings.lightHops < -1 || settings.lightHops > limits::kMaxLightHops)
     throw std::invalid_argument(fmt::format("light hops {} must be -2 (automatic), -1 (every light) or 0 to {}",
-                                            spec.getLightHops(), limits::kMaxLightHops));
-  // 0 stands for the default (1); anything else must be a usable multiplier.
-  if (spec.getExposure() != 0 &&
-      !(spec.getExposure() >= limits::kMinExposure && spec.getExposure() <= limits::kMaxExposure))
-    throw std::invalid_argument(fmt::format("exposure {} must be a number from {:g} to {:g}", spec.getExposure(),
+                                            settings.lightHops, limits::kMaxLightHops));
+  if (!(settings.exposure >= limits::kMinExposure && settings.exposure <= limits::kMaxExposure))
+    throw std::invalid_argument(fmt::format("exposure {} must be a number from {:g} to {:g}", settings.exposure,
                                             limits::kMinExposure, limits::kMaxExposure));
   // A bad --accel is refused here, naming the problem, rather than failing
   // every cell's lease in the workers.
-  if (spec.getAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getAccel().cStr()));
-  if (spec.getRenderAccel().size()) validateAcceleratorSpec(parseAcceleratorSpec(spec.getRenderAccel().cStr()));
+  validateAcceleratorSpec(parseAcceleratorSpec(settings.accel));
+  validateAcceleratorSpec(parseAcceleratorSpec(settings.renderAccel));
   if (scene.camera().cell >= scene.cells().size())
     throw std::invalid_argument(fmt::format("scene {}: the camera's cell {} does not exist", scene.directory(),
                                             scene.camera().cell));

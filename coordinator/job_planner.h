@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "common/job/job_settings.h"
 #include "common/scene/store/scene_store.h"
 #include "coordinator/job_store.h"
 #include "proto/wire.capnp.h"
@@ -19,9 +20,17 @@ constexpr uint32_t kPhotonsPerEmitBatch = 20000;
 constexpr uint64_t kMostEmitBatches = 50000;   // a billion photons; beyond, batches grow
 constexpr uint32_t kSamplesPerCameraBatch = 16384;
 
-// Checks a spec against its scene, filling defaults (image size from the
-// camera). Throws std::invalid_argument with a one-line reason.
-void validateSpec(wire::JobSpec::Builder spec, const SceneStore& scene);
+// Every automatic value of a submitted job, resolved once from its scene:
+// the image size from the camera, the light hops from the kind of cells,
+// the render accelerator from the accelerator; a value a submit message
+// leaves 0 or "" takes JobSettings's default. The coordinator stores the
+// result and hands it to workers, which decide nothing. Resolving a
+// resolved job changes nothing.
+JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene);
+
+// Checks resolved settings against their scene. Throws
+// std::invalid_argument with a one-line reason.
+void validateJobSettings(const JobSettings& settings, const SceneStore& scene);
 
 // Splits spec.photons across the lights in proportion to their power
 // (largest remainders, deterministic) and queues emission batches. Up to

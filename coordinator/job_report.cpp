@@ -55,7 +55,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["settings"] = {{"store", spec.getStore().cStr()},   {"output", spec.getOutput().cStr()},
                        {"photons", spec.getPhotons()},      {"spp", spec.getSpp()},
                        {"seed", spec.getSeed()},            {"accel", spec.getAccel().cStr()},
-                       {"render_accel", spec.getRenderAccel().size() ? spec.getRenderAccel().cStr() : spec.getAccel().cStr()},
+                       {"render_accel", spec.getRenderAccel().cStr()},
                        {"width", spec.getWidth()},          {"height", spec.getHeight()},
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
@@ -169,14 +169,13 @@ LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Read
   return image;
 }
 
-float exposureOf(wire::JobSpec::Reader spec) { return spec.getExposure() > 0 ? spec.getExposure() : 1.0f; }
 }  // namespace
 
 void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
   // The directory was checked at submit; it is never created here, on
   // behalf of whoever submitted.
   const std::string output = spec.getOutput().cStr();
-  writeImage(output, filmImage(store, job, spec), exposureOf(spec));
+  writeImage(output, filmImage(store, job, spec), spec.getExposure());
   const std::string statsPath = output + ".json";
   writeFileAtomically(statsPath, jobStatistics(store, job, spec).dump(2) + "\n");
 }
@@ -191,7 +190,7 @@ std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec:
   const fs::path file = fs::path(pattern) / ("image" + fs::path(spec.getOutput().cStr()).extension().string());
   std::string bytes;
   try {
-    writeImage(file.string(), filmImage(store, job, spec), exposureOf(spec));
+    writeImage(file.string(), filmImage(store, job, spec), spec.getExposure());
     std::ifstream in(file, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), {});
   } catch (...) {

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <tuple>
 
@@ -139,16 +140,13 @@ void JobStore::loadUnleasedWork() {
   unleasedValid_ = true;
 }
 
-void JobStore::migrate() {
-  const int version = db_.userVersion();
-  if (version > kSchemaVersion)
-    throw std::runtime_error(fmt::format("{}: schema version {} is newer than this coordinator ({}); upgrade portico",
-                                         db_.path(), version, kSchemaVersion));
-  // Steps fall through: a database at version v runs steps v+1..latest,
-  // each in its own transaction.
-  if (version < 1) {
-    sql::Transaction tx(db_);
-    db_.exec(R"sql(
+namespace {
+// The schema's steps, one per version: a database at version v runs steps
+// v+1..latest (JobStore::migrate).
+
+// Version 1: jobs, their queued batches, open leases, photon tables, film
+// chunks and counters.
+constexpr const char* kSchemaVersion1 = R"sql(
       CREATE TABLE jobs (
         id INTEGER PRIMARY KEY,
         spec BLOB NOT NULL,
@@ -201,47 +199,34 @@ void JobStore::migrate() {
         value INTEGER NOT NULL,
         PRIMARY KEY (job, name)
       );
-    )sql");
-    db_.setUserVersion(1);
-    tx.commit();
-  }
-  if (version < 2) {
-    // Attempt numbers: how many lost leases each queued batch has been in.
-    sql::Transaction tx(db_);
-    db_.exec("ALTER TABLE batches ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0");
-    db_.setUserVersion(2);
-    tx.commit();
-  }
-  if (version < 3) {
-    // Photon payloads move to append-only files (append_files.h); rows keep
-    // where each lies. Rows written before keep their blob (file_offset NULL).
-    sql::Transaction tx(db_);
-    db_.exec(R"sql(
+    )sql";
+
+// Version 2: attempt numbers, how many lost leases each queued batch has been in.
+constexpr const char* kSchemaVersion2 = "ALTER TABLE batches ADD COLUMN attempts INTEGER NOT NULL DEFAULT 0";
+
+// Version 3: photon payloads live in append-only files (append_files.h);
+// rows keep where each lies. Rows of version 2 keep their blob (file_offset NULL).
+constexpr const char* kSchemaVersion3 = R"sql(
       ALTER TABLE photons ADD COLUMN file_offset INTEGER;
       ALTER TABLE photons ADD COLUMN file_size INTEGER NOT NULL DEFAULT 0;
       ALTER TABLE photons ADD COLUMN file_crc INTEGER NOT NULL DEFAULT 0;
-    )sql");
-    db_.setUserVersion(3);
-    tx.commit();
-  }
-  if (version < 4) {
-    // Ray batch payloads move to append-only files too (rows written before
-    // keep their blob: file_segment NULL), and the files' checksum becomes
-    // CRC-32C (hardware on x86-64): the photon rows' CRCs are recomputed.
-    sql::Transaction tx(db_);
-    db_.exec(R"sql(
+    )sql";
+
+// Version 4, first part: ray batch payloads live in append-only files too
+// (rows of version 3 keep their blob: file_segment NULL).
+constexpr const char* kSchemaVersion4Batches = R"sql(
       ALTER TABLE batches ADD COLUMN file_segment INTEGER;
       ALTER TABLE batches ADD COLUMN file_offset INTEGER NOT NULL DEFAULT 0;
       ALTER TABLE batches ADD COLUMN file_size INTEGER NOT NULL DEFAULT 0;
       ALTER TABLE batches ADD COLUMN file_crc INTEGER NOT NULL DEFAULT 0;
-    )sql");
-    rechecksumPhotonFiles();
-    // Closed leases leave no row: the table holds the open ones,
-    // a handful, and needs no index (two fewer index updates per lease);
-    // its state column stays as schema 3 had it, 'open' in every row.
-    // Ids must still never repeat (a late Result names its lease by id):
-    // AUTOINCREMENT, from the highest id ever given.
-    db_.exec(R"sql(
+    )sql";
+
+// Version 4, second part: closed leases leave no row. The table holds the
+// open ones, a handful, and needs no index (two fewer index updates per
+// lease); its state column stays as version 3 has it, 'open' in every row.
+// Ids must still never repeat (a late Result names its lease by id):
+// AUTOINCREMENT, from the highest id ever given.
+constexpr const char* kSchemaVersion4Leases = R"sql(
       CREATE TABLE leases_v4 (
         id INTEGER PRIMARY KEY AUTOINCREMENT,
         job INTEGER NOT NULL REFERENCES jobs(id),
@@ -258,20 +243,38 @@ void JobStore::migrate() {
       INSERT INTO sqlite_sequence(name, seq) SELECT 'leases_v4', COALESCE(MAX(id), 0) FROM leases;
       DROP TABLE leases;
       ALTER TABLE leases_v4 RENAME TO leases;
-    )sql");
-    db_.setUserVersion(4);
-    tx.commit();
-  }
-  if (version < 5) {
-    // Photon records went from 24 bytes of floats to 16 on a lattice over
-    // each cell (common/transport/photon_record.h). Each job says which
-    // records its tables hold; the coordinator runs the photon pass of an
-    // unfinished job with old ones again (Coordinator's constructor).
+    )sql";
+
+// Version 5: each job says which photon records its tables hold: 24 bytes
+// of floats (versions up to 4), or 16 on a lattice over each cell
+// (common/transport/photon_record.h). The coordinator runs the photon pass
+// of an unfinished job with 24-byte records again (Coordinator's constructor).
+constexpr const char* kSchemaVersion5 =
+    "ALTER TABLE jobs ADD COLUMN photon_record_bytes INTEGER NOT NULL DEFAULT 24";
+}  // namespace
+
+void JobStore::migrate() {
+  const int version = db_.userVersion();
+  if (version > kSchemaVersion)
+    throw std::runtime_error(fmt::format("{}: schema version {} is newer than this coordinator ({}); upgrade portico",
+                                         db_.path(), version, kSchemaVersion));
+  // Steps fall through, each in its own transaction.
+  const auto step = [&](int to, const std::function<void()>& apply) {
+    if (version >= to) return;
     sql::Transaction tx(db_);
-    db_.exec("ALTER TABLE jobs ADD COLUMN photon_record_bytes INTEGER NOT NULL DEFAULT 24");
-    db_.setUserVersion(5);
+    apply();
+    db_.setUserVersion(to);
     tx.commit();
-  }
+  };
+  step(1, [&] { db_.exec(kSchemaVersion1); });
+  step(2, [&] { db_.exec(kSchemaVersion2); });
+  step(3, [&] { db_.exec(kSchemaVersion3); });
+  step(4, [&] {
+    db_.exec(kSchemaVersion4Batches);
+    rechecksumPhotonFiles();   // the files' checksum is CRC-32C (hardware on x86-64)
+    db_.exec(kSchemaVersion4Leases);
+  });
+  step(5, [&] { db_.exec(kSchemaVersion5); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by

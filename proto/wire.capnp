@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 6;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal
+const protocolVersion :UInt32 = 7;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values)
 
 enum Phase {
   photons @0;
@@ -68,6 +68,9 @@ struct RayBatch {
   }
 }
 
+# What a job computes (common/job/job_settings.h). A Submit may leave
+# automatic values (0, "", lightHops -2): the coordinator resolves them once
+# (resolveJobSettings) and every Assign carries the complete spec.
 struct JobSpec {
   store @0 :Text;          # scene store directory (absolute)
   output @1 :Text;         # image path (.png or .exr), absolute
@@ -75,7 +78,7 @@ struct JobSpec {
   spp @3 :UInt32;
   seed @4 :UInt64;
   accel @5 :Text;
-  width @6 :UInt32;        # 0: the camera's
+  width @6 :UInt32;        # 0 (in a Submit): the camera's
   height @7 :UInt32;
   exposure @8 :Float32;
   lightSamples @9 :UInt32;
@@ -85,7 +88,7 @@ struct JobSpec {
   aov @13 :Aov;            # what the image shows
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
   irradiance @15 :Irradiance;  # what a final-gather hit reads
-  renderAccel @16 :Text;   # accelerator of render leases ("": accel)
+  renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
 }
 
 enum Irradiance {

@@ -1,5 +1,6 @@
-// Runs one lease: loads the cell, builds what is missing (accelerator,
-// photon map), traces every batch, and packs the Result.
+// Runs one lease in three steps: load (lease_load.h: the cell, its
+// accelerator and photon map), trace (lease_trace.h: every batch, then
+// crossings into held cells) and encode (lease_result.h: the Result).
 #pragma once
 
 #include <capnp/message.h>
@@ -18,8 +19,6 @@
 
 namespace portico {
 
-JobParameters parametersFromSpec(wire::JobSpec::Reader spec);
-
 // The photon table that arrived in a PhotonsReply: its batches' records, in
 // order, still encoded (runLease decodes them on its cell's PhotonFrame).
 std::string photonTableOf(wire::PhotonsReply::Reader reply);
@@ -35,7 +34,7 @@ struct MoreCellError : std::runtime_error {
 // The scene is read from `storeDirectory` (the job's store, or the worker's
 // local copy of it). Crossings into cells the cache already holds are traced
 // in the lease too, up to max(forwardRays, the lease's own work) rays (0:
-// none); see forwardToHeldCells in lease_runner.cpp. Throws TracingStopped
+// none); see forwardToHeldCells in lease_trace.cpp. Throws TracingStopped
 // (cell_kernel.h) soon after `stop` is set: its job was cancelled, or the
 // worker is stopping; nothing is reported for such a lease.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,

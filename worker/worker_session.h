@@ -1,7 +1,5 @@
-// The worker's conversation with the coordinator (a DEALER socket): Hello,
-// heartbeats both ways, leases in, results out, reconnect when the
-// coordinator goes silent. Tracing runs on a second thread so heartbeats
-// keep flowing during a long lease.
+// The worker's service: leases in, results out. Tracing runs on a second
+// thread so that messages (and heartbeats) keep flowing during a long lease.
 #pragma once
 
 #include <capnp/message.h>
@@ -23,6 +21,7 @@
 
 #include "worker/accelerator_choice.h"
 #include "worker/cell_cache.h"
+#include "worker/coordinator_link.h"
 #include "worker/store_mirror.h"
 
 namespace portico {
@@ -61,6 +60,9 @@ struct FinishedLease {
   bool stopped = false;                 // given up midway (job cancelled, worker stopping): nothing to report
 };
 
+// The worker: "next message -> handle it -> reply", over a CoordinatorLink
+// that hides the handshake, heartbeats and reconnection. Leases are readied
+// on the main thread (store files, photons) and traced on a second one.
 class WorkerSession {
  public:
   explicit WorkerSession(WorkerOptions options);
@@ -75,9 +77,36 @@ class WorkerSession {
   }
 
  private:
+  // A lease the main thread readies before it is traced: it may wait for the
+  // store's files (--cache-dir) or the cell's photons (render phase).
+  struct PreparingLease {
+    std::unique_ptr<net::Decoded> assign;
+    bool waitingForPhotons = false;
+    bool waitingForFile = false;
+  };
+
+  // The main thread: the coordinator's messages.
+  void handle(std::unique_ptr<net::Decoded> decoded);
+  void onAssign(std::unique_ptr<net::Decoded> decoded);
+  void onFileChunk(wire::FileChunk::Reader chunk);
+  void onPhotons(wire::PhotonsReply::Reader reply);
+  void onCancel(uint64_t job);
+  // The main thread: leases in and out.
+  void prepareQueuedLeases();
+  void advanceLease();
+  void startTracing(std::optional<std::string> photonRecords);
+  void failLease(const std::string& why);
+  void sendFinishedLeases();
+  void sendFailure(uint64_t lease, const std::string& why, std::optional<uint32_t> failedCell = std::nullopt);
+  void reportCrashIfAny();
+  // Stops the chain, waits for it, and forgets every lease (the coordinator
+  // requeues them): the link was lost, or the worker is leaving.
+  void abandonLeases();
+
+  // The tracing thread.
   FinishedLease traceLease(const net::Decoded& assign, std::optional<std::string> photonRecords);
   bool readyToTrace(const net::Decoded& assign);
-  // The tracing thread: `first`, then each queued lease ready to trace.
+  // `first`, then each queued lease ready to trace.
   void runChain(std::unique_ptr<net::Decoded> first, std::optional<std::string> photonRecords);
 
   WorkerOptions options_;
@@ -85,7 +114,15 @@ class WorkerSession {
   std::optional<net::ClientKeys> keys_;
   CellCache cache_;
   AcceleratorChooser chooser_;
-  int leaseDone_;   // eventfd: written for each finished lease
+  int leaseFinishedFd_;   // eventfd: written for each finished lease
+  std::unique_ptr<CoordinatorLink> link_;
+  // The lease being readied on the main thread (not yet traced). The
+  // coordinator sends the next lease before this one ends
+  // (WorkerInfo::kLeasesInFlight), so that it is here the moment the
+  // tracing thread is free.
+  std::optional<PreparingLease> preparing_;
+  std::future<void> tracing_;   // the tracing thread of the current chain
+  int leasesReported_ = 0;      // Results sent (--crash-after-leases)
   // Shared by the main thread and the tracing thread, under `mutex`.
   struct Chain {
     std::mutex mutex;

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/job/job_settings.h"
 #include "common/scene/store/scene_store.h"
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_tracer.h"
@@ -29,32 +30,7 @@ struct TracingStopped : std::runtime_error {
   TracingStopped() : std::runtime_error("tracing stopped") {}
 };
 
-// JobSpec.lightHops meaning "choose from the store": 2 for room cells, all
-// lights for voxel cells (scene import --grid).
-constexpr int kAutomaticLightHops = -2;
-
-struct JobParameters {
-  uint64_t seed = 1;
-  uint32_t spp = 4;
-  uint32_t width = 0, height = 0;
-  uint32_t lightSamples = 2;      // shadow rays per camera hit
-  int lightHops = 2;              // sample lights of cells within this many portals (-1: all)
-  uint32_t photonK = 64;          // photons per density estimate
-  float photonRadius = 0.5f;      // largest search radius, metres
-  uint32_t maxPhotonBounces = 64;
-  uint32_t gather = 0;            // final-gather rays per camera hit (0: estimate at the hit)
-  // What a gather hit reads: the nearest precomputed irradiance (Christensen;
-  // IrradianceCache), or the k-nearest-photon estimate searched there.
-  enum class Irradiance { Precomputed, Knn } irradiance = Irradiance::Precomputed;
-  // A precomputed point at about one photon in this many of a cell's map.
-  uint32_t irradianceStride = 8;
-  // Photons per precomputed estimate: each is read by many gather hits, so
-  // it can use fewer than an estimate seen directly (as Jensen's gather
-  // lookups do, §9.3.2); measured on the reference scenes, half of photonK
-  // gave a lower block error than photonK, in less time.
-  uint32_t irradianceK() const { return std::max(8u, photonK / 2); }
-  enum class Aov { Radiance, Cells, Portals } aov = Aov::Radiance;
-};
+using JobParameters = JobSettings;   // the complete spec of the lease's job
 
 // False colours for the cell and portal pictures: distinct, stable hues.
 Vec3 cellColour(uint32_t cell);

@@ -1,10 +1,11 @@
-// A ray in flight between cells, and its conversions to and from the wire.
+// A ray in flight between cells: everything needed to finish it
+// (common/net/ray_wire.h converts it to and from the wire).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 #include "common/math.h"
-#include "proto/wire.capnp.h"
 
 namespace portico {
 
@@ -19,38 +20,6 @@ struct RayState {
   float tMin = 0, tMax = kInfinity;
   Vec3 weight;              // photon power, camera/gather throughput, or shadow contribution
 };
-
-inline void toWire(const RayState& ray, wire::Ray::Builder out) {
-  out.setKind(static_cast<wire::RayKind>(ray.kind));
-  out.setDepth(ray.depth);
-  out.setPathId(ray.pathId);
-  out.setPixel(ray.pixel);
-  out.setOx(ray.origin.x);
-  out.setOy(ray.origin.y);
-  out.setOz(ray.origin.z);
-  out.setDx(ray.direction.x);
-  out.setDy(ray.direction.y);
-  out.setDz(ray.direction.z);
-  out.setTMin(ray.tMin);
-  out.setTMax(ray.tMax);
-  out.setR(ray.weight.x);
-  out.setG(ray.weight.y);
-  out.setB(ray.weight.z);
-}
-
-inline RayState fromWire(wire::Ray::Reader in) {
-  RayState ray;
-  ray.kind = static_cast<RayKind>(in.getKind());
-  ray.depth = in.getDepth();
-  ray.pathId = in.getPathId();
-  ray.pixel = in.getPixel();
-  ray.origin = {in.getOx(), in.getOy(), in.getOz()};
-  ray.direction = {in.getDx(), in.getDy(), in.getDz()};
-  ray.tMin = in.getTMin();
-  ray.tMax = in.getTMax();
-  ray.weight = {in.getR(), in.getG(), in.getB()};
-  return ray;
-}
 
 // A ray from the network is traced only if it is well formed.
 inline bool isValid(const RayState& ray) {

@@ -7,35 +7,14 @@
 #include <string>
 #include <vector>
 
+#include "common/job/job_settings.h"
 #include "common/scene/import/building_importer.h"
 
 namespace portico::cli {
 
-// Options shared by `render` and `submit`: what the job computes.
-struct RenderOptions {
-  std::string store;
-  std::string output;
-  std::string accel = "grid";
-  // Render leases' structure: "" picks bvh with the default grid (render
-  // rays are many per triangle: bvh traces camera rays 1.3-1.9x as fast as
-  // kd:sah and builds 2.5x as fast, docs/accelerator-benchmarks.md), else
-  // the --accel.
-  std::string renderAccel;
-  // Defaults checked against the reference scenes (docs/validation.md):
-  // final gathering at every camera hit, N-rooks pixel samples.
-  uint64_t photons = 200000;
-  uint32_t spp = 16;
-  uint32_t gather = 4;
-  uint64_t seed = 1;
-  uint32_t width = 0, height = 0;
-  uint32_t lightSamples = 2;
-  int lightHops = -2;   // -2: automatic (2 for rooms and portals, every light for voxel cells)
-  uint32_t photonK = 64;
-  float photonRadius = 0.5f;
-  float exposure = 1.0f;
-  std::string aov = "radiance";
-  std::string irradiance = "precomputed";   // what a gather hit reads: precomputed | knn
-};
+// Options shared by `render` and `submit`: what the job computes, with the
+// job's own defaults (common/job/job_settings.h).
+using RenderOptions = JobSettings;
 
 void addRenderOptions(CLI::App& command, RenderOptions& options);
 

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "common/net/client.h"
+#include "common/net/job_spec_wire.h"
 #include "common/util/cli_bounds.h"
 #include "common/util/output_path.h"
 #include "coordinator/job_limits.h"
@@ -55,19 +56,31 @@ void addRenderOptions(CLI::App& command, RenderOptions& o) {
   command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")
       ->capture_default_str()
       ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
-  command.add_option("--irradiance", o.irradiance,
-                     "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at about one "
-                     "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
+  command
+      .add_option_function<std::string>(
+          "--irradiance",
+          [&o](const std::string& name) {
+            o.irradiance = name == "knn" ? JobSettings::Irradiance::Knn : JobSettings::Irradiance::Precomputed;
+          },
+          "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at about one "
+          "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
       ->check(CLI::IsMember({"precomputed", "knn"}))
-      ->capture_default_str();
+      ->default_str(toString(o.irradiance));
   command.add_option("--exposure", o.exposure, "PNG exposure")
       ->capture_default_str()
       ->check(realNumber(limits::kMinExposure, limits::kMaxExposure));
-  command.add_option("--aov", o.aov,
-                     "what the image shows: radiance; cells (false colour of each pixel's cell); "
-                     "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
+  command
+      .add_option_function<std::string>(
+          "--aov",
+          [&o](const std::string& name) {
+            o.aov = name == "cells"     ? JobSettings::Aov::Cells
+                    : name == "portals" ? JobSettings::Aov::Portals
+                                        : JobSettings::Aov::Radiance;
+          },
+          "what the image shows: radiance; cells (false colour of each pixel's cell); "
+          "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
       ->check(CLI::IsMember({"radiance", "cells", "portals"}))
-      ->capture_default_str();
+      ->default_str(toString(o.aov));
 }
 
 void addConnectOptions(CLI::App& command, ConnectOptions& o) {
@@ -99,26 +112,13 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 }  // namespace
 
 void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
-  auto spec = message.initRoot<wire::Envelope>().initSubmit().initSpec();
-  spec.setStore(std::filesystem::absolute(o.store).lexically_normal().string());
+  JobSettings settings = o;
+  settings.store = std::filesystem::absolute(o.store).lexically_normal().string();
   // As the user who asks: the coordinator checks it again as itself.
   checkOutputPath(o.output);
-  spec.setOutput(std::filesystem::absolute(o.output).lexically_normal().string());
-  spec.setAccel(o.accel);
-  spec.setRenderAccel(!o.renderAccel.empty() ? o.renderAccel : o.accel == "grid" ? "bvh" : o.accel);
-  spec.setPhotons(o.photons);
-  spec.setSpp(o.spp);
-  spec.setSeed(o.seed);
-  spec.setWidth(o.width);
-  spec.setHeight(o.height);
-  spec.setLightSamples(o.lightSamples);
-  spec.setPhotonK(o.photonK);
-  spec.setPhotonRadius(o.photonRadius);
-  spec.setExposure(o.exposure);
-  spec.setGather(o.gather);
-  spec.setLightHops(o.lightHops);
-  spec.setIrradiance(o.irradiance == "knn" ? wire::Irradiance::KNN : wire::Irradiance::PRECOMPUTED);
-  spec.setAov(o.aov == "cells" ? wire::Aov::CELLS : o.aov == "portals" ? wire::Aov::PORTALS : wire::Aov::RADIANCE);
+  settings.output = std::filesystem::absolute(o.output).lexically_normal().string();
+  // Automatic values stay automatic: the coordinator resolves them (resolveJobSettings).
+  toWire(settings, message.initRoot<wire::Envelope>().initSubmit().initSpec());
 }
 
 int runSubmit(const ConnectOptions& connect, const RenderOptions& render) {

@@ -13,7 +13,7 @@
 
 #include "common/net/message.h"
 #include "common/transport/photon_record.h"
-#include "common/transport/ray_state.h"
+#include "common/net/ray_wire.h"
 #include "tests/fuzz/fuzz_support.h"
 
 using namespace portico;

@@ -11,7 +11,7 @@
 
 #include "common/transport/photon_map.h"
 #include "common/transport/photon_record.h"
-#include "common/transport/ray_state.h"
+#include "common/net/ray_wire.h"
 #include "proto/wire.capnp.h"
 
 namespace portico::fuzz {

@@ -1,0 +1,61 @@
+// A job's settings: what it computes, with the one set of defaults there
+// is. The `render` and `submit` options bind to these fields, the submit
+// message carries them (common/net/job_spec_wire.h), the coordinator
+// resolves every automatic value once at submit (resolveJobSettings,
+// coordinator/job_planner.h) and stores the result, and workers trace with
+// that complete spec.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+
+namespace portico {
+
+// lightHops meaning "choose from the store": 2 for room cells, all lights
+// for voxel cells (scene import --grid).
+constexpr int kAutomaticLightHops = -2;
+
+struct JobSettings {
+  std::string store;                 // scene store directory (absolute once submitted)
+  std::string output;                // image path (.png or .exr)
+  std::string accel = "grid";        // per-cell accelerator of the photon pass
+  // Render leases' structure; "" (automatic): bvh with the grid, else the
+  // accel. Render rays are many per triangle: bvh traces camera rays
+  // 1.3-1.9x as fast as kd:sah and builds 2.5x as fast
+  // (docs/accelerator-benchmarks.md).
+  std::string renderAccel;
+  // Defaults checked against the reference scenes (docs/validation.md):
+  // final gathering at every camera hit, N-rooks pixel samples.
+  uint64_t photons = 200000;
+  uint32_t spp = 16;
+  uint32_t gather = 4;               // final-gather rays per camera hit (0: estimate at the hit)
+  uint64_t seed = 1;
+  uint32_t width = 0, height = 0;    // 0: the camera's
+  uint32_t lightSamples = 2;         // shadow rays per camera hit
+  int lightHops = kAutomaticLightHops;   // sample lights of cells within this many portals (-1: all)
+  uint32_t photonK = 64;             // photons per density estimate
+  float photonRadius = 0.5f;         // largest search radius, metres
+  float exposure = 1.0f;             // PNG exposure
+  // What a gather hit reads: the nearest precomputed irradiance (Christensen;
+  // IrradianceCache), or the k-nearest-photon estimate searched there.
+  enum class Irradiance { Precomputed, Knn } irradiance = Irradiance::Precomputed;
+  enum class Aov { Radiance, Cells, Portals } aov = Aov::Radiance;   // what the image shows
+
+  // The renderer's own constants, the same for every job (not on the wire).
+  uint32_t maxPhotonBounces = 64;
+  // A precomputed point at about one photon in this many of a cell's map.
+  uint32_t irradianceStride = 8;
+  // Photons per precomputed estimate: each is read by many gather hits, so
+  // it can use fewer than an estimate seen directly (as Jensen's gather
+  // lookups do, §9.3.2); measured on the reference scenes, half of photonK
+  // gives a lower block error than photonK, in less time.
+  uint32_t irradianceK() const { return std::max(8u, photonK / 2); }
+
+  bool operator==(const JobSettings&) const = default;
+};
+
+const char* toString(JobSettings::Irradiance irradiance);
+const char* toString(JobSettings::Aov aov);
+
+}  // namespace portico

@@ -1,0 +1,53 @@
+#include "common/net/job_spec_wire.h"
+
+namespace portico {
+
+void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
+  spec.setStore(settings.store);
+  spec.setOutput(settings.output);
+  spec.setAccel(settings.accel);
+  spec.setRenderAccel(settings.renderAccel);
+  spec.setPhotons(settings.photons);
+  spec.setSpp(settings.spp);
+  spec.setSeed(settings.seed);
+  spec.setWidth(settings.width);
+  spec.setHeight(settings.height);
+  spec.setLightSamples(settings.lightSamples);
+  spec.setPhotonK(settings.photonK);
+  spec.setPhotonRadius(settings.photonRadius);
+  spec.setExposure(settings.exposure);
+  spec.setGather(settings.gather);
+  spec.setLightHops(settings.lightHops);
+  spec.setIrradiance(settings.irradiance == JobSettings::Irradiance::Knn ? wire::Irradiance::KNN
+                                                                          : wire::Irradiance::PRECOMPUTED);
+  spec.setAov(settings.aov == JobSettings::Aov::Cells     ? wire::Aov::CELLS
+              : settings.aov == JobSettings::Aov::Portals ? wire::Aov::PORTALS
+                                                          : wire::Aov::RADIANCE);
+}
+
+JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
+  JobSettings settings;
+  settings.store = spec.getStore();
+  settings.output = spec.getOutput();
+  settings.accel = spec.getAccel();
+  settings.renderAccel = spec.getRenderAccel();
+  settings.photons = spec.getPhotons();
+  settings.spp = spec.getSpp();
+  settings.seed = spec.getSeed();
+  settings.width = spec.getWidth();
+  settings.height = spec.getHeight();
+  settings.lightSamples = spec.getLightSamples();
+  settings.photonK = spec.getPhotonK();
+  settings.photonRadius = spec.getPhotonRadius();
+  settings.exposure = spec.getExposure();
+  settings.gather = spec.getGather();
+  settings.lightHops = spec.getLightHops();
+  settings.irradiance = spec.getIrradiance() == wire::Irradiance::KNN ? JobSettings::Irradiance::Knn
+                                                                       : JobSettings::Irradiance::Precomputed;
+  settings.aov = spec.getAov() == wire::Aov::CELLS     ? JobSettings::Aov::Cells
+                 : spec.getAov() == wire::Aov::PORTALS ? JobSettings::Aov::Portals
+                                                       : JobSettings::Aov::Radiance;
+  return settings;
+}
+
+}  // namespace portico

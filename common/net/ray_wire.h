@@ -1,0 +1,42 @@
+// A ray in flight between cells (common/transport/ray_state.h) and its
+// wire form (wire::Ray): the transport code knows nothing of the wire.
+#pragma once
+
+#include "common/transport/ray_state.h"
+#include "proto/wire.capnp.h"
+
+namespace portico {
+
+inline void toWire(const RayState& ray, wire::Ray::Builder out) {
+  out.setKind(static_cast<wire::RayKind>(ray.kind));
+  out.setDepth(ray.depth);
+  out.setPathId(ray.pathId);
+  out.setPixel(ray.pixel);
+  out.setOx(ray.origin.x);
+  out.setOy(ray.origin.y);
+  out.setOz(ray.origin.z);
+  out.setDx(ray.direction.x);
+  out.setDy(ray.direction.y);
+  out.setDz(ray.direction.z);
+  out.setTMin(ray.tMin);
+  out.setTMax(ray.tMax);
+  out.setR(ray.weight.x);
+  out.setG(ray.weight.y);
+  out.setB(ray.weight.z);
+}
+
+inline RayState fromWire(wire::Ray::Reader in) {
+  RayState ray;
+  ray.kind = static_cast<RayKind>(in.getKind());
+  ray.depth = in.getDepth();
+  ray.pathId = in.getPathId();
+  ray.pixel = in.getPixel();
+  ray.origin = {in.getOx(), in.getOy(), in.getOz()};
+  ray.direction = {in.getDx(), in.getDy(), in.getDz()};
+  ray.tMin = in.getTMin();
+  ray.tMax = in.getTMax();
+  ray.weight = {in.getR(), in.getG(), in.getB()};
+  return ray;
+}
+
+}  // namespace portico

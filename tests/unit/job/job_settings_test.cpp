@@ -1,0 +1,98 @@
+#include "common/job/job_settings.h"
+
+#include <capnp/message.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "common/net/job_spec_wire.h"
+#include "common/scene/import/building_importer.h"
+#include "common/scene/store/scene_store.h"
+#include "coordinator/job_planner.h"
+
+namespace portico {
+namespace {
+
+namespace fs = std::filesystem;
+
+// two_rooms as rooms (grid 0) or as voxel cells, imported once per process.
+const SceneStore& twoRooms(uint32_t grid) {
+  static std::map<uint32_t, SceneStore> stores;
+  if (auto it = stores.find(grid); it != stores.end()) return it->second;
+  const fs::path store =
+      fs::temp_directory_path() / ("portico-job-settings-" + std::to_string(getpid()) + "-" + std::to_string(grid));
+  fs::remove_all(store);
+  ImportOptions options;
+  options.gridResolution = grid;
+  importBuilding({std::string(PORTICO_REFERENCE_DIR) + "/two_rooms/scene.json"}, store.string(), options);
+  return stores.emplace(grid, SceneStore::open(store.string())).first->second;
+}
+
+TEST(JobSettings, EveryAutomaticValueIsResolvedOnceFromTheScene) {
+  const SceneStore& rooms = twoRooms(0);
+  const JobSettings resolved = resolveJobSettings(JobSettings{}, rooms);
+  EXPECT_EQ(resolved.width, rooms.camera().width);
+  EXPECT_EQ(resolved.height, rooms.camera().height);
+  EXPECT_EQ(resolved.lightHops, 2);   // room cells
+  EXPECT_EQ(resolved.accel, "grid");
+  EXPECT_EQ(resolved.renderAccel, "bvh");
+  EXPECT_EQ(resolveJobSettings(resolved, rooms), resolved);   // nothing left to resolve
+  EXPECT_NO_THROW(validateJobSettings(resolved, rooms));
+
+  EXPECT_EQ(resolveJobSettings(JobSettings{}, twoRooms(2)).lightHops, -1);   // voxel cells: every light
+  JobSettings chosen;
+  chosen.accel = "kd:sah";
+  chosen.lightHops = 0;
+  chosen.width = 32;
+  chosen.height = 16;
+  const JobSettings kept = resolveJobSettings(chosen, rooms);
+  EXPECT_EQ(kept.renderAccel, "kd:sah");
+  EXPECT_EQ(kept.lightHops, 0);
+  EXPECT_EQ(kept.width, 32u);
+  EXPECT_EQ(kept.height, 16u);
+}
+
+TEST(JobSettings, ASubmitThatLeavesValuesOutGetsTheDefaults) {
+  capnp::MallocMessageBuilder message;
+  auto spec = message.initRoot<wire::JobSpec>();
+  spec.setPhotons(10);
+  spec.setSpp(1);
+  spec.setPhotonRadius(0.5f);
+  const JobSettings resolved = resolveJobSettings(jobSettingsFromWire(spec.asReader()), twoRooms(0));
+  const JobSettings defaults;
+  EXPECT_EQ(resolved.photonK, defaults.photonK);
+  EXPECT_EQ(resolved.exposure, defaults.exposure);
+  EXPECT_EQ(resolved.accel, defaults.accel);
+  EXPECT_EQ(resolved.renderAccel, "bvh");
+  EXPECT_EQ(resolved.lightHops, 2);   // the wire's own default
+  EXPECT_NO_THROW(validateJobSettings(resolved, twoRooms(0)));
+}
+
+TEST(JobSettings, TheWireFormKeepsEveryField) {
+  JobSettings settings;
+  settings.store = "/stores/a";
+  settings.output = "/images/a.exr";
+  settings.accel = "kd:sah";
+  settings.renderAccel = "embree";
+  settings.photons = 123456;
+  settings.spp = 3;
+  settings.gather = 7;
+  settings.seed = 99;
+  settings.width = 640;
+  settings.height = 480;
+  settings.lightSamples = 5;
+  settings.lightHops = -1;
+  settings.photonK = 17;
+  settings.photonRadius = 0.25f;
+  settings.exposure = 2.5f;
+  settings.irradiance = JobSettings::Irradiance::Knn;
+  settings.aov = JobSettings::Aov::Portals;
+  capnp::MallocMessageBuilder message;
+  toWire(settings, message.initRoot<wire::JobSpec>());
+  EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);
+}
+
+}  // namespace
+}  // namespace portico

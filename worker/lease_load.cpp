@@ -1,0 +1,113 @@
+#include "worker/lease_load.h"
+
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <memory>
+#include <stdexcept>
+#include <vector>
+
+#include "common/net/job_spec_wire.h"
+#include "common/transport/photon_record.h"
+#include "worker/lease_runner.h"
+
+namespace portico {
+
+namespace {
+// `--accel auto`: the cell with the structure the cost model picks for the
+// rays it is expected to trace, rebuilt when a busy cell makes another pay.
+LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneStore& scene, uint32_t cellId,
+                     int64_t cellWork, bool renderPhase) {
+  const CellInfo& info = scene.cells()[cellId];
+  const CellShape shape = cellShape(double(info.triangleCount), info.bounds);
+  const double expected = chooser.expectedRays(renderPhase, cellWork);
+  bool loadedNow = false;
+  LoadedCell& cell = cache.cell(scene.directory(), cellId, "auto", [&] {
+    loadedNow = true;
+    const CostPrediction choice = chooser.firstChoice(shape, expected);
+    spdlog::info("cell {} ({} triangles): auto chose {} for ~{:.0f} rays (predicted build {:.1f} ms, {:.0f} ns/ray)",
+                 cellId, info.triangleCount, choice.candidate.spec, expected, choice.buildMs, choice.traceNsPerRay);
+    return choice.candidate.spec;
+  });
+  if (loadedNow) return cell;
+  // The rays still to come are the cell's pending work (`expected`), not
+  // what it traced so far. In the photon pass a cell traces most of its
+  // rays in its emission lease and then only the few photons that wander
+  // back in; a bet on its past (rebuilding a busy cell for as many rays
+  // again) pays for kd-trees that are never used.
+  if (auto better = chooser.betterChoice(cell.builtSpec, shape, expected)) {
+    spdlog::info("cell {} ({} triangles): auto rebuilds {} as {} for ~{:.0f} more rays ({} traced so far)", cellId,
+                 info.triangleCount, cell.builtSpec, better->candidate.spec, expected, cell.raysTraced);
+    cache.rebuildAccelerator(cell, better->candidate.spec);
+  }
+  return cell;
+}
+
+LoadedCell& cellWithAccelerator(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
+                                uint32_t cellId, int64_t work, bool renderPhase) {
+  return lease.accel == "auto" ? autoCell(cache, chooser, *lease.scene, cellId, work, renderPhase)
+                               : cache.cell(lease.store, cellId, lease.accel);
+}
+
+int64_t microsecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The cell's photon map from the records of a PhotonsReply, with its
+// irradiance cache when gather hits read one. Final gathering uses every
+// photon; the estimate at a camera hit only those that bounced (direct
+// light is sampled with shadow rays).
+std::unique_ptr<IndirectLight> assembleIndirectLight(CellCache& cache, LoadedLease& lease, uint32_t cellId,
+                                                     std::string photonRecords) {
+  const JobParameters& parameters = lease.parameters;
+  // Room for the decoded photons, which become the map, its build's
+  // scratch and the irradiance cache (under a quarter of the map).
+  const size_t count = photonRecords.size() / sizeof(PhotonRecord);
+  cache.makeRoom(2 * count * sizeof(StoredPhoton));
+  std::vector<StoredPhoton> photons;
+  unpackRecords(photonRecords.data(), photonRecords.size(),
+                PhotonFrame(lease.scene->cells()[cellId].bounds, parameters.photonRadius), parameters.gather > 0,
+                photons);
+  photonRecords.clear();
+  photonRecords.shrink_to_fit();
+  auto light = std::make_unique<IndirectLight>(IndirectLight{PhotonMap(std::move(photons)), std::nullopt});
+  if (parameters.gather > 0 && parameters.irradiance == JobParameters::Irradiance::Precomputed) {
+    const auto started = std::chrono::steady_clock::now();
+    light->irradiance.emplace(light->photons, parameters.irradianceStride, parameters.irradianceK(),
+                              parameters.photonRadius);
+    lease.irradiancePoints = int64_t(light->irradiance->size());
+    lease.irradianceMicroseconds = microsecondsSince(started);
+  }
+  return light;
+}
+}  // namespace
+
+LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assign::Reader assign,
+                      std::optional<std::string> photonRecords, const std::string& storeDirectory) {
+  auto spec = assign.getSpec();
+  const uint32_t cellId = assign.getCell();
+  LoadedLease lease;
+  lease.store = storeDirectory;
+  lease.scene = &cache.scene(storeDirectory);
+  // The coordinator resolved every automatic value (resolveJobSettings).
+  lease.parameters = jobSettingsFromWire(spec);
+  lease.renderPhase = assign.getPhase() == wire::Phase::RENDER;
+  lease.accel = lease.renderPhase ? lease.parameters.renderAccel : lease.parameters.accel;
+  lease.cell = &cellWithAccelerator(cache, chooser, lease, cellId, assign.getCellWork(), lease.renderPhase);
+  if (lease.renderPhase) {
+    lease.indirect = cache.indirectLight(assign.getJob(), cellId);
+    if (!lease.indirect) {
+      if (!photonRecords) throw std::logic_error("render lease without photons");
+      lease.indirect = &cache.storeIndirectLight(
+          assign.getJob(), cellId, assembleIndirectLight(cache, lease, cellId, std::move(*photonRecords)));
+    }
+  }
+  return lease;
+}
+
+LoadedCell& loadMoreCell(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease, uint32_t cellId,
+                         int64_t work) {
+  return cellWithAccelerator(cache, chooser, lease, cellId, work, false);
+}
+
+}  // namespace portico

@@ -1,0 +1,38 @@
+// A lease's first step: what it traces with. The scene, the job's
+// parameters, the lease's cell with the job's accelerator, and in the
+// render phase the cell's photon map, assembled from the photons that came
+// with the lease when the cache does not hold it yet.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "common/transport/cell_kernel.h"
+#include "proto/wire.capnp.h"
+#include "worker/accelerator_choice.h"
+#include "worker/cell_cache.h"
+
+namespace portico {
+
+struct LoadedLease {
+  const SceneStore* scene = nullptr;
+  std::string store;               // the store directory the scene was read from
+  JobParameters parameters;
+  std::string accel;               // the structure this lease's cells are traced with
+  bool renderPhase = false;
+  LoadedCell* cell = nullptr;      // the lease's own cell
+  const IndirectLight* indirect = nullptr;   // its photon map (render phase)
+  int64_t irradiancePoints = 0;    // precomputed by this lease
+  int64_t irradianceMicroseconds = 0;
+};
+
+LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assign::Reader assign,
+                      std::optional<std::string> photonRecords, const std::string& storeDirectory);
+
+// Another cell of the lease (Assign.moreCells) with the lease's structure;
+// `work`: the rays it is to trace, for `--accel auto`.
+LoadedCell& loadMoreCell(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease, uint32_t cellId,
+                         int64_t work);
+
+}  // namespace portico

@@ -1,0 +1,129 @@
+#include "worker/lease_trace.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include "common/net/ray_wire.h"
+#include "worker/lease_runner.h"
+
+namespace portico {
+
+namespace {
+void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobParameters& parameters, uint32_t cellId,
+                  capnp::List<wire::RayBatch>::Reader batches, KernelOutputs& out) {
+  for (auto batch : batches) {
+    switch (batch.which()) {
+      case wire::RayBatch::EMIT: {
+        auto emit = batch.getEmit();
+        if (emit.getLight() >= scene.lights().size() || scene.lights()[emit.getLight()].cell != cellId)
+          throw std::runtime_error(
+              fmt::format("emission batch names light {}, which is not in cell {}", emit.getLight(), cellId));
+        kernel.emitPhotons(emit.getLight(), emit.getFirstPath(), emit.getCount(), emit.getPhotonsOfLight(), out);
+        break;
+      }
+      case wire::RayBatch::CAMERA: {
+        auto camera = batch.getCamera();
+        if (uint64_t(camera.getFirstPixel()) + camera.getPixelCount() > uint64_t(parameters.width) * parameters.height)
+          throw std::runtime_error("camera batch lies outside the image");
+        kernel.generateCameraRays(camera.getFirstPixel(), camera.getPixelCount(), out);
+        break;
+      }
+      case wire::RayBatch::RAYS:
+        for (auto ray : batch.getRays()) kernel.trace(fromWire(ray), out);
+        break;
+    }
+  }
+}
+
+int64_t workOf(capnp::List<wire::RayBatch>::Reader batches) {
+  int64_t work = 0;
+  for (auto batch : batches)
+    work += batch.isRays() ? int64_t(batch.getRays().size()) : batch.isEmit() ? int64_t(batch.getEmit().getCount()) : 0;
+  return work;
+}
+
+// The photon pass's more cells (Assign.moreCells), each in its own kernel;
+// a failure names its cell.
+void traceMoreCells(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
+                    wire::Assign::Reader assign, const std::atomic<bool>* stop, KernelOutputs& out) {
+  const SceneStore& scene = *lease.scene;
+  for (auto more : assign.getMoreCells()) {
+    const uint32_t moreId = more.getCell();
+    if (moreId >= scene.cells().size())
+      throw std::runtime_error(fmt::format("lease names cell {}, which does not exist", moreId));
+    try {
+      LoadedCell& moreCell = loadMoreCell(cache, chooser, lease, moreId, workOf(more.getBatches()));
+      CellKernel kernel(scene, *moreCell.tracer, lease.parameters, nullptr);
+      kernel.setStopFlag(stop);
+      traceBatches(scene, kernel, lease.parameters, moreId, more.getBatches(), out);
+    } catch (const TracingStopped&) {
+      throw;
+    } catch (const std::exception& e) {
+      throw MoreCellError(moreId, e.what());
+    } catch (const kj::Exception& e) {
+      throw MoreCellError(moreId, fmt::format("malformed lease: {}", e.getDescription().cStr()));
+    }
+  }
+}
+
+// Crossings into cells this worker already holds (with the job's accelerator,
+// and in the render phase with their photon map) are traced here, in this
+// lease, instead of going back to the coordinator to come out again as a
+// lease of their own. A photon bouncing between rooms the worker holds then
+// finishes without a round trip per portal: the end of a photon pass is
+// made of such small generations, each a lease, and the workers would sit
+// idle between them. No bit changes: a ray carries its whole state, photon
+// tables are sorted by content and film sums are exact. At most `limit`
+// rays are forwarded (the last destination's in full), so a lease stays
+// about a lease's work. Returns the rays forwarded.
+int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, uint64_t job, int64_t limit,
+                           KernelOutputs& out, const std::atomic<bool>* stop) {
+  int64_t forwarded = 0;
+  for (bool progress = true; progress && forwarded < limit;) {
+    progress = false;
+    for (auto it = out.crossings.begin(); it != out.crossings.end() && forwarded < limit;) {
+      const uint32_t destination = it->first;
+      LoadedCell* held = cache.heldCell(lease.store, destination, lease.accel);
+      const IndirectLight* photons = held && lease.renderPhase ? cache.indirectLight(job, destination) : nullptr;
+      if (!held || (lease.renderPhase && !photons)) {
+        ++it;
+        continue;
+      }
+      const std::vector<RayState> rays = std::move(it->second);
+      it = out.crossings.erase(it);   // tracing may add crossings to other cells; this one stays valid
+      CellKernel kernel(*lease.scene, *held->tracer, lease.parameters, photons);
+      kernel.setStopFlag(stop);
+      for (const RayState& ray : rays) kernel.trace(ray, out);
+      forwarded += int64_t(rays.size());
+      progress = true;
+    }
+  }
+  return forwarded;
+}
+}  // namespace
+
+TracedLease traceLoadedLease(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
+                             wire::Assign::Reader assign, int64_t forwardRays, const std::atomic<bool>* stop) {
+  TracedLease traced;
+  // More cells come only in the photon pass (they need no photon map).
+  if (assign.getMoreCells().size() > 0 && lease.renderPhase)
+    throw std::runtime_error("a render lease with more cells");
+  {
+    CellKernel kernel(*lease.scene, *lease.cell->tracer, lease.parameters, lease.indirect);
+    kernel.setStopFlag(stop);
+    traceBatches(*lease.scene, kernel, lease.parameters, assign.getCell(), assign.getBatches(), traced.out);
+  }
+  traceMoreCells(cache, chooser, lease, assign, stop, traced.out);
+  // The lease's own rays, before any are forwarded: what auto learns from.
+  lease.cell->raysTraced += traced.out.counters.raySegments;
+  chooser.learn(lease.renderPhase, assign.getLeaseWork(), traced.out.counters.raySegments);
+  if (forwardRays > 0)
+    traced.forwarded = forwardToHeldCells(cache, lease, assign.getJob(), std::max(forwardRays, assign.getLeaseWork()),
+                                          traced.out, stop);
+  return traced;
+}
+
+}  // namespace portico
