@@ -177,7 +177,7 @@ InCorePhotonResult runInCorePhotonTracer(const SceneStore& scene, const InCorePh
           // Emission: CellKernel::emitPhotons.
           const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
           const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
-          Vec3 origin = offsetAlongNormal(light.corner + light.edge1 * u + light.edge2 * v, lightNormal);
+          Vec3 origin = offsetAlongNormal(light.pointAt(u, v), lightNormal);
           Vec3 direction =
               sampleCosineHemisphere(lightNormal, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
                                      randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
