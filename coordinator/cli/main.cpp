@@ -52,9 +52,12 @@ int main(int argc, char** argv) {
   bool noCompress = false;
   info->add_flag("--no-compress", noCompress, "skip the zlib-compressed size (slow on large stores)");
   std::string exportOutput;
-  auto* exportCommand = scene->add_subcommand("export", "write a scene store's triangles as OBJ + MTL");
+  auto* exportCommand = scene->add_subcommand("export", "write a scene store as glTF (.glb, .gltf) or OBJ + MTL");
   exportCommand->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
-  exportCommand->add_option("-o,--output", exportOutput, "OBJ file to write (its MTL beside it)")->required();
+  exportCommand
+      ->add_option("-o,--output", exportOutput,
+                   "file to write: FILE.glb, FILE.gltf (FILE.bin beside it) or FILE.obj (FILE.mtl beside it)")
+      ->required();
   ScenePlanOptions planOptions;
   auto* plan = scene->add_subcommand("plan", "draw top-down floor plans of a scene store as a PNG");
   plan->add_option("STORE", store, "scene store directory")->required()->check(CLI::ExistingDirectory);
