@@ -206,7 +206,11 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     const uint32_t cell = givenCells ? cellIds.at(entry.cell) : 0;
     if (!entry.albedo) {
-      addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
+      try {
+        addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
+      } catch (const std::runtime_error& e) {
+        fail(e.what());
+      }
     } else {
       ImportedObject object;
       object.label = entry.label();

@@ -432,7 +432,8 @@ BuildingDescription readBuildingJson(const std::string& path) {
   const json root = parseFile(path);
   const Reader reader(path);
   if (!root.is_object()) reader.fail("the top level must be a JSON object");
-  reader.requireKnownKeys(root, "top level", {"name", "units", "objects", "lights", "cells", "portals", "camera", "cameras"});
+  reader.requireKnownKeys(root, "top level",
+                          {"name", "units", "objects", "lights", "cells", "portals", "camera", "cameras"});
   BuildingDescription building;
   building.path = path;
   building.name = fs::path(path).stem().string();

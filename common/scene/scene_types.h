@@ -36,7 +36,9 @@ struct AreaLight {
   Vec3 normal() const { return normalize(cross(edge1, edge2)); }
   float area() const { return isTriangle() ? 0.5f * length(cross(edge1, edge2)) : length(cross(edge1, edge2)); }
   Vec3 power() const { return radiance * (kPi * area()); }   // Phi = pi A L per channel
-  Vec3 center() const { return isTriangle() ? corner + (edge1 + edge2) * (1.0f / 3.0f) : corner + (edge1 + edge2) * 0.5f; }
+  Vec3 center() const {
+    return isTriangle() ? corner + (edge1 + edge2) * (1.0f / 3.0f) : corner + (edge1 + edge2) * 0.5f;
+  }
   // A uniformly distributed point for (u, v) uniform in [0,1)^2. A triangle
   // folds the square's far half onto itself (u + v > 1 -> 1 - u, 1 - v), so
   // both shapes use the same two random numbers.
