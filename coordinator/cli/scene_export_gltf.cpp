@@ -173,7 +173,6 @@ ExportSummary exportStoreGltf(const std::string& directory, const std::string& p
   const SceneStore store = SceneStore::open(directory);
   json document{{"asset", {{"version", "2.0"}, {"generator", "portico scene export"}}},
                 {"scene", 0},
-                {"extensionsUsed", {"KHR_materials_emissive_strength"}},
                 {"bufferViews", json::array()},
                 {"accessors", json::array()},
                 {"meshes", json::array()},
@@ -213,6 +212,11 @@ ExportSummary exportStoreGltf(const std::string& directory, const std::string& p
   document["scenes"] = {{{"name", store.meta().count("name") ? store.meta().at("name") : std::string("building")},
                          {"nodes", sceneNodes},
                          {"extras", sceneExtras(store)}}};
+  for (const json& material : document["materials"])
+    if (material.contains("extensions")) document["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+  // glTF forbids empty top-level arrays (a store without triangles has no meshes).
+  for (const char* key : {"bufferViews", "accessors", "meshes", "materials"})
+    if (document[key].empty()) document.erase(key);
   json bufferEntry{{"byteLength", buffer.bytes().size()}};
   if (fs::path(path).extension() == ".glb") {
     document["buffers"] = json::array({bufferEntry});
