@@ -1,5 +1,7 @@
 #include "common/transport/light_sampler.h"
 
+#include <algorithm>
+
 #include "common/transport/sampling.h"
 
 namespace portico {
@@ -47,15 +49,20 @@ LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u)
     const Vec3 toPoint = point - light.center();
     // A point behind the light's plane sees only its dark back.
     const bool lightFacesPoint = dot(light.normal(), toPoint) > 0;
-    // Half the light's diagonal: a point cannot be nearer the light than
-    // that bound says without being over it, so cap the falloff there.
-    const float halfDiagonal = 0.5f * length(light.edge1 + light.edge2);
-    const Vec3 corner = light.corner;
+    // How far the light reaches from its centre (half a parallelogram's
+    // diagonal): a point cannot be nearer the light than that bound says
+    // without being over it, so cap the falloff there.
+    Vec3 corners[4];
+    const int cornerCount = light.corners(corners);
+    float reach = 0.5f * length(light.edge1 + light.edge2);
+    if (light.isTriangle()) {
+      reach = 0.0f;
+      for (int k = 0; k < cornerCount; ++k) reach = std::max(reach, length(corners[k] - light.center()));
+    }
     bool pointFacesLight = false;   // any part of the light above the point's tangent plane
-    for (const Vec3& q : {corner, corner + light.edge1, corner + light.edge2, corner + light.edge1 + light.edge2})
-      pointFacesLight |= dot(normal, q - point) > 0;
+    for (int k = 0; k < cornerCount; ++k) pointFacesLight |= dot(normal, corners[k] - point) > 0;
     if (lightFacesPoint && pointFacesLight) {
-      const double d2 = std::max(double(dot(toPoint, toPoint)), double(halfDiagonal) * halfDiagonal);
+      const double d2 = std::max(double(dot(toPoint, toPoint)), double(reach) * reach);
       total += luminance(light.power()) / d2;
     }
     cumulative[i] = total;

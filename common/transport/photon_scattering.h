@@ -26,7 +26,7 @@ inline RayState emitPhoton(const AreaLight& light, const Vec3& lightNormal, cons
                            uint64_t path) {
   const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
   const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
-  const Vec3 point = light.corner + light.edge1 * u + light.edge2 * v;
+  const Vec3 point = light.pointAt(u, v);
   RayState photon;
   photon.kind = RayKind::Photon;
   photon.pathId = path;

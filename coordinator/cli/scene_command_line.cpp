@@ -74,9 +74,12 @@ void addExport(CLI::App& scene, CommandTable& table) {
     std::string store, output;
   };
   auto o = std::make_shared<Options>();
-  auto* exportCommand = scene.add_subcommand("export", "write a scene store's triangles as OBJ + MTL");
+  auto* exportCommand = scene.add_subcommand("export", "write a scene store as glTF (.glb, .gltf) or OBJ + MTL");
   exportCommand->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
-  exportCommand->add_option("-o,--output", o->output, "OBJ file to write (its MTL beside it)")->required();
+  exportCommand
+      ->add_option("-o,--output", o->output,
+                   "file to write: FILE.glb, FILE.gltf (FILE.bin beside it) or FILE.obj (FILE.mtl beside it)")
+      ->required();
   table.add(exportCommand, [o] { return runSceneExport(o->store, o->output); });
 }
 

@@ -59,12 +59,13 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
                              100.0 * double(read) / double(objects),
                              std::chrono::duration<double>(now - started).count());
   };
+  ImportSummary summary;
   if (inputs.size() == 1 && isIfcFile(inputs[0])) {
     // The converter's files live beside the store while it is written, then go.
     const std::string converted = store + ".ifc-conversion";
     std::filesystem::remove_all(converted);
     try {
-      importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, withProgress);
+      summary = importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, withProgress);
       std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
                                  std::filesystem::copy_options::overwrite_existing);
     } catch (...) {
@@ -73,9 +74,11 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
     }
     std::filesystem::remove_all(converted);
   } else {
-    importBuilding(inputs, store, withProgress);
+    summary = importBuilding(inputs, store, withProgress);
   }
-  return runSceneInfo(store, false);
+  const int status = runSceneInfo(store, false);
+  for (const std::string& warning : summary.warnings) std::cerr << "portico: warning: " << warning << "\n";
+  return status;
 }
 
 namespace {

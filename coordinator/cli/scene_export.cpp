@@ -10,6 +10,8 @@
 
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/scene_store.h"
+#include "coordinator/cli/export_groups.h"
+#include "coordinator/cli/scene_export_gltf.h"
 
 namespace portico::cli {
 
@@ -42,7 +44,8 @@ void writeComments(const SceneStore& store, fmt::ostream& out) {
 ExportSummary exportStoreObj(const std::string& directory, const std::string& objPath) {
   namespace fs = std::filesystem;
   if (fs::path(objPath).extension() != ".obj")
-    throw std::runtime_error(fmt::format("{}: export writes Wavefront OBJ (+ MTL); name the file *.obj", objPath));
+    throw std::runtime_error(
+        fmt::format("{}: export writes Wavefront OBJ (+ MTL) or glTF; name the file *.obj, *.glb or *.gltf", objPath));
   const SceneStore store = SceneStore::open(directory);
   const std::string mtlPath = fs::path(objPath).replace_extension(".mtl").string();
   writeMtl(store, mtlPath);
@@ -56,35 +59,31 @@ ExportSummary exportStoreObj(const std::string& directory, const std::string& ob
     const std::unique_ptr<CellGeometry> geometry =
         CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
     const MeshView& mesh = geometry->mesh();
-    uint32_t previousMaterial = UINT32_MAX, lamp = 0, lampTriangles = 0;
-    out.print("o {}\n", cell.name);
-    for (uint32_t t = 0; t < mesh.triangleCount; ++t) {
-      const uint32_t material = geometry->material(t);
-      // A lamp is two triangles (a quad): each its own object, so that an
-      // import reads it back as one quad light.
-      const bool emissive = store.materials()[material].emissive();
-      if (emissive && lampTriangles % 2 == 0) out.print("o {}-lamp-{}\n", cell.name, lamp++);
-      if (!emissive && previousMaterial != UINT32_MAX && store.materials()[previousMaterial].emissive())
+    uint32_t lamp = 0;
+    for (const TriangleGroup& group : exportGroups(*geometry, store.materials())) {
+      if (group.lamp)
+        out.print("o {}-lamp-{}\n", cell.name, lamp++);
+      else
         out.print("o {}\n", cell.name);
-      if (emissive || material != previousMaterial) out.print("usemtl {}\n", materialName(store.materials()[material]));
-      lampTriangles += emissive ? 1 : 0;
-      previousMaterial = material;
-      Vec3 v[3];
-      mesh.triangle(t, v[0], v[1], v[2]);
-      for (const Vec3& p : v) {
-        out.print("v {} {} {}\n", p.x, p.y, p.z);
-        summary.bounds.extend(p);
+      out.print("usemtl {}\n", materialName(store.materials()[group.material]));
+      for (uint32_t t : group.triangles) {
+        Vec3 v[3];
+        mesh.triangle(t, v[0], v[1], v[2]);
+        for (const Vec3& p : v) {
+          out.print("v {} {} {}\n", p.x, p.y, p.z);
+          summary.bounds.extend(p);
+        }
+        out.print("f {} {} {}\n", vertexBase, vertexBase + 1, vertexBase + 2);
+        vertexBase += 3;
+        ++summary.triangles;
       }
-      out.print("f {} {} {}\n", vertexBase, vertexBase + 1, vertexBase + 2);
-      vertexBase += 3;
-      ++summary.triangles;
     }
   }
   return summary;
 }
 
 int runSceneExport(const std::string& store, const std::string& output) {
-  const ExportSummary s = exportStoreObj(store, output);
+  const ExportSummary s = isGltfPath(output) ? exportStoreGltf(store, output) : exportStoreObj(store, output);
   std::cout << fmt::format("{}: {} triangles, bounds ({}, {}, {}) - ({}, {}, {})\n", output, s.triangles, s.bounds.lo.x,
                            s.bounds.lo.y, s.bounds.lo.z, s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z);
   return 0;

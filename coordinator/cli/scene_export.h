@@ -1,8 +1,9 @@
 // `portico scene export STORE -o FILE.obj`: the store's triangles as
-// Wavefront OBJ + MTL, one object per cell (lamps one object each, so that
-// `portico scene import FILE.obj` takes them back as quad lights), every
-// material's albedo as Kd and emission as Ke; portals and cameras as
-// comments. For Blender, any viewer, and other renderers.
+// Wavefront OBJ + MTL, objects per cell and material (lamps one object each,
+// export_groups.h, so that `portico scene import FILE.obj` takes them back
+// as lights), every material's albedo as Kd and emission as Ke; portals and
+// cameras as comments. For Blender, any viewer, and other renderers.
+// FILE.glb and FILE.gltf go to the glTF writer (scene_export_gltf.h).
 #pragma once
 
 #include <cstdint>

@@ -31,6 +31,10 @@ namespace {
 constexpr float kCellPadding = 1e-3f;        // 1 mm around the scene for a cell we make
 constexpr float kCellTolerance = 1e-3f;      // triangles may stick out of their cell by this much of the scene size
 const char* const kSingleCellName = "building";
+const char* const kNoLightsWarning =
+    "the scene has no lights, so it renders black and `portico render` refuses it; add one with a \"lights\" "
+    "array in a building.json (quads and triangles, docs/building-json.md), an emissive material in a mesh file "
+    "(MTL Ke, glTF emissiveFactor), or, for an IFC model, --lights panels";
 
 std::string formatVec(const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
 
@@ -65,6 +69,46 @@ void appendPart(const MeshFilePart& part, ImportedObject& object) {
 
 void extendBounds(Bounds3& bounds, const ImportedObject& object) {
   for (size_t v = 0; v < object.positions.size() / 3; ++v) bounds.extend(object.vertex(static_cast<uint32_t>(v)));
+}
+
+// An emissive object's lights: one quad light where it is a parallelogram of
+// two triangles (every lamp portico writes), otherwise one triangle light
+// per triangle, so any shape emits with its own area and radiance.
+void addEmitter(const ImportedObject& object, const Vec3& radiance, ImportedScene& scene) {
+  std::string problem;
+  if (const std::optional<Parallelogram> quad = parallelogramFromTriangles(object.positions, object.indices, problem)) {
+    scene.lights.push_back(ImportedLight{object.label, object.cell, *quad, radiance});
+    return;
+  }
+  for (size_t t = 0; t < object.triangleCount(); ++t) {
+    const Vec3 a = object.vertex(object.indices[3 * t]), b = object.vertex(object.indices[3 * t + 1]),
+               c = object.vertex(object.indices[3 * t + 2]);
+    scene.lights.push_back(ImportedLight{fmt::format("{} triangle {}", object.label, t), object.cell,
+                                         Parallelogram{a, b - a, c - a}, radiance, LightShape::Triangle});
+  }
+}
+
+// The parts of a mesh file as objects with the file's own materials (diffuse
+// colour clamped to [0, 1]; emissive colour, or `emissionOverride`, as
+// radiance); emissive parts become lights.
+void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& labelPrefix, uint32_t cell,
+                               const std::optional<Vec3>& emissionOverride, MaterialTable& materials,
+                               ImportedScene& scene) {
+  for (const MeshFilePart& part : mesh.parts) {
+    const MeshFileMaterial& source = mesh.materials[part.material];
+    const std::string label = fmt::format("{}: part '{}'", labelPrefix, part.name);
+    if (!isFinite(source.diffuse) || !isFinite(source.emissive))
+      throw std::runtime_error(fmt::format("{}: material '{}' has a colour that is not finite", label, source.name));
+    const Vec3 albedo = min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
+    const Vec3 emission = emissionOverride ? *emissionOverride : max(source.emissive, Vec3(0.0f));
+    ImportedObject object;
+    object.label = label;
+    object.cell = cell;
+    appendPart(part, object);
+    object.material = materials.add(source.name, albedo, emission, scene.materials);
+    if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
+    scene.objects.push_back(std::move(object));
+  }
 }
 
 // The smallest of `cells` containing p (cells may touch), if any.
@@ -108,6 +152,27 @@ void checkObjectsInCells(const ImportedScene& scene, const std::string& path) {
   }
 }
 
+// An entry of the building.json's "lights": its triangles (an emissive,
+// black material) and the light itself.
+void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& materials, ImportedScene& scene) {
+  ImportedObject object;
+  object.label = given.label();
+  object.cell = cell;
+  const Vec3 a = given.corner, b = given.corner + given.edge1, c = given.corner + given.edge2;
+  if (given.shape == LightShape::Triangle) {
+    object.positions = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z};
+    object.indices = {0, 1, 2};
+  } else {
+    const Vec3 d = given.corner + given.edge1 + given.edge2;
+    object.positions = {a.x, a.y, a.z, b.x, b.y, b.z, d.x, d.y, d.z, c.x, c.y, c.z};
+    object.indices = {0, 1, 2, 0, 2, 3};   // both wound like cross(edge1, edge2)
+  }
+  object.material = materials.add(given.name, Vec3(0.0f), given.radiance, scene.materials);
+  scene.lights.push_back(ImportedLight{given.label(), cell, Parallelogram{given.corner, given.edge1, given.edge2},
+                                       given.radiance, given.shape});
+  scene.objects.push_back(std::move(object));
+}
+
 ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options) {
   const BuildingDescription building = readBuildingJson(path);
   auto fail = [&](const std::string& problem) {
@@ -139,23 +204,28 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
       fail(fmt::format("{}: {}", entry.label(), e.what()));
     }
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
-    ImportedObject object;
-    object.label = entry.label();
-    object.cell = givenCells ? cellIds.at(entry.cell) : 0;
-    for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
-    object.material = materials.add(entry.name, entry.albedo, entry.emission, scene.materials);
-    if (maxComponent(entry.emission) > 0.0f) {
-      std::string problem;
-      const std::optional<Parallelogram> shape = parallelogramFromTriangles(object.positions, object.indices, problem);
-      if (!shape)
-        fail(fmt::format(
-            "emissive object '{}' (objects[{}]) is not a parallelogram ({}); only quad lights are supported",
-            entry.name, entry.index, problem));
-      scene.lights.push_back(ImportedLight{entry.label(), object.cell, *shape, entry.emission});
+    const uint32_t cell = givenCells ? cellIds.at(entry.cell) : 0;
+    if (!entry.albedo) {
+      try {
+        addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
+      } catch (const std::runtime_error& e) {
+        fail(e.what());
+      }
+    } else {
+      ImportedObject object;
+      object.label = entry.label();
+      object.cell = cell;
+      for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
+      const Vec3 emission = entry.emission.value_or(Vec3(0.0f));
+      object.material = materials.add(entry.name, *entry.albedo, emission, scene.materials);
+      if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
+      scene.objects.push_back(std::move(object));
     }
-    scene.objects.push_back(std::move(object));
     if (options.onMeshRead) options.onMeshRead(scene.objects.size(), building.objects.size());
   }
+
+  for (const BuildingLight& light : building.lights)
+    addGivenLight(light, givenCells ? cellIds.at(light.cell) : 0, materials, scene);
 
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
   for (const BuildingCamera& camera : building.cameras) scene.bounds.extend(camera.camera.origin);
@@ -186,29 +256,7 @@ ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
   for (const std::string& path : paths) {
     const LoadedMeshFile mesh = loadMeshFile(path);
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
-    for (const MeshFilePart& part : mesh.parts) {
-      const MeshFileMaterial& source = mesh.materials[part.material];
-      const std::string label = fmt::format("mesh file '{}': part '{}'", path, part.name);
-      if (!isFinite(source.diffuse) || !isFinite(source.emissive))
-        throw std::runtime_error(fmt::format("{}: material '{}' has a colour that is not finite", label, source.name));
-      const Vec3 albedo = min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
-      const Vec3 emission = max(source.emissive, Vec3(0.0f));
-      ImportedObject object;
-      object.label = label;
-      appendPart(part, object);
-      object.material = materials.add(source.name, albedo, emission, scene.materials);
-      if (maxComponent(emission) > 0.0f) {
-        std::string problem;
-        const std::optional<Parallelogram> shape =
-            parallelogramFromTriangles(object.positions, object.indices, problem);
-        if (!shape)
-          throw std::runtime_error(fmt::format(
-              "mesh file '{}': emissive part '{}' is not a parallelogram ({}); only quad lights are supported", path,
-              part.name, problem));
-        scene.lights.push_back(ImportedLight{label, 0, *shape, emission});
-      }
-      scene.objects.push_back(std::move(object));
-    }
+    addPartsWithFileMaterials(mesh, fmt::format("mesh file '{}'", path), 0, std::nullopt, materials, scene);
   }
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
   scene.cells.push_back(ImportedCell{kSingleCellName, padded(scene.bounds)});
@@ -225,15 +273,7 @@ ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
 
 void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
   for (const ImportedPortal& portal : scene.portals) writer.addPortal(portal.cellA, portal.cellB, portal.polygon);
-  for (const ImportedLight& light : scene.lights) {
-    AreaLight area;
-    area.cell = light.cell;
-    area.corner = light.shape.corner;
-    area.edge1 = light.shape.edge1;
-    area.edge2 = light.shape.edge2;
-    area.radiance = light.radiance;
-    writer.addLight(area);
-  }
+  for (const ImportedLight& light : scene.lights) writer.addLight(light.areaLight());
   writer.setCamera(scene.camera);
   // One output cell in memory at a time.
   for (uint32_t id = 0; id < scene.cells.size(); ++id) {
@@ -294,7 +334,9 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   else
     writeGivenCells(scene, writer);
   writer.commit();
-  return ImportSummary{scene.triangleCount(), scene.degenerateTrianglesDropped};
+  ImportSummary summary{scene.triangleCount(), scene.degenerateTrianglesDropped, scene.lights.size(), {}};
+  if (scene.lights.empty()) summary.warnings.push_back(kNoLightsWarning);
+  return summary;
 }
 
 }  // namespace portico

@@ -1,11 +1,14 @@
 // Imports a building into a scene store: `portico scene import`.
 //
 // Inputs are either one building.json (docs/building-json.md: objects with a
-// mesh file, cell, albedo and emission; cells; portals; camera) or one or
+// mesh file, cell, albedo (or the file's materials) and emission; lights;
+// cells; portals; camera) or one or
 // more mesh files (OBJ, PLY, glTF/GLB, anything Assimp reads), which become
 // one cell around everything, materials from the files' colours and a
-// default camera. Emissive objects must be parallelograms of two triangles;
-// they become AreaLights (and stay geometry, so rays can hit them).
+// default camera. Emissive objects become AreaLights (and stay geometry, so
+// rays can hit them): a parallelogram of two triangles one quad light, any
+// other shape one triangle light per triangle. A building.json may also
+// list lights directly ("lights": quads and triangles).
 //
 // With ImportOptions::gridResolution = RG > 0 the scene is cut into RG^3
 // voxel cells instead of its own cells (voxel_cells.h): the same building can
@@ -42,6 +45,10 @@ constexpr uint32_t kMaxImportGridResolution = 256;
 struct ImportSummary {
   uint64_t triangles = 0;                    // of the input, as kept (before any grid cutting)
   uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
+  uint64_t lights = 0;                       // as imported (before any grid cutting)
+  // One line each, for the user: the scene has no lights (it would render
+  // black, so `portico render` refuses it), saying how to add one.
+  std::vector<std::string> warnings;
 };
 
 ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,

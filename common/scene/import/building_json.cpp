@@ -214,6 +214,13 @@ std::string knownCells(const std::optional<std::vector<BuildingCell>>& cells) {
   return "known: " + names;
 }
 
+Vec3 radiance(const Reader& reader, const json& value, const std::string& what) {
+  const Vec3 v = reader.vec3(value, what);
+  if (std::min({v.x, v.y, v.z}) < 0.0f)
+    reader.fail(fmt::format("{} [{}, {}, {}] must not be negative", what, v.x, v.y, v.z));
+  return v;
+}
+
 std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, const fs::path& baseDirectory,
                                         const std::optional<std::vector<BuildingCell>>& cells) {
   const json& list = reader.required(root, "objects", "the file");
@@ -247,20 +254,74 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
       reader.fail(fmt::format("{} has no \"cell\" (every object needs one when \"cells\" is given)", what));
     }
 
-    object.albedo = reader.vec3(reader.required(entry, "albedo", what), what + " albedo");
-    if (std::min({object.albedo.x, object.albedo.y, object.albedo.z}) < 0.0f || maxComponent(object.albedo) > 1.0f)
-      reader.fail(fmt::format("{}: albedo [{}, {}, {}] must lie within [0, 1] (it is a reflectance)", what,
-                              object.albedo.x, object.albedo.y, object.albedo.z));
-    const json* emission = reader.member(entry, "emission");
-    if (emission && !emission->is_null()) {
-      object.emission = reader.vec3(*emission, what + " emission");
-      if (std::min({object.emission.x, object.emission.y, object.emission.z}) < 0.0f)
-        reader.fail(fmt::format("{}: emission [{}, {}, {}] must not be negative", what, object.emission.x,
-                                object.emission.y, object.emission.z));
+    if (const json* albedo = reader.member(entry, "albedo")) {
+      const Vec3 value = reader.vec3(*albedo, what + " albedo");
+      if (std::min({value.x, value.y, value.z}) < 0.0f || maxComponent(value) > 1.0f)
+        reader.fail(fmt::format("{}: albedo [{}, {}, {}] must lie within [0, 1] (it is a reflectance)", what, value.x,
+                                value.y, value.z));
+      object.albedo = value;
     }
+    const json* emission = reader.member(entry, "emission");
+    if (emission && !emission->is_null()) object.emission = radiance(reader, *emission, what + " emission");
     objects.push_back(std::move(object));
   }
   return objects;
+}
+
+// One entry of "lights": {"quad": {"corner", "edge1", "edge2"}} or
+// {"triangle": [p0, p1, p2]}, with "radiance" and (given cells) "cell".
+BuildingLight readLight(const Reader& reader, const json& entry, size_t index,
+                        const std::optional<std::vector<BuildingCell>>& cells) {
+  BuildingLight light;
+  light.index = index;
+  std::string what = fmt::format("lights[{}]", index);
+  if (!entry.is_object()) reader.fail(what + " must be an object");
+  light.name = fmt::format("light-{}", index);
+  if (const json* name = reader.member(entry, "name")) light.name = reader.string(*name, what + ".name");
+  what = light.label();
+  reader.requireKnownKeys(entry, what, {"name", "cell", "quad", "triangle", "radiance"});
+  const json* quad = reader.member(entry, "quad");
+  const json* triangle = reader.member(entry, "triangle");
+  if ((quad != nullptr) == (triangle != nullptr))
+    reader.fail(fmt::format("{} needs one shape: \"quad\": {{\"corner\", \"edge1\", \"edge2\"}} or "
+                            "\"triangle\": [[x, y, z], [x, y, z], [x, y, z]]",
+                            what));
+  if (quad) {
+    if (!quad->is_object()) reader.fail(what + ": \"quad\" must be an object with \"corner\", \"edge1\", \"edge2\"");
+    reader.requireKnownKeys(*quad, what + " quad", {"corner", "edge1", "edge2"});
+    light.corner = reader.vec3(reader.required(*quad, "corner", what + " quad"), what + " quad.corner");
+    light.edge1 = reader.vec3(reader.required(*quad, "edge1", what + " quad"), what + " quad.edge1");
+    light.edge2 = reader.vec3(reader.required(*quad, "edge2", what + " quad"), what + " quad.edge2");
+  } else {
+    if (!triangle->is_array() || triangle->size() != 3)
+      reader.fail(what + ": \"triangle\" must be an array of 3 points [x, y, z]");
+    const Vec3 a = reader.vec3((*triangle)[0], what + " triangle[0]");
+    light.shape = LightShape::Triangle;
+    light.corner = a;
+    light.edge1 = reader.vec3((*triangle)[1], what + " triangle[1]") - a;
+    light.edge2 = reader.vec3((*triangle)[2], what + " triangle[2]") - a;
+  }
+  if (!(length(cross(light.edge1, light.edge2)) > 0.0f))
+    reader.fail(fmt::format("{}: the {} has zero area (its edges are parallel or zero)", what,
+                            quad ? "quad" : "triangle"));
+  light.radiance = radiance(reader, reader.required(entry, "radiance", what), what + " radiance");
+  if (!(maxComponent(light.radiance) > 0.0f)) reader.fail(what + ": radiance is zero; a light must emit");
+  if (const json* cell = reader.member(entry, "cell")) {
+    light.cell = reader.string(*cell, what + ".cell");
+    if (!findCell(cells, light.cell))
+      reader.fail(fmt::format("{}: unknown cell '{}' ({})", what, light.cell, knownCells(cells)));
+  } else if (cells) {
+    reader.fail(fmt::format("{} has no \"cell\" (every light needs one when \"cells\" is given)", what));
+  }
+  return light;
+}
+
+std::vector<BuildingLight> readLights(const Reader& reader, const json& list,
+                                      const std::optional<std::vector<BuildingCell>>& cells) {
+  if (!list.is_array()) reader.fail("\"lights\" must be an array");
+  std::vector<BuildingLight> lights;
+  for (size_t i = 0; i < list.size(); ++i) lights.push_back(readLight(reader, list[i], i, cells));
+  return lights;
 }
 
 std::vector<BuildingPortal> readPortals(const Reader& reader, const json& list,
@@ -365,12 +426,14 @@ std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) 
 }  // namespace
 
 std::string BuildingObject::label() const { return fmt::format("objects[{}] ('{}')", index, name); }
+std::string BuildingLight::label() const { return fmt::format("lights[{}] ('{}')", index, name); }
 
 BuildingDescription readBuildingJson(const std::string& path) {
   const json root = parseFile(path);
   const Reader reader(path);
   if (!root.is_object()) reader.fail("the top level must be a JSON object");
-  reader.requireKnownKeys(root, "top level", {"name", "units", "objects", "cells", "portals", "camera", "cameras"});
+  reader.requireKnownKeys(root, "top level",
+                          {"name", "units", "objects", "lights", "cells", "portals", "camera", "cameras"});
   BuildingDescription building;
   building.path = path;
   building.name = fs::path(path).stem().string();
@@ -378,6 +441,7 @@ BuildingDescription readBuildingJson(const std::string& path) {
   readUnits(reader, root);
   if (const json* cells = reader.member(root, "cells")) building.cells = readCells(reader, *cells);
   building.objects = readObjects(reader, root, fs::path(path).parent_path(), building.cells);
+  if (const json* lights = reader.member(root, "lights")) building.lights = readLights(reader, *lights, building.cells);
   if (const json* portals = reader.member(root, "portals"))
     building.portals = readPortals(reader, *portals, building.cells);
   building.cameras = readCameras(reader, root);

@@ -1,8 +1,8 @@
 // Reads a building.json (format: docs/building-json.md) into plain records,
 // checking everything that can be checked without the meshes: types, finite
 // numbers, albedo range, cell names, portal polygons, cameras. Mesh-dependent
-// checks (files exist, triangles inside their cell, emitters are quads,
-// camera inside a cell) are the importer's.
+// checks (files exist, triangles inside their cell, camera inside a cell)
+// are the importer's.
 #pragma once
 
 #include <cstddef>
@@ -20,9 +20,24 @@ struct BuildingObject {
   std::string name;          // "name", else the mesh file's stem
   std::string meshPath;      // resolved against the json's directory
   std::string cell;          // "cell"; empty when the file has no "cells"
-  Vec3 albedo;
-  Vec3 emission;             // zero when null or absent
+  // Absent: every part of the mesh file takes the file's own material.
+  std::optional<Vec3> albedo;
+  std::optional<Vec3> emission;   // absent when null or not given
   // "objects[3] ('light')": how messages name the object.
+  std::string label() const;
+};
+
+// An entry of "lights": a quad (corner + s*edge1 + t*edge2) or a triangle
+// (corner, corner + edge1, corner + edge2), emitting on the side of
+// cross(edge1, edge2).
+struct BuildingLight {
+  size_t index = 0;          // position in "lights"
+  std::string name;          // "name", else "light-<index>"
+  std::string cell;          // "cell"; empty when the file has no "cells"
+  LightShape shape = LightShape::Parallelogram;
+  Vec3 corner, edge1, edge2;
+  Vec3 radiance;
+  // "lights[2] ('desk lamp')": how messages name the light.
   std::string label() const;
 };
 
@@ -46,6 +61,7 @@ struct BuildingDescription {
   std::string path;          // the json file, as given
   std::string name;          // "name", or the file's stem
   std::vector<BuildingObject> objects;
+  std::vector<BuildingLight> lights;
   std::optional<std::vector<BuildingCell>> cells;   // absent: one cell around everything
   std::vector<BuildingPortal> portals;
   std::vector<BuildingCamera> cameras;              // at least one

@@ -35,12 +35,25 @@ struct ImportedObject {
   }
 };
 
-// An emissive object: a parallelogram whose triangles are also in `objects`.
+// An emitter: a parallelogram or a triangle (corner, corner + edge1,
+// corner + edge2) whose triangles are also in `objects`.
 struct ImportedLight {
   std::string label;
   uint32_t cell = 0;                // index into ImportedScene::cells
   Parallelogram shape;
   Vec3 radiance;
+  LightShape kind = LightShape::Parallelogram;
+  // The store's record of it (id left to the writer).
+  AreaLight areaLight() const {
+    AreaLight light;
+    light.cell = cell;
+    light.shape = kind;
+    light.corner = shape.corner;
+    light.edge1 = shape.edge1;
+    light.edge2 = shape.edge2;
+    light.radiance = radiance;
+    return light;
+  }
 };
 
 struct ImportedCell {

@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "common/scene/import/gltf_emissive_strength.h"
+
 namespace portico {
 
 namespace {
@@ -28,7 +30,9 @@ std::string oneLine(std::string text) {
   throw std::runtime_error(fmt::format("mesh file '{}': {}", path, problem));
 }
 
-MeshFileMaterial readMaterial(const aiMaterial& source, size_t index) {
+// `fileStrength`: the material's KHR_materials_emissive_strength as the file
+// gives it, applied where Assimp does not report an intensity itself.
+MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float fileStrength) {
   MeshFileMaterial material;
   aiString name;
   material.name = source.Get(AI_MATKEY_NAME, name) == aiReturn_SUCCESS && name.length > 0
@@ -42,8 +46,9 @@ MeshFileMaterial readMaterial(const aiMaterial& source, size_t index) {
     material.diffuse = Vec3(colour.r, colour.g, colour.b);
   if (source.Get(AI_MATKEY_COLOR_EMISSIVE, colour) == aiReturn_SUCCESS) {
     material.emissive = Vec3(colour.r, colour.g, colour.b);
-    float strength = 1.0f;   // KHR_materials_emissive_strength
-    if (source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength) == aiReturn_SUCCESS) material.emissive *= strength;
+    float strength = fileStrength;   // KHR_materials_emissive_strength
+    source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength);
+    material.emissive *= strength;
   }
   return material;
 }
@@ -139,7 +144,12 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
 
   LoadedMeshFile file;
   file.path = path;
-  for (unsigned m = 0; m < scene->mNumMaterials; ++m) file.materials.push_back(readMaterial(*scene->mMaterials[m], m));
+  const GltfEmissiveStrengths strengths = gltfEmissiveStrengths(path);
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
+    aiString name;
+    scene->mMaterials[m]->Get(AI_MATKEY_NAME, name);
+    file.materials.push_back(readMaterial(*scene->mMaterials[m], m, strengths.of(name.C_Str(), m)));
+  }
   if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
   PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");
   if (file.parts.empty())

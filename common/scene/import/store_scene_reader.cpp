@@ -44,7 +44,8 @@ ImportedScene sceneFromStore(const std::string& directory) {
   for (const Portal& portal : store.portals()) scene.portals.push_back(ImportedPortal{portal.cellA, portal.cellB, portal.polygon});
   for (const AreaLight& light : store.lights())
     scene.lights.push_back(ImportedLight{"light " + std::to_string(light.id), light.cell,
-                                         Parallelogram{light.corner, light.edge1, light.edge2}, light.radiance});
+                                         Parallelogram{light.corner, light.edge1, light.edge2}, light.radiance,
+                                         light.shape});
   scene.camera = store.camera();
   scene.bounds.extend(Bounds3(scene.camera.origin, scene.camera.origin));
   return scene;

@@ -15,9 +15,9 @@
 //  * Lights: a light must emit from its own cell. One whose edges run along
 //    the axes (every quad light of a box-like building) is cut at the voxel
 //    faces into one AreaLight per voxel it covers (same radiance, so the
-//    same total power); any other goes whole to the voxel holding its centre,
-//    nudged to the emitting side (a ceiling light on a voxel face belongs to
-//    the voxel below it).
+//    same total power); any other, and every triangle light, goes whole to
+//    the voxel holding its centre, nudged to the emitting side (a ceiling
+//    light on a voxel face belongs to the voxel below it).
 //  * The camera's cell is the voxel holding its origin.
 #pragma once
 

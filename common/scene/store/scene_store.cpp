@@ -110,11 +110,12 @@ class CatalogueReader {
     return materials;
   }
 
-  std::vector<AreaLight> lights(size_t cellCount) {
+  std::vector<AreaLight> lights(size_t cellCount, int version) {
     std::vector<AreaLight> lights;
-    sql::Statement& row = db_.prepare(
+    sql::Statement& row = db_.prepare(fmt::format(
         "SELECT id, cell, corner_x, corner_y, corner_z, edge1_x, edge1_y, edge1_z, edge2_x, edge2_y, edge2_z, "
-        "radiance_r, radiance_g, radiance_b FROM lights ORDER BY id");
+        "radiance_r, radiance_g, radiance_b, {} FROM lights ORDER BY id",
+        version >= 3 ? "shape" : "'parallelogram'"));
     while (row.step()) {
       requireDenseId("lights", row.columnInt(0), lights.size());
       requireCell(fmt::format("light {}", row.columnInt(0)), row.columnInt(1), cellCount);
@@ -125,6 +126,10 @@ class CatalogueReader {
       light.edge1 = columnVec3(row, 5);
       light.edge2 = columnVec3(row, 8);
       light.radiance = columnVec3(row, 11);
+      const std::string shape = row.columnText(14);
+      if (shape != "parallelogram" && shape != "triangle")
+        fail(fmt::format("light {}: unknown shape '{}' (parallelogram or triangle)", light.id, shape));
+      light.shape = shape == "triangle" ? LightShape::Triangle : LightShape::Parallelogram;
       lights.push_back(light);
     }
     return lights;
@@ -181,7 +186,7 @@ SceneStore SceneStore::open(const std::string& directory) {
     store.cells_ = reader.cells();
     store.portals_ = reader.portals(store.cells_.size());
     store.materials_ = reader.materials(version);
-    store.lights_ = reader.lights(store.cells_.size());
+    store.lights_ = reader.lights(store.cells_.size(), version);
     store.camera_ = reader.camera(store.cells_.size());
   } catch (const CatalogueError&) {
     throw;

@@ -14,7 +14,9 @@ namespace portico::scene_schema {
 //   1: first version.
 //   2: materials.hidden_from_camera (cut-away surfaces). Version 1 is still
 //      read, as if every material had hidden_from_camera = 0.
-constexpr int kVersion = 2;
+//   3: lights.shape ('parallelogram' or 'triangle'). Versions 1 and 2 are
+//      still read, every light a parallelogram.
+constexpr int kVersion = 3;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -54,7 +56,8 @@ CREATE TABLE lights(
   corner_x REAL NOT NULL, corner_y REAL NOT NULL, corner_z REAL NOT NULL,
   edge1_x REAL NOT NULL, edge1_y REAL NOT NULL, edge1_z REAL NOT NULL,
   edge2_x REAL NOT NULL, edge2_y REAL NOT NULL, edge2_z REAL NOT NULL,
-  radiance_r REAL NOT NULL, radiance_g REAL NOT NULL, radiance_b REAL NOT NULL);
+  radiance_r REAL NOT NULL, radiance_g REAL NOT NULL, radiance_b REAL NOT NULL,
+  shape TEXT NOT NULL DEFAULT 'parallelogram' CHECK (shape IN ('parallelogram', 'triangle')));
 CREATE TABLE camera(
   id INTEGER PRIMARY KEY CHECK (id = 0),
   origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,

@@ -311,7 +311,7 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
     insert.run();
   }
   for (const AreaLight& light : lights) {
-    sql::Statement& insert = db.prepare("INSERT INTO lights VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    sql::Statement& insert = db.prepare("INSERT INTO lights VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     insert.bind(1, int64_t{light.id}).bind(2, int64_t{light.cell});
     for (int c = 0; c < 3; ++c) {
       insert.bind(3 + c, double{light.corner[c]});
@@ -319,6 +319,7 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
       insert.bind(9 + c, double{light.edge2[c]});
       insert.bind(12 + c, double{light.radiance[c]});
     }
+    insert.bind(15, std::string(light.isTriangle() ? "triangle" : "parallelogram"));
     insert.run();
   }
   sql::Statement& insert = db.prepare("INSERT INTO camera VALUES (0, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");

@@ -20,18 +20,43 @@ struct Material {
   bool emissive() const { return maxComponent(emission) > 0.0f; }
 };
 
-// A parallelogram area light: corner + s*edge1 + t*edge2, s,t in [0,1].
+enum class LightShape : uint8_t { Parallelogram, Triangle };
+
+// An area light: a parallelogram corner + s*edge1 + t*edge2, s,t in [0,1],
+// or the triangle (corner, corner + edge1, corner + edge2), s + t <= 1.
 // It emits on the side of cross(edge1, edge2). Its triangles are also part
 // of its cell's geometry (with an emissive material), so rays can hit it.
 struct AreaLight {
   uint32_t id = 0;
   uint32_t cell = 0;
+  LightShape shape = LightShape::Parallelogram;
   Vec3 corner, edge1, edge2;
   Vec3 radiance;
+  bool isTriangle() const { return shape == LightShape::Triangle; }
   Vec3 normal() const { return normalize(cross(edge1, edge2)); }
-  float area() const { return length(cross(edge1, edge2)); }
+  float area() const { return isTriangle() ? 0.5f * length(cross(edge1, edge2)) : length(cross(edge1, edge2)); }
   Vec3 power() const { return radiance * (kPi * area()); }   // Phi = pi A L per channel
-  Vec3 center() const { return corner + (edge1 + edge2) * 0.5f; }
+  Vec3 center() const {
+    return isTriangle() ? corner + (edge1 + edge2) * (1.0f / 3.0f) : corner + (edge1 + edge2) * 0.5f;
+  }
+  // A uniformly distributed point for (u, v) uniform in [0,1)^2. A triangle
+  // folds the square's far half onto itself (u + v > 1 -> 1 - u, 1 - v), so
+  // both shapes use the same two random numbers.
+  Vec3 pointAt(float u, float v) const {
+    if (isTriangle() && u + v > 1.0f) {
+      u = 1.0f - u;
+      v = 1.0f - v;
+    }
+    return corner + edge1 * u + edge2 * v;
+  }
+  // Its 3 or 4 corners; returns how many were written.
+  int corners(Vec3 (&out)[4]) const {
+    out[0] = corner;
+    out[1] = corner + edge1;
+    out[2] = corner + edge2;
+    out[3] = corner + edge1 + edge2;
+    return isTriangle() ? 3 : 4;
+  }
 };
 
 struct CellInfo {

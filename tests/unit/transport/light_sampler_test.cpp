@@ -81,5 +81,56 @@ TEST(LightSampler, LightsNearFollowThePortalGraph) {
   std::filesystem::remove_all(store);
 }
 
+// A triangle light's points cover it uniformly: all inside, their mean at
+// the centroid, each half of the triangle (split by a median) half of them.
+TEST(AreaLightShape, TrianglePointsAreUniform) {
+  AreaLight triangle;
+  triangle.shape = LightShape::Triangle;
+  triangle.corner = {1, 2, 3};
+  triangle.edge1 = {2, 0, 0};
+  triangle.edge2 = {0, 0, 1};
+  EXPECT_FLOAT_EQ(triangle.area(), 1.0f);
+  Vec3 mean(0.0f);
+  int nearHalf = 0;
+  const int n = 200;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const Vec3 p = triangle.pointAt((i + 0.5f) / n, (j + 0.5f) / n);
+      const float s = (p.x - 1.0f) / 2.0f, t = p.z - 3.0f;
+      ASSERT_TRUE(s >= 0 && t >= 0 && s + t <= 1.0f + 1e-6f && p.y == 2.0f) << i << " " << j;
+      mean += p;
+      nearHalf += s < t ? 1 : 0;   // one side of the median through corner 0
+    }
+  mean *= 1.0f / float(n * n);
+  EXPECT_NEAR(length(mean - triangle.center()), 0.0f, 2e-3f);
+  EXPECT_NEAR(nearHalf / double(n * n), 0.5, 0.01);
+}
+
+// A parallelogram keeps corner + u edge1 + v edge2, bit for bit.
+TEST(AreaLightShape, ParallelogramPointsAreTheBilinearMap) {
+  const AreaLight quad = ceilingLight(0, {0.3f, 3, 0.7f}, 1.3f, 1);
+  for (float u : {0.0f, 0.123f, 0.5f, 0.999f})
+    for (float v : {0.0f, 0.77f, 0.999f}) {
+      const Vec3 expected = quad.corner + quad.edge1 * u + quad.edge2 * v;
+      EXPECT_EQ(quad.pointAt(u, v), expected);
+    }
+}
+
+// A triangle light beside a quad light of twice its area and the same
+// radiance: half the quad's power, so half its weight from a point equally far.
+TEST(LightSampler, TriangleLightsWeighByTheirPower) {
+  std::vector<AreaLight> lights{ceilingLight(0, {-2, 3, 0}, 1, 10), ceilingLight(1, {2, 3, 0}, 1, 10)};
+  lights[1].shape = LightShape::Triangle;
+  lights[1].corner = Vec3(2, 3, 0) - (lights[1].edge1 + lights[1].edge2) * (1.0f / 3.0f);   // centroid at (2, 3, 0)
+  ASSERT_NEAR(length(lights[1].center() - Vec3(2, 3, 0)), 0.0f, 1e-6f);
+  LightSampler sampler(lights, LightSampler::allLights(lights));
+  const LightChoice quad = sampler.choose({0, 0, 0}, {0, 1, 0}, 0.1f);
+  const LightChoice triangle = sampler.choose({0, 0, 0}, {0, 1, 0}, 0.9f);
+  ASSERT_EQ(quad.light, 0u);
+  ASSERT_EQ(triangle.light, 1u);
+  EXPECT_NEAR(quad.probability, 2.0f / 3.0f, 1e-5f);
+  EXPECT_NEAR(triangle.probability, 1.0f / 3.0f, 1e-5f);
+}
+
 }  // namespace
 }  // namespace portico

@@ -177,7 +177,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "2");
+  EXPECT_EQ(store.meta().at("format_version"), "3");
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -440,8 +440,9 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 2);
+    EXPECT_EQ(db.userVersion(), 3);
     db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
+    db.exec("ALTER TABLE lights DROP COLUMN shape");
     db.setUserVersion(1);
   }
   const SceneStore store = SceneStore::open(temp / "store");
@@ -455,6 +456,27 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   sql::Database(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate).setUserVersion(0);
   const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
   EXPECT_NE(error.find("schema version 0"), std::string::npos) << error;
+}
+
+// Version 2 (before lights.shape) is still read: every light a parallelogram.
+TEST(SceneStore, OpensAVersionTwoStoreWithParallelogramLights) {
+  TempDirectory temp;
+  TinyScene().write(temp / "store");
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("UPDATE lights SET shape = 'triangle'");
+  }
+  ASSERT_EQ(SceneStore::open(temp / "store").lights().size(), 1u);
+  EXPECT_TRUE(SceneStore::open(temp / "store").lights()[0].isTriangle());
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("ALTER TABLE lights DROP COLUMN shape");
+    db.setUserVersion(2);
+  }
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.lights().size(), 1u);
+  EXPECT_FALSE(store.lights()[0].isTriangle());
+  EXPECT_GT(store.lights()[0].area(), 0.0f);
 }
 
 TEST(SceneStore, OpenRejectsAFileThatIsNotADatabase) {
