@@ -220,7 +220,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
     const AreaLight& light = scene_.lights()[choice.light];
     const float u = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 1);
     const float v = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 2);
-    const Vec3 target = light.corner + light.edge1 * u + light.edge2 * v;
+    const Vec3 target = light.pointAt(u, v);
     const Vec3 origin = offsetAlongNormal(point, normal);
     const Vec3 toLight = target - origin;
     const float distance2 = dot(toLight, toLight);
