@@ -31,12 +31,12 @@ def clip_polygon_to_box(polygon, lo, hi):
 
 
 def fan(polygon):
-    out = []
-    for i in range(1, len(polygon) - 1):
-        t = np.array([polygon[0], polygon[i], polygon[i + 1]])
-        if np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2 > MIN_AREA:
-            out.append(t)
-    return out
+    if len(polygon) < 3:
+        return []
+    p = np.asarray(polygon)
+    triangles = np.stack([np.broadcast_to(p[0], p[1:-1].shape), p[1:-1], p[2:]], axis=1)
+    area = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1) / 2
+    return list(triangles[area > MIN_AREA])
 
 
 def distribute(corners, lines, owner, cells):
@@ -45,16 +45,25 @@ def distribute(corners, lines, owner, cells):
     tlo, thi = corners.min(axis=1), corners.max(axis=1)
     first = [np.clip(np.searchsorted(lines[a], tlo[:, a], side="right") - 1, 0, len(lines[a]) - 2) for a in range(3)]
     last = [np.clip(np.searchsorted(lines[a], thi[:, a], side="left") - 1, 0, len(lines[a]) - 2) for a in range(3)]
+    # A triangle within one grid box goes whole to that box's cell: decided
+    # for all of them at once. Only the others are looked at one by one.
+    single = np.all([first[a] == last[a] for a in range(3)], axis=0)
+    whole_cell = np.where(single, owner[first[0], first[1], first[2]], -1)
     pieces = {}
-    for t in range(len(corners)):
+    for t in np.nonzero(~single)[0]:
         block = owner[first[0][t]:last[0][t] + 1, first[1][t]:last[1][t] + 1, first[2][t]:last[2][t] + 1]
         candidates = np.unique(block)
         if len(candidates) == 1:
-            pieces.setdefault(int(candidates[0]), []).append((corners[t], t))
+            whole_cell[t] = candidates[0]
             continue
         for c in candidates:
             polygon = clip_polygon_to_box([p.copy() for p in corners[t]], cells[c].lo, cells[c].hi)
             for piece in fan(polygon):
                 pieces.setdefault(int(c), []).append((piece, t))
-    for c in sorted(pieces):
-        yield c, np.array([p for p, _ in pieces[c]]), np.array([t for _, t in pieces[c]])
+    for c in sorted(set(pieces) | set(np.unique(whole_cell[whole_cell >= 0]).tolist())):
+        whole = np.nonzero(whole_cell == c)[0]
+        clipped = pieces.get(c, [])
+        triangles = np.concatenate([corners[whole], np.array([p for p, _ in clipped]).reshape(-1, 3, 3)])
+        source = np.concatenate([whole, np.array([t for _, t in clipped], dtype=np.int64)])
+        order = np.argsort(source, kind="stable")      # the triangles' order, as one by one
+        yield c, triangles[order], source[order]
