@@ -28,6 +28,7 @@ OUTSET = 0.05       # metres: from a space's side into its wall, where no space 
 MERGE = 0.03        # metres: grid lines closer than this are one
 SAMPLE = 0.1        # metres: spacing of the sealing test's samples
 CLEARANCE = 0.006   # metres: grid lines keep at least half of this from surfaces facing along them
+PAD = 1e-3          # metres: more than inside_mesh's JITTER
 AIR = -1
 
 
@@ -199,9 +200,13 @@ def _sealed(points, sealers, sealer_lo, sealer_hi):
     columns = np.ascontiguousarray(points.T)
     for s in near:
         mesh, (mlo, mhi) = sealers[s]
+        # The box test is only a prefilter: it keeps points up to PAD outside,
+        # since inside_mesh nudges points (by its JITTER) before it decides; a
+        # sample on a wall's foot lies on the slab's top, and the nudge puts
+        # it inside the wall, not the slab.
         todo = ~sealed
         for a in range(3):      # column by column: much faster than np.all(..., axis=1)
-            todo &= (columns[a] >= mlo[a]) & (columns[a] <= mhi[a])
+            todo &= (columns[a] >= mlo[a] - PAD) & (columns[a] <= mhi[a] + PAD)
         if todo.any():
             sealed[todo] = inside_mesh(points[todo], mesh, axis=0)
     return sealed
