@@ -44,8 +44,14 @@ def _near_triangles(mesh, points, axis):
     """Triangles whose footprint (across the axis) meets the points' footprint."""
     u, v = _other_axes(axis)
     lo, hi = points.min(axis=0), points.max(axis=0)
+    return _triangles_over(mesh, axis, lo[u], hi[u], lo[v], hi[v])
+
+
+def _triangles_over(mesh, axis, u_lo, u_hi, v_lo, v_hi):
+    """Triangles whose footprint (across the axis) meets the rectangle."""
+    u, v = _other_axes(axis)
     tlo, thi = mesh.triangle_bounds()
-    keep = (thi[:, u] >= lo[u]) & (tlo[:, u] <= hi[u]) & (thi[:, v] >= lo[v]) & (tlo[:, v] <= hi[v])
+    keep = (thi[:, u] >= u_lo) & (tlo[:, u] <= u_hi) & (thi[:, v] >= v_lo) & (tlo[:, v] <= v_hi)
     return mesh.corners()[keep]
 
 
@@ -56,14 +62,16 @@ def inside_mesh(points, mesh, axis=0):
     computed once, and each point counts those ahead of it (a cell face
     across the axis holds rows of hundreds of such points)."""
     points = np.asarray(points, dtype=np.float64) + JITTER
-    corners = _near_triangles(mesh, points, axis)
-    if len(corners) == 0:
-        return np.zeros(len(points), dtype=bool)
+    if len(points) == 0:
+        return np.zeros(0, dtype=bool)
     u, v = _other_axes(axis)
     # Rows by their (u, v) coordinates; one-dimensional uniques are much
-    # faster than np.unique(axis=0).
+    # faster than np.unique(axis=0), and their ends are the footprint.
     us, u_of_point = np.unique(points[:, u], return_inverse=True)
     vs, v_of_point = np.unique(points[:, v], return_inverse=True)
+    corners = _triangles_over(mesh, axis, us[0], us[-1], vs[0], vs[-1])
+    if len(corners) == 0:
+        return np.zeros(len(points), dtype=bool)
     keys, ray_of_point = np.unique(u_of_point.reshape(-1) * len(vs) + v_of_point.reshape(-1), return_inverse=True)
     ray_of_point = ray_of_point.reshape(-1)
     origins = np.zeros((len(keys), 3))
