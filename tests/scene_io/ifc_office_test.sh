@@ -9,6 +9,7 @@
 set -euo pipefail
 bin="$1"; src="$2"
 python="${PORTICO_PYTHON:-$src/.venv/bin/python3}"
+[ -x "$python" ] || { echo "$python: no python3 with IfcOpenShell (run deploy/install-deps.sh, or set PORTICO_PYTHON)"; exit 1; }
 work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
 
 PYTHONPATH="$src/python" "$python" -m portico_ifc.tools.make_office_ifc --storeys 2 --rooms-per-side 25 "$work/office.ifc"
