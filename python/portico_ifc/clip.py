@@ -30,13 +30,20 @@ def clip_polygon_to_box(polygon, lo, hi):
     return polygon
 
 
-def fan(polygon):
-    out = []
-    for i in range(1, len(polygon) - 1):
-        t = np.array([polygon[0], polygon[i], polygon[i + 1]])
-        if np.linalg.norm(np.cross(t[1] - t[0], t[2] - t[0])) / 2 > MIN_AREA:
-            out.append(t)
-    return out
+def fan_all(polygons):
+    """The fans of many polygons at once: (k, 3, 3) triangles, polygon by
+    polygon, slivers dropped, and for each the index of its polygon."""
+    polygons = [np.asarray(p) for p in polygons]
+    counts = np.array([max(0, len(p) - 2) for p in polygons], dtype=np.int64)
+    if counts.sum() == 0:
+        return np.zeros((0, 3, 3)), np.zeros(0, dtype=np.int64)
+    apex = np.concatenate([np.broadcast_to(p[0], (n, 3)) for p, n in zip(polygons, counts) if n])
+    second = np.concatenate([p[1:-1] for p, n in zip(polygons, counts) if n])
+    third = np.concatenate([p[2:] for p, n in zip(polygons, counts) if n])
+    triangles = np.stack([apex, second, third], axis=1)
+    area = np.linalg.norm(np.cross(second - apex, third - apex), axis=1) / 2
+    keep = area > MIN_AREA
+    return triangles[keep], np.repeat(np.arange(len(polygons)), counts)[keep]
 
 
 def distribute(corners, lines, owner, cells):
@@ -45,16 +52,29 @@ def distribute(corners, lines, owner, cells):
     tlo, thi = corners.min(axis=1), corners.max(axis=1)
     first = [np.clip(np.searchsorted(lines[a], tlo[:, a], side="right") - 1, 0, len(lines[a]) - 2) for a in range(3)]
     last = [np.clip(np.searchsorted(lines[a], thi[:, a], side="left") - 1, 0, len(lines[a]) - 2) for a in range(3)]
-    pieces = {}
-    for t in range(len(corners)):
+    # A triangle within one grid box goes whole to that box's cell: decided
+    # for all of them at once. Only the others are clipped one by one, and
+    # their pieces fanned all at once.
+    single = np.all([first[a] == last[a] for a in range(3)], axis=0)
+    whole_cell = np.where(single, owner[first[0], first[1], first[2]], -1)
+    polygons, polygon_cell, polygon_source = [], [], []
+    for t in np.nonzero(~single)[0]:
         block = owner[first[0][t]:last[0][t] + 1, first[1][t]:last[1][t] + 1, first[2][t]:last[2][t] + 1]
         candidates = np.unique(block)
         if len(candidates) == 1:
-            pieces.setdefault(int(candidates[0]), []).append((corners[t], t))
+            whole_cell[t] = candidates[0]
             continue
         for c in candidates:
-            polygon = clip_polygon_to_box([p.copy() for p in corners[t]], cells[c].lo, cells[c].hi)
-            for piece in fan(polygon):
-                pieces.setdefault(int(c), []).append((piece, t))
-    for c in sorted(pieces):
-        yield c, np.array([p for p, _ in pieces[c]]), np.array([t for _, t in pieces[c]])
+            polygons.append(clip_polygon_to_box([p.copy() for p in corners[t]], cells[c].lo, cells[c].hi))
+            polygon_cell.append(int(c))
+            polygon_source.append(t)
+    pieces, of_polygon = fan_all(polygons)
+    piece_cell = np.array(polygon_cell, dtype=np.int64)[of_polygon]
+    piece_source = np.array(polygon_source, dtype=np.int64)[of_polygon]
+    for c in np.union1d(piece_cell, whole_cell[whole_cell >= 0]).tolist():
+        whole = np.nonzero(whole_cell == c)[0]
+        clipped = np.nonzero(piece_cell == c)[0]
+        triangles = np.concatenate([corners[whole], pieces[clipped]])
+        source = np.concatenate([whole, piece_source[clipped]])
+        order = np.argsort(source, kind="stable")      # the triangles' order, as one by one
+        yield c, triangles[order], source[order]

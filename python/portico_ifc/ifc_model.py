@@ -31,12 +31,26 @@ class Mesh:
     vertices: np.ndarray          # (n, 3) float64, portico axes
     triangles: np.ndarray         # (m, 3) int64
 
+    # Computed once: the sealing tests ask for them thousands of times.
+    _corners: np.ndarray = field(default=None, init=False, repr=False, compare=False)
+    _triangle_bounds: tuple = field(default=None, init=False, repr=False, compare=False)
+
     def bounds(self):
         return self.vertices.min(axis=0), self.vertices.max(axis=0)
 
     def corners(self):
-        """(m, 3, 3): the corners of every triangle."""
-        return self.vertices[self.triangles]
+        """(m, 3, 3): the corners of every triangle (read-only)."""
+        if self._corners is None:
+            self._corners = self.vertices[self.triangles]
+            self._corners.flags.writeable = False
+        return self._corners
+
+    def triangle_bounds(self):
+        """((m, 3), (m, 3)): every triangle's box."""
+        if self._triangle_bounds is None:
+            c = self.corners()
+            self._triangle_bounds = (c.min(axis=1), c.max(axis=1))
+        return self._triangle_bounds
 
 
 @dataclass
@@ -200,7 +214,14 @@ def read_ifc(path):
             of_triangle = np.zeros(len(triangles), dtype=np.int64)
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))
-    result.materials = materials.entries
+    # Materials are met in the order the threads finish shapes: number them
+    # by name and colour instead ("default" stays first).
+    order = [0] + sorted(range(1, len(materials.entries)), key=lambda i: materials.entries[i])
+    renumber = np.empty(len(order), dtype=np.int64)
+    renumber[order] = np.arange(len(order))
+    result.materials = [materials.entries[i] for i in order]
+    for e in result.elements:
+        e.material_of_triangle = renumber[e.material_of_triangle]
     # Same model, same order: sort by GlobalId so that the output never depends on threads.
     result.elements.sort(key=lambda e: (e.guid, e.ifc_type))
     result.spaces.sort(key=lambda s: (s.name, s.guid))

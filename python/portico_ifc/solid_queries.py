@@ -40,34 +40,90 @@ def _crossings(points, corners, axis, upward=True):
     return inside & ahead, height
 
 
-def _near_triangles(corners, points, axis):
+def _near_triangles(mesh, points, axis):
     """Triangles whose footprint (across the axis) meets the points' footprint."""
     u, v = _other_axes(axis)
     lo, hi = points.min(axis=0), points.max(axis=0)
-    tlo, thi = corners.min(axis=1), corners.max(axis=1)
-    keep = (thi[:, u] >= lo[u]) & (tlo[:, u] <= hi[u]) & (thi[:, v] >= lo[v]) & (tlo[:, v] <= hi[v])
-    return corners[keep]
+    return _triangles_over(mesh, axis, lo[u], hi[u], lo[v], hi[v])
+
+
+def _triangles_over(mesh, axis, u_lo, u_hi, v_lo, v_hi):
+    """Triangles whose footprint (across the axis) meets the rectangle."""
+    u, v = _other_axes(axis)
+    tlo, thi = mesh.triangle_bounds()
+    keep = (thi[:, u] >= u_lo) & (tlo[:, u] <= u_hi) & (thi[:, v] >= v_lo) & (tlo[:, v] <= v_hi)
+    return mesh.corners()[keep]
 
 
 def inside_mesh(points, mesh, axis=0):
-    """(n,) bool: which points lie inside the closed mesh."""
+    """(n,) bool: which points lie inside the closed mesh.
+
+    Points on one line along the axis share a ray: its crossings are
+    computed once, and each point counts those ahead of it (a cell face
+    across the axis holds rows of hundreds of such points)."""
     points = np.asarray(points, dtype=np.float64) + JITTER
-    corners = _near_triangles(mesh.corners(), points, axis)
-    result = np.zeros(len(points), dtype=bool)
+    if len(points) == 0:
+        return np.zeros(0, dtype=bool)
+    u, v = _other_axes(axis)
+    # Rows by their (u, v) coordinates; one-dimensional uniques are much
+    # faster than np.unique(axis=0), and their ends are the footprint.
+    us, u_of_point = np.unique(points[:, u], return_inverse=True)
+    vs, v_of_point = np.unique(points[:, v], return_inverse=True)
+    corners = _triangles_over(mesh, axis, us[0], us[-1], vs[0], vs[-1])
     if len(corners) == 0:
-        return result
+        return np.zeros(len(points), dtype=bool)
+    keys, ray_of_point = np.unique(u_of_point.reshape(-1) * len(vs) + v_of_point.reshape(-1), return_inverse=True)
+    ray_of_point = ray_of_point.reshape(-1)
+    origins = np.zeros((len(keys), 3))
+    origins[:, u], origins[:, v] = us[keys // len(vs)], vs[keys % len(vs)]
+    rays = keys
     step = max(1, _CHUNK // len(corners))
-    for start in range(0, len(points), step):
-        hits, _ = _crossings(points[start:start + step], corners, axis)
-        result[start:start + step] = hits.sum(axis=1) % 2 == 1
-    return result
+    hit_ray, hit_height = [], []
+    for start in range(0, len(rays), step):
+        rows, heights = _ray_crossings(origins[start:start + step], corners, axis)
+        hit_ray.append(rows + start)
+        hit_height.append(heights)
+    hit_ray, hit_height = np.concatenate(hit_ray), np.concatenate(hit_height)
+    # Each ray's crossing heights in one row, padded with -inf (never ahead).
+    per_ray = np.bincount(hit_ray, minlength=len(rays))
+    slot = np.arange(len(hit_ray)) - np.repeat(np.cumsum(per_ray) - per_ray, per_ray)
+    table = np.full((len(rays), max(1, int(per_ray.max(initial=0)))), -np.inf)
+    table[hit_ray, slot] = hit_height
+    ahead = (table[ray_of_point] > points[:, axis][:, None]).sum(axis=1)
+    return ahead % 2 == 1
+
+
+def _ray_crossings(origins, corners, axis):
+    """The (ray, height) pairs where the line along the axis through each
+    origin crosses a triangle: same arithmetic as _crossings, with the
+    height computed only where the footprint test passes."""
+    u, v = _other_axes(axis)
+    a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
+    pu, pv = origins[:, u][:, None], origins[:, v][:, None]
+
+    def edge(p, q):
+        return (q[:, u] - p[:, u])[None, :] * (pv - p[:, v][None, :]) - (q[:, v] - p[:, v])[None, :] * (pu - p[:, u][None, :])
+
+    e0, e1 = edge(a, b), edge(b, c)
+    same = ((e0 > 0) & (e1 > 0)) | ((e0 < 0) & (e1 < 0))
+    rows, cols = np.nonzero(same)
+    e0, e1 = e0[rows, cols], e1[rows, cols]
+    p, q = c[cols], a[cols]
+    e2 = (q[:, u] - p[:, u]) * (origins[rows, v] - p[:, v]) - (q[:, v] - p[:, v]) * (origins[rows, u] - p[:, u])
+    inside = ((e0 > 0) & (e2 > 0)) | ((e0 < 0) & (e2 < 0))
+    rows, cols, e0, e1, e2 = rows[inside], cols[inside], e0[inside], e1[inside], e2[inside]
+    area = e0 + e1 + e2
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        w_a, w_b, w_c = e1 / area, e2 / area, e0 / area
+        height = w_a * a[cols, axis] + w_b * b[cols, axis] + w_c * c[cols, axis]
+    return rows, height
 
 
 def first_hit_along(points, mesh, axis, upward=True):
     """(n,) float: the axis coordinate of the nearest crossing of the mesh from
     each point along +axis (upward) or -axis; NaN where there is none."""
     points = np.asarray(points, dtype=np.float64) + JITTER
-    corners = _near_triangles(mesh.corners(), points, axis)
+    corners = _near_triangles(mesh, points, axis)
     result = np.full(len(points), np.nan)
     if len(corners) == 0:
         return result
