@@ -59,7 +59,7 @@ int64_t microsecondsSince(std::chrono::steady_clock::time_point start) {
 // light is sampled with shadow rays).
 std::unique_ptr<IndirectLight> assembleIndirectLight(CellCache& cache, LoadedLease& lease, uint32_t cellId,
                                                      std::string photonRecords) {
-  const JobParameters& parameters = lease.parameters;
+  const JobSettings& parameters = lease.parameters;
   // Room for the decoded photons, which become the map, its build's
   // scratch and the irradiance cache (under a quarter of the map).
   const size_t count = photonRecords.size() / sizeof(PhotonRecord);
@@ -71,7 +71,7 @@ std::unique_ptr<IndirectLight> assembleIndirectLight(CellCache& cache, LoadedLea
   photonRecords.clear();
   photonRecords.shrink_to_fit();
   auto light = std::make_unique<IndirectLight>(IndirectLight{PhotonMap(std::move(photons)), std::nullopt});
-  if (parameters.gather > 0 && parameters.irradiance == JobParameters::Irradiance::Precomputed) {
+  if (parameters.gather > 0 && parameters.irradiance == JobSettings::Irradiance::Precomputed) {
     const auto started = std::chrono::steady_clock::now();
     light->irradiance.emplace(light->photons, parameters.irradianceStride, parameters.irradianceK(),
                               parameters.photonRadius);

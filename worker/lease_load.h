@@ -18,7 +18,7 @@ namespace portico {
 struct LoadedLease {
   const SceneStore* scene = nullptr;
   std::string store;               // the store directory the scene was read from
-  JobParameters parameters;
+  JobSettings parameters;
   std::string accel;               // the structure this lease's cells are traced with
   bool renderPhase = false;
   LoadedCell* cell = nullptr;      // the lease's own cell

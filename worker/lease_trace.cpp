@@ -12,7 +12,7 @@
 namespace portico {
 
 namespace {
-void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobParameters& parameters, uint32_t cellId,
+void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobSettings& parameters, uint32_t cellId,
                   capnp::List<wire::RayBatch>::Reader batches, KernelOutputs& out) {
   for (auto batch : batches) {
     switch (batch.which()) {

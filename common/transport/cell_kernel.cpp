@@ -19,7 +19,7 @@ Vec3 hitNormalFacing(const MeshView& mesh, uint32_t primitive, const Vec3& direc
 Ray toRay(const RayState& state) { return {state.origin, state.direction, state.tMin, state.tMax}; }
 }  // namespace
 
-CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
+CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
                        const IndirectLight* indirect)
     : scene_(scene),
       tracer_(tracer),
@@ -188,9 +188,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           current.tMin = event.t;
           continue;
         }
-        if (parameters_.aov == JobParameters::Aov::Cells)
+        if (parameters_.aov == JobSettings::Aov::Cells)
           addToFilm(current.pixel, current.weight * cellColour(tracer_.cell().id()), out);
-        else if (parameters_.aov == JobParameters::Aov::Portals)
+        else if (parameters_.aov == JobSettings::Aov::Portals)
           addToFilm(current.pixel, current.weight * portalCountColour(current.depth), out);
         else
           shade(current, event, out);

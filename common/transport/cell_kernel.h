@@ -30,8 +30,6 @@ struct TracingStopped : std::runtime_error {
   TracingStopped() : std::runtime_error("tracing stopped") {}
 };
 
-using JobParameters = JobSettings;   // the complete spec of the lease's job
-
 // False colours for the cell and portal pictures: distinct, stable hues.
 Vec3 cellColour(uint32_t cell);
 Vec3 portalCountColour(uint32_t crossings);
@@ -52,7 +50,7 @@ class CellKernel {
   // indirect: the cell's photon map in the render phase (null in the photon
   // phase): every photon when final gathering, else only those that
   // bounced; with its irradiance cache when gather hits read one.
-  CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobParameters& parameters,
+  CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
              const IndirectLight* indirect);
 
   void emitPhotons(uint32_t light, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight, KernelOutputs& out);
@@ -80,7 +78,7 @@ class CellKernel {
 
   const SceneStore& scene_;
   const CellTracer& tracer_;
-  const JobParameters& parameters_;
+  const JobSettings& parameters_;
   // The lattice of this cell's photon table, made once: every deposit is
   // encoded on it (copies across portals on their neighbour's).
   const PhotonFrame ownFrame_;

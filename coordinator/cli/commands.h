@@ -14,9 +14,7 @@ namespace portico::cli {
 
 // Options shared by `render` and `submit`: what the job computes, with the
 // job's own defaults (common/job/job_settings.h).
-using RenderOptions = JobSettings;
-
-void addRenderOptions(CLI::App& command, RenderOptions& options);
+void addRenderOptions(CLI::App& command, JobSettings& options);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
@@ -47,7 +45,7 @@ struct LocalRunOptions {
   std::string logLevel = "info";
   std::string keys;   // CURVE keys for the local services ("" for none)
 };
-int runRender(const RenderOptions& render, const LocalRunOptions& local);
+int runRender(const JobSettings& render, const LocalRunOptions& local);
 
 // How the client commands reach a running coordinator.
 struct ConnectOptions {
@@ -57,7 +55,7 @@ struct ConnectOptions {
 };
 void addConnectOptions(CLI::App& command, ConnectOptions& options);
 
-int runSubmit(const ConnectOptions& connect, const RenderOptions& render);
+int runSubmit(const ConnectOptions& connect, const JobSettings& render);
 int runStatus(const ConnectOptions& connect, uint64_t job, bool json);
 int runWait(const ConnectOptions& connect, uint64_t job, bool quiet);
 int runCancel(const ConnectOptions& connect, uint64_t job);

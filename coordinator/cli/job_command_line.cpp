@@ -16,7 +16,7 @@ namespace {
 
 void addRender(CLI::App& app, CommandTable& table) {
   struct Options {
-    RenderOptions render;
+    JobSettings render;
     LocalRunOptions local;
   };
   auto o = std::make_shared<Options>();
@@ -42,7 +42,7 @@ struct JobOptions {
 void addSubmit(CLI::App& app, CommandTable& table) {
   struct Options {
     ConnectOptions connect;
-    RenderOptions render;
+    JobSettings render;
   };
   auto o = std::make_shared<Options>();
   auto* submit = app.add_subcommand("submit", "submit a job to a running coordinator; prints its id");

@@ -20,7 +20,7 @@
 
 namespace portico::cli {
 
-void addRenderOptions(CLI::App& command, RenderOptions& o) {
+void addRenderOptions(CLI::App& command, JobSettings& o) {
   command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
   command.add_option("--accel", o.accel,
@@ -111,7 +111,7 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 }
 }  // namespace
 
-void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
+void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message) {
   JobSettings settings = o;
   settings.store = std::filesystem::absolute(o.store).lexically_normal().string();
   // As the user who asks: the coordinator checks it again as itself.
@@ -121,7 +121,7 @@ void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message) {
   toWire(settings, message.initRoot<wire::Envelope>().initSubmit().initSpec());
 }
 
-int runSubmit(const ConnectOptions& connect, const RenderOptions& render) {
+int runSubmit(const ConnectOptions& connect, const JobSettings& render) {
   capnp::MallocMessageBuilder message;
   fillSubmit(render, message);
   net::CoordinatorClient client = connectTo(connect);

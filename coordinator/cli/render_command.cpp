@@ -19,7 +19,7 @@
 
 namespace portico::cli {
 
-void fillSubmit(const RenderOptions& o, capnp::MallocMessageBuilder& message);
+void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message);
 
 namespace {
 volatile sig_atomic_t interrupted = 0;
@@ -40,7 +40,7 @@ std::string readEndpoint(const std::string& path, ChildProcess& coordinator, con
 }
 }  // namespace
 
-int runRender(const RenderOptions& render, const LocalRunOptions& local) {
+int runRender(const JobSettings& render, const LocalRunOptions& local) {
   if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
   capnp::MallocMessageBuilder submit;
   fillSubmit(render, submit);   // validates options before anything starts

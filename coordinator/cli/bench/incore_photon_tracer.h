@@ -21,7 +21,7 @@ struct InCorePhotonOptions {
   uint64_t photons = 200000;
   uint64_t seed = 1;
   uint32_t threads = 2;           // tracing threads, and Embree's build threads
-  uint32_t maxBounces = 64;       // as JobParameters::maxPhotonBounces
+  uint32_t maxBounces = 64;       // as JobSettings::maxPhotonBounces
   uint32_t photonsPerChunk = 4096;  // photons a thread takes at a time
 };
 
