@@ -77,24 +77,50 @@ def _cell_names(cells, spaces):
     return result
 
 
-def _match_openings(openings, portals, cells, cell_of_point):
-    """For each door and window: the cells either side of it and whether a
-    portal joins them across the hole."""
+def _joined_through(start, end, axis, portals_between, lines, cell_of_point):
+    """Whether portals join the cells of two points on one line along `axis`:
+    every face between two cells on the way is crossed by a portal there."""
+    u, v = [a for a in range(3) if a != axis]
+    lo, hi = sorted((start[axis], end[axis]))
+    stops = np.concatenate([[lo], lines[axis][(lines[axis] > lo) & (lines[axis] < hi)], [hi]])
+    path = []
+    for x in (stops[:-1] + stops[1:]) / 2:
+        p = start.copy()
+        p[axis] = x
+        path.append(cell_of_point(p))
+    if None in path or path[0] == path[-1]:
+        return False
+    for a, b, plane in zip(path[:-1], path[1:], stops[1:-1]):
+        if a != b and not any(abs(p.plane - plane) < 1e-9 and
+                              all(p.lo[w] - 1e-3 <= start[w] <= p.hi[w] + 1e-3 for w in (u, v))
+                              for p in portals_between.get((min(a, b), max(a, b), axis), ())):
+            return False
+    return True
+
+
+def _match_openings(openings, portals, cells, lines, cell_of_point):
+    """For each door and window: the cells either side of it and whether
+    portals join them through the hole, on the line through its centre
+    across its wall or roof. The faces crossed need not lie within the
+    hole's depth: a wall that falls wholly between two grid lines lies in a
+    thin air cell with a portal on either side of it."""
+    portals_between = {}
+    for p in portals:
+        portals_between.setdefault((min(p.cell_a, p.cell_b), max(p.cell_a, p.cell_b), p.axis), []).append(p)
     found = []
     for o in openings:
-        extent = o.hi - o.lo
-        thin = int(np.argmin(extent))     # across the wall, or the roof for a skylight
+        axis = o.across
         centre = (o.lo + o.hi) / 2
-        sides = []
+        ends = []
         for sign in (-1, 1):
             p = centre.copy()
-            p[thin] += sign * (extent[thin] / 2 + 0.3)
-            sides.append(cell_of_point(p))
-        crossing = [p for p in portals if p.axis == thin and o.lo[thin] - 1e-3 <= p.plane <= o.hi[thin] + 1e-3 and
-                    all(p.lo[a] - 1e-3 <= centre[a] <= p.hi[a] + 1e-3 for a in range(3) if a != thin)]
+            p[axis] += sign * ((o.hi[axis] - o.lo[axis]) / 2 + 0.3)
+            ends.append(p)
+        sides = [cell_of_point(p) for p in ends]
         labels = [cells[s].label if s is not None else None for s in sides]
+        joined = _joined_through(ends[0], ends[1], axis, portals_between, lines, cell_of_point)
         found.append({"kind": o.kind, "name": o.name, "sides": labels,
-                      "portal": bool(crossing), "between_two_regions": labels[0] != labels[1]})
+                      "portal": joined, "between_two_regions": labels[0] != labels[1]})
     return found
 
 
@@ -177,7 +203,7 @@ def convert(ifc_path, out_dir, lights="auto"):
     with open(os.path.join(out_dir, "building.json"), "w") as f:
         json.dump(building, f, indent=1)
 
-    openings = _match_openings(model.openings, portals, cells, cell_of_point)
+    openings = _match_openings(model.openings, portals, cells, lines, cell_of_point)
     summary = {
         "schema": model.schema,
         "unit_scale": model.unit_scale,

@@ -77,6 +77,8 @@ class Opening:
     name: str
     lo: np.ndarray
     hi: np.ndarray
+    host: tuple = ()              # GlobalIds of the wall, slab or roof it is cut from, and of its parts
+    across: int = None            # the axis through the hole: across its host
 
 
 @dataclass
@@ -148,6 +150,32 @@ def _opening_of(product):
     return None
 
 
+def _host_of(opening):
+    """GlobalIds of the wall, slab or roof an opening element is cut from and
+    of its parts: a roof is often an aggregate whose slabs carry the shape."""
+    for rel in getattr(opening, "VoidsElements", None) or []:
+        host = rel.RelatingBuildingElement
+        return (host.GlobalId,) + tuple(p.GlobalId for p in ifcopenshell.util.element.get_decomposition(host))
+    return ()
+
+
+def _through_host(opening, host_bounds):
+    """Sets the axis through the hole and its depth along that axis from the
+    host's box: the host is thinnest across the hole, while an opening
+    element may be extruded well beyond it (a skylight's runs metres above
+    the roof, so that its own box is thinnest sideways). Without a host, the
+    hole's own box decides."""
+    if host_bounds is None:
+        opening.across = int(np.argmin(opening.hi - opening.lo))
+        return
+    host_lo, host_hi = host_bounds
+    axis = int(np.argmin(host_hi - host_lo))
+    lo, hi = max(opening.lo[axis], host_lo[axis]), min(opening.hi[axis], host_hi[axis])
+    if lo < hi:
+        opening.lo[axis], opening.hi[axis] = lo, hi
+    opening.across = axis
+
+
 class _MaterialTable:
     def __init__(self):
         self.entries, self.index = [], {}
@@ -181,7 +209,8 @@ def read_ifc(path):
     holes = {}
     for p in list(model.by_type("IfcDoor")) + list(model.by_type("IfcWindow")):
         opening = _opening_of(p)
-        holes[(opening or p).id()] = (p, "door" if p.is_a("IfcDoor") else "window")
+        host = _host_of(opening) if opening else ()
+        holes[(opening or p).id()] = (p, "door" if p.is_a("IfcDoor") else "window", host)
     wanted = surfaces + list(model.by_type("IfcSpace")) + [model.by_id(i) for i in holes]
     wanted = [p for p in {p.id(): p for p in wanted if p.Representation is not None}.values()]
 
@@ -193,9 +222,9 @@ def read_ifc(path):
         mesh = Mesh(vertices, triangles)
         name = product.Name or product.GlobalId
         if product.id() in holes:
-            filled, kind = holes[product.id()]
+            filled, kind, host = holes[product.id()]
             lo, hi = mesh.bounds()
-            result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi))
+            result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi, host))
         if product.is_a("IfcSpace"):
             label = " ".join(x for x in (product.Name, product.LongName) if x) or product.GlobalId
             result.spaces.append(Space(label, product.GlobalId, mesh))
@@ -214,6 +243,11 @@ def read_ifc(path):
             of_triangle = np.zeros(len(triangles), dtype=np.int64)
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))
+    element_bounds = {e.guid: e.mesh.bounds() for e in result.elements}
+    for o in result.openings:
+        boxes = [element_bounds[g] for g in o.host if g in element_bounds]
+        _through_host(o, (np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
+                      if boxes else None)
     # Materials are met in the order the threads finish shapes: number them
     # by name and colour instead ("default" stays first).
     order = [0] + sorted(range(1, len(materials.entries)), key=lambda i: materials.entries[i])
