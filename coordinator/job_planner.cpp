@@ -35,6 +35,44 @@ void checkPortalsPerCell(const SceneStore& scene) {
         throw std::invalid_argument(fmt::format("scene {}: cell {} has more than {} portals (duplicates?)",
                                                 scene.directory(), cell, kMaxPortalsPerCell));
 }
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string text(const Vec3& v) { return fmt::format("{},{},{}", v.x, v.y, v.z); }
+
+// The store's camera, or the job's with its automatic parts (up, fov) taken
+// from the store's and its cell located; refuses, naming the option, a
+// camera that cannot trace.
+JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore& scene) {
+  const Camera& own = scene.camera();
+  const JobCamera stores{own.origin, own.target, own.up, own.fovYDegrees, own.cell};
+  // The store's camera is taken as the store has it, as jobs always did.
+  if (!chosen || *chosen == stores) return stores;
+  JobCamera camera = *chosen;
+  if (camera.up == Vec3(0.0f)) camera.up = own.up;
+  if (camera.fovYDegrees == 0) camera.fovYDegrees = own.fovYDegrees;
+  if (!finite(camera.lookFrom)) throw std::invalid_argument(fmt::format("--look-from {} is not a point", text(camera.lookFrom)));
+  if (!finite(camera.lookAt)) throw std::invalid_argument(fmt::format("--look-at {} is not a point", text(camera.lookAt)));
+  if (camera.lookAt == camera.lookFrom)
+    throw std::invalid_argument(fmt::format("--look-at {} is the --look-from point: no direction to look", text(camera.lookAt)));
+  const Vec3 forward = normalize(camera.lookAt - camera.lookFrom);
+  if (!finite(camera.up) || !(length(cross(forward, normalize(camera.up))) > 1e-4f))
+    throw std::invalid_argument(fmt::format("--up {} is not a direction across the view", text(camera.up)));
+  if (!(camera.fovYDegrees > 0 && camera.fovYDegrees < 180))
+    throw std::invalid_argument(fmt::format("--fov {} must be above 0 and below 180 degrees", camera.fovYDegrees));
+  // The store's eye keeps the store's cell (where overlapping cells meet,
+  // the one the store recorded); any other eye is in the smallest cell
+  // containing it. Either way resolving again finds the same cell.
+  if (camera.lookFrom == own.origin) {
+    camera.cell = own.cell;
+  } else {
+    const std::optional<uint32_t> cell = scene.locateCell(camera.lookFrom);
+    if (!cell)
+      throw std::invalid_argument(fmt::format("--look-from {} is outside every cell of scene {}",
+                                              text(camera.lookFrom), scene.directory()));
+    camera.cell = *cell;
+  }
+  return camera;
+}
 }  // namespace
 
 JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
@@ -55,6 +93,7 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   }
   if (settings.photonK == 0) settings.photonK = defaults.photonK;
   if (settings.exposure == 0) settings.exposure = defaults.exposure;
+  settings.camera = resolveCamera(settings.camera, scene);
   return settings;
 }
 
@@ -91,9 +130,10 @@ void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
   // every cell's lease in the workers.
   validateAcceleratorSpec(parseAcceleratorSpec(settings.accel));
   validateAcceleratorSpec(parseAcceleratorSpec(settings.renderAccel));
-  if (scene.camera().cell >= scene.cells().size())
+  const uint32_t cameraCell = settings.camera ? settings.camera->cell : scene.camera().cell;
+  if (cameraCell >= scene.cells().size())
     throw std::invalid_argument(fmt::format("scene {}: the camera's cell {} does not exist", scene.directory(),
-                                            scene.camera().cell));
+                                            cameraCell));
   checkPortalsPerCell(scene);
 }
 
@@ -129,6 +169,8 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
 
 void queueCameraRays(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, const SceneStore& scene) {
   const uint32_t pixels = spec.getWidth() * spec.getHeight();
+  // A resolved spec always has its camera; one stored without it renders the store's.
+  const uint32_t cameraCell = spec.hasCamera() ? spec.getCamera().getCell() : scene.camera().cell;
   const uint32_t pixelsPerBatch = std::max<uint32_t>(1, kSamplesPerCameraBatch / spec.getSpp());
   for (uint32_t first = 0; first < pixels; first += pixelsPerBatch) {
     const uint32_t count = std::min(pixelsPerBatch, pixels - first);
@@ -136,7 +178,7 @@ void queueCameraRays(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, 
     auto camera = message.initRoot<wire::RayBatch>().initCamera();
     camera.setFirstPixel(first);
     camera.setPixelCount(count);
-    store.addBatch(job, scene.camera().cell, 1, BatchKind::Camera, int64_t(count) * spec.getSpp(),
+    store.addBatch(job, cameraCell, 1, BatchKind::Camera, int64_t(count) * spec.getSpp(),
                    net::packToString(message));
   }
 }

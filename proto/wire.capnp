@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 7;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values)
+const protocolVersion :UInt32 = 8;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera
 
 enum Phase {
   photons @0;
@@ -89,6 +89,22 @@ struct JobSpec {
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
   irradiance @15 :Irradiance;  # what a final-gather hit reads
   renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
+  camera @17 :JobCamera;   # absent (in a Submit): the store's camera; always present once resolved
+}
+
+# A camera chosen at render time (common/job/job_settings.h JobCamera).
+struct JobCamera {
+  fromX @0 :Float32;
+  fromY @1 :Float32;
+  fromZ @2 :Float32;
+  atX @3 :Float32;
+  atY @4 :Float32;
+  atZ @5 :Float32;
+  upX @6 :Float32;         # up all zero (in a Submit): the store camera's
+  upY @7 :Float32;
+  upZ @8 :Float32;
+  fovY @9 :Float32;        # full vertical angle, degrees; 0 (in a Submit): the store camera's
+  cell @10 :UInt32;        # the cell containing the eye (set by the coordinator)
 }
 
 enum Irradiance {

@@ -8,13 +8,26 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <string>
+
+#include "common/math.h"
 
 namespace portico {
 
 // lightHops meaning "choose from the store": 2 for room cells, all lights
 // for voxel cells (scene import --grid).
 constexpr int kAutomaticLightHops = -2;
+
+// A job's own camera, chosen at render time (`--look-from`, `--look-at`,
+// `--up`, `--fov`): photon maps do not depend on it. A zero up or fov means
+// the store camera's; resolveJobSettings fills them and the cell.
+struct JobCamera {
+  Vec3 lookFrom, lookAt, up{0, 0, 0};
+  float fovYDegrees = 0;
+  uint32_t cell = 0;                 // the cell containing lookFrom
+  bool operator==(const JobCamera&) const = default;
+};
 
 struct JobSettings {
   std::string store;                 // scene store directory (absolute once submitted)
@@ -41,6 +54,9 @@ struct JobSettings {
   // IrradianceCache), or the k-nearest-photon estimate searched there.
   enum class Irradiance { Precomputed, Knn } irradiance = Irradiance::Precomputed;
   enum class Aov { Radiance, Cells, Portals } aov = Aov::Radiance;   // what the image shows
+  // Unset: the store's camera; always set once resolved, so that every
+  // worker traces the same camera rays.
+  std::optional<JobCamera> camera;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;

@@ -23,6 +23,15 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
   spec.setAov(settings.aov == JobSettings::Aov::Cells     ? wire::Aov::CELLS
               : settings.aov == JobSettings::Aov::Portals ? wire::Aov::PORTALS
                                                           : wire::Aov::RADIANCE);
+  if (settings.camera) {
+    const JobCamera& c = *settings.camera;
+    auto camera = spec.initCamera();
+    camera.setFromX(c.lookFrom.x), camera.setFromY(c.lookFrom.y), camera.setFromZ(c.lookFrom.z);
+    camera.setAtX(c.lookAt.x), camera.setAtY(c.lookAt.y), camera.setAtZ(c.lookAt.z);
+    camera.setUpX(c.up.x), camera.setUpY(c.up.y), camera.setUpZ(c.up.z);
+    camera.setFovY(c.fovYDegrees);
+    camera.setCell(c.cell);
+  }
 }
 
 JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
@@ -47,6 +56,13 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   settings.aov = spec.getAov() == wire::Aov::CELLS     ? JobSettings::Aov::Cells
                  : spec.getAov() == wire::Aov::PORTALS ? JobSettings::Aov::Portals
                                                        : JobSettings::Aov::Radiance;
+  if (spec.hasCamera()) {
+    const auto camera = spec.getCamera();
+    settings.camera = JobCamera{Vec3(camera.getFromX(), camera.getFromY(), camera.getFromZ()),
+                                Vec3(camera.getAtX(), camera.getAtY(), camera.getAtZ()),
+                                Vec3(camera.getUpX(), camera.getUpY(), camera.getUpZ()), camera.getFovY(),
+                                camera.getCell()};
+  }
   return settings;
 }
 

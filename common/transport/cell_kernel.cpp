@@ -17,6 +17,20 @@ Vec3 hitNormalFacing(const MeshView& mesh, uint32_t primitive, const Vec3& direc
 }
 
 Ray toRay(const RayState& state) { return {state.origin, state.direction, state.tMin, state.tMax}; }
+
+// The job's camera (resolved at submit, the same for every worker); the
+// store's for settings that carry none.
+Camera cameraOf(const JobSettings& parameters, const SceneStore& scene) {
+  Camera camera = scene.camera();
+  if (const auto& chosen = parameters.camera) {
+    camera.origin = chosen->lookFrom;
+    camera.target = chosen->lookAt;
+    camera.up = chosen->up;
+    camera.fovYDegrees = chosen->fovYDegrees;
+    camera.cell = chosen->cell;
+  }
+  return camera;
+}
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
@@ -28,7 +42,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       photons_(indirect ? &indirect->photons : nullptr),
       irradiance_(indirect && indirect->irradiance ? &*indirect->irradiance : nullptr),
       lightSampler_(scene.lights(), LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops)) {
-  if (parameters.width && parameters.height) camera_.emplace(scene.camera(), parameters.width, parameters.height);
+  if (parameters.width && parameters.height) camera_.emplace(cameraOf(parameters, scene), parameters.width, parameters.height);
 }
 
 void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight,

@@ -20,7 +20,63 @@
 
 namespace portico::cli {
 
+namespace {
+// "X,Y,Z": three finite numbers; nullopt for anything else.
+std::optional<Vec3> parseVec3(const std::string& text) {
+  float v[3];
+  const char* at = text.data();
+  const char* end = text.data() + text.size();
+  for (int i = 0; i < 3; ++i) {
+    const auto [next, error] = std::from_chars(at, end, v[i]);
+    if (error != std::errc() || !std::isfinite(v[i])) return std::nullopt;
+    at = next;
+    if (i < 2) {
+      if (at == end || *at != ',') return std::nullopt;
+      ++at;
+    }
+  }
+  if (at != end) return std::nullopt;
+  return Vec3(v[0], v[1], v[2]);
+}
+
+CLI::Validator vec3Text() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        return parseVec3(text) ? std::string() : fmt::format("'{}' is not three numbers X,Y,Z", text);
+      },
+      "X,Y,Z");
+}
+
+// The job's camera, made on the first camera option; the coordinator
+// refuses what cannot trace (an eye outside every cell, look-at == look-from).
+void addCameraOptions(CLI::App& command, JobSettings& o) {
+  auto camera = [&o]() -> JobCamera& { return o.camera ? *o.camera : o.camera.emplace(); };
+  auto* from = command.add_option_function<std::string>(
+      "--look-from", [camera](const std::string& t) { camera().lookFrom = *parseVec3(t); },
+      "the job's camera: eye point X,Y,Z in metres (default: the store's camera)");
+  from->check(vec3Text());
+  auto* at = command.add_option_function<std::string>(
+      "--look-at", [camera](const std::string& t) { camera().lookAt = *parseVec3(t); },
+      "the point X,Y,Z the job's camera looks at");
+  at->check(vec3Text());
+  from->needs(at);
+  at->needs(from);
+  command
+      .add_option_function<std::string>("--up", [camera](const std::string& t) { camera().up = *parseVec3(t); },
+                                        "the job's camera's up direction X,Y,Z (default: the store camera's)")
+      ->check(vec3Text())
+      ->needs(from);
+  command
+      .add_option_function<float>("--fov", [camera](float degrees) { camera().fovYDegrees = degrees; },
+                                  "the job's camera's full vertical field of view, degrees (default: the store "
+                                  "camera's)")
+      ->check(realNumber(1e-3, 179.999))
+      ->needs(from);
+}
+}  // namespace
+
 void addRenderOptions(CLI::App& command, JobSettings& o) {
+  addCameraOptions(command, o);
   command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
   command.add_option("--accel", o.accel,

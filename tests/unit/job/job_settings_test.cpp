@@ -89,9 +89,43 @@ TEST(JobSettings, TheWireFormKeepsEveryField) {
   settings.exposure = 2.5f;
   settings.irradiance = JobSettings::Irradiance::Knn;
   settings.aov = JobSettings::Aov::Portals;
+  settings.camera = JobCamera{Vec3(1, 2, 3), Vec3(4, 5, 6), Vec3(0, 0, 1), 35.5f, 7};
   capnp::MallocMessageBuilder message;
   toWire(settings, message.initRoot<wire::JobSpec>());
   EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);
+}
+
+TEST(JobSettings, TheCameraIsTheStoresUnlessChosenAndAChosenOneIsInTheCellOfItsEye) {
+  const SceneStore& rooms = twoRooms(0);
+  const Camera& own = rooms.camera();
+  const JobCamera stores = *resolveJobSettings(JobSettings{}, rooms).camera;
+  EXPECT_EQ(stores, (JobCamera{own.origin, own.target, own.up, own.fovYDegrees, own.cell}));
+
+  // An eye in another cell: up and fov come from the store's camera.
+  uint32_t other = own.cell == 0 ? 1 : 0;
+  JobSettings chosen;
+  chosen.camera = JobCamera{rooms.cells()[other].bounds.center(), own.target};
+  const JobSettings resolved = resolveJobSettings(chosen, rooms);
+  EXPECT_EQ(resolved.camera->cell, rooms.locateCell(chosen.camera->lookFrom).value());
+  EXPECT_EQ(resolved.camera->up, own.up);
+  EXPECT_EQ(resolved.camera->fovYDegrees, own.fovYDegrees);
+  EXPECT_EQ(resolveJobSettings(resolved, rooms), resolved);
+
+  const auto refusal = [&](JobCamera camera) -> std::string {
+    JobSettings settings;
+    settings.camera = camera;
+    try {
+      resolveJobSettings(settings, rooms);
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(refusal({Vec3(1e6f), own.target}).find("--look-from"), std::string::npos);
+  EXPECT_NE(refusal({own.origin, own.origin}).find("--look-at"), std::string::npos);
+  EXPECT_NE(refusal({own.origin, own.target, Vec3(0), 180.0f}).find("--fov"), std::string::npos);
+  EXPECT_NE(refusal({own.origin, own.target, own.target - own.origin}).find("--up"), std::string::npos);
+  EXPECT_NE(refusal({Vec3(std::nanf("")), own.target}).find("--look-from"), std::string::npos);
 }
 
 }  // namespace

@@ -1,0 +1,89 @@
+// A camera chosen at render time (`--look-from`, `--look-at`, `--up`,
+// `--fov`), end to end through `portico render` with real workers.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+
+#include "common/scene/store/scene_store.h"
+#include "tests/integration/service_harness.h"
+
+namespace portico {
+namespace {
+
+using namespace harness;
+
+class CameraChoice : public DemoStoreSuite<CameraChoice> {
+ protected:
+  static std::string text(const Vec3& v) { return fmt::format("{},{},{}", v.x, v.y, v.z); }
+
+  // Renders a small image with `extra` options; returns the exit code.
+  static int render(const std::string& name, int workers, const std::vector<std::string>& extra) {
+    std::vector<std::string> argv{kBin + "portico", "render", store_.string(), "-o", (dir_ / (name + ".exr")).string(),
+                                  "--workers", std::to_string(workers), "--photons", "20000", "--spp", "1",
+                                  "--gather", "2", "--width", "48", "--height", "32"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return runCommand(argv, dir_ / (name + ".log"));
+  }
+  static fs::path image(const std::string& name) { return dir_ / (name + ".exr"); }
+};
+
+TEST_F(CameraChoice, TheStoresOwnCameraGivenAsOptionsGivesTheDefaultImageBitForBit) {
+  const Camera own = SceneStore::open(store_).camera();
+  ASSERT_EQ(render("default", 2, {}), 0) << readFile(dir_ / "default.log");
+  ASSERT_EQ(render("own", 2,
+                   {"--look-from", text(own.origin), "--look-at", text(own.target), "--up", text(own.up), "--fov",
+                    fmt::format("{}", own.fovYDegrees)}),
+            0)
+      << readFile(dir_ / "own.log");
+  EXPECT_EQ(differingFloats(image("default"), image("own")), 0u);
+}
+
+TEST_F(CameraChoice, AnotherEyeGivesAnotherLitImageWithTheSameBitsForOneAndTwoWorkers) {
+  const SceneStore scene = SceneStore::open(store_);
+  const Camera& own = scene.camera();
+  // Closer to the target, in whichever cell holds the new eye.
+  const Vec3 eye = own.origin + (own.target - own.origin) * 0.3f;
+  ASSERT_TRUE(scene.locateCell(eye).has_value());
+  const std::vector<std::string> options{"--look-from", text(eye), "--look-at", text(own.target), "--fov", "50"};
+  ASSERT_EQ(render("default-view", 1, {}), 0) << readFile(dir_ / "default-view.log");
+  ASSERT_EQ(render("closer-one", 1, options), 0) << readFile(dir_ / "closer-one.log");
+  ASSERT_EQ(render("closer-two", 2, options), 0) << readFile(dir_ / "closer-two.log");
+  EXPECT_EQ(differingFloats(image("closer-one"), image("closer-two")), 0u);
+  EXPECT_GT(differingFloats(image("closer-one"), image("default-view")), 0u);
+  const LinearImage closer = readImage(image("closer-one").string());
+  size_t lit = 0;
+  for (float value : closer.rgb) lit += value > 0;
+  EXPECT_GT(lit, closer.rgb.size() / 3);
+}
+
+// Each refusal is one line naming the option, and the exit code says so.
+TEST_F(CameraChoice, BadCamerasAreRefusedInOneLineNamingTheOption) {
+  const Camera own = SceneStore::open(store_).camera();
+  const std::string at = text(own.target);
+  struct Case {
+    const char* name;
+    std::vector<std::string> options;
+    const char* option;
+  };
+  const std::vector<Case> cases{
+      {"outside", {"--look-from", "1e6,1e6,1e6", "--look-at", at}, "--look-from"},
+      {"same", {"--look-from", at, "--look-at", at}, "--look-at"},
+      {"nan", {"--look-from", "nan,0,0", "--look-at", at}, "--look-from"},
+      {"words", {"--look-from", "1,2", "--look-at", at}, "--look-from"},
+      {"fov-zero", {"--look-from", text(own.origin), "--look-at", at, "--fov", "0"}, "--fov"},
+      {"fov-wide", {"--look-from", text(own.origin), "--look-at", at, "--fov", "180"}, "--fov"},
+      {"no-at", {"--look-from", text(own.origin)}, "--look-from"},
+  };
+  for (const Case& c : cases) {
+    EXPECT_NE(render(c.name, 1, c.options), 0) << c.name;
+    std::string log = readFile(dir_ / (std::string(c.name) + ".log"));
+    while (!log.empty() && log.back() == '\n') log.pop_back();
+    EXPECT_NE(log.find(c.option), std::string::npos) << c.name << ": " << log;
+    EXPECT_EQ(log.find('\n'), std::string::npos) << c.name << ": " << log;
+  }
+}
+
+}  // namespace
+}  // namespace portico
