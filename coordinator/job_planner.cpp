@@ -11,6 +11,7 @@
 #include "common/accel/accelerator.h"
 #include "common/net/message.h"
 #include "common/transport/photon_shares.h"
+#include "common/scene/store/floor_levels.h"
 #include "common/scene/store/portal_geometry.h"
 #include "common/transport/sampling.h"
 #include "coordinator/job_limits.h"
@@ -45,7 +46,7 @@ std::string text(const Vec3& v) { return fmt::format("{},{},{}", v.x, v.y, v.z);
 JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore& scene) {
   const Camera& own = scene.camera();
   const JobCamera stores{own.origin, own.target, own.up, own.fovYDegrees, own.cell};
-  // The store's camera is taken as the store has it, as jobs always did.
+  // The store's camera, given or left out, is used exactly as stored.
   if (!chosen || *chosen == stores) return stores;
   JobCamera camera = *chosen;
   if (camera.up == Vec3(0.0f)) camera.up = own.up;
@@ -88,8 +89,7 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   if (settings.lightHops == kAutomaticLightHops) {
     // Lights a couple of rooms away matter; a couple of voxels away is no
     // distance at all: voxel cells sample every light.
-    const auto cells = scene.meta().find("cells");
-    settings.lightHops = cells != scene.meta().end() && cells->second.rfind("grid", 0) == 0 ? -1 : 2;
+    settings.lightHops = hasVoxelCells(scene) ? -1 : 2;
   }
   if (settings.photonK == 0) settings.photonK = defaults.photonK;
   if (settings.exposure == 0) settings.exposure = defaults.exposure;

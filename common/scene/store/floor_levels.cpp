@@ -44,9 +44,11 @@ uint32_t floorCount(const SceneStore& store) {
   return static_cast<uint32_t>(findFloorLevels(store.cells()).levels.size());
 }
 
-const char* levelWord(const SceneStore& store) {
+bool hasVoxelCells(const SceneStore& store) {
   const auto it = store.meta().find("cells");
-  return it != store.meta().end() && it->second.rfind("grid", 0) == 0 ? "layer" : "floor";
+  return it != store.meta().end() && it->second.rfind("grid", 0) == 0;
 }
+
+const char* levelWord(const SceneStore& store) { return hasVoxelCells(store) ? "layer" : "floor"; }
 
 }  // namespace portico

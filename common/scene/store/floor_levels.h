@@ -28,6 +28,10 @@ FloorLevels findFloorLevels(const std::vector<CellInfo>& cells);
 // of levels findFloorLevels finds.
 uint32_t floorCount(const SceneStore& store);
 
+// Whether the store's cells are voxels of a uniform grid (scene import
+// --grid) rather than rooms.
+bool hasVoxelCells(const SceneStore& store);
+
 // "layer" for a store cut into voxels (its levels are slabs of voxels, not
 // storeys), else "floor": the word `scene info` and `scene plan` use.
 const char* levelWord(const SceneStore& store);
