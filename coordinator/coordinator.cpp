@@ -23,6 +23,7 @@
 #include "coordinator/job_planner.h"
 #include "coordinator/job_report.h"
 #include "coordinator/peer_rights.h"
+#include "coordinator/photon_reuse.h"
 
 namespace portico {
 
@@ -450,6 +451,7 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
   // fewer automatic values stored complete too.
   context.spec = std::make_unique<capnp::MallocMessageBuilder>();
   toWire(resolveJobSettings(stored, *context.scene), context.spec->initRoot<wire::JobSpec>());
+  context.photonJob = record->photonJob();
   return jobs_.emplace(job, std::move(context)).first->second;
 }
 
@@ -535,6 +537,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
   assign.setCell(chosen->cell);
   assign.setSpec(job->reader());
+  assign.setPhotonJob(job->photonJob);
   assign.setLeaseWork(leaseWork);
   assign.setCellWork(std::max(chosen->work, leaseWork));
   const auto copyBatches = [](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
@@ -752,16 +755,34 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
     refuse(fmt::format("job {}: this worker holds no lease of it", request.getJob()));
     return;
   }
+  // A job that reuses an earlier job's photon pass reads that job's tables,
+  // as long as that pass stands complete (a lender whose pass runs again
+  // has none for now).
+  const uint64_t job = request.getJob();
+  const uint64_t photonJob = store_.job(job)->photonJob();
+  if (photonJob != job) {
+    if (auto lender = store_.job(photonJob); !lender || !lender->photonsComplete) {
+      const std::string reason = fmt::format("the photon pass it reused (job {}) is no longer complete", photonJob);
+      refuse(reason);
+      restartPhotonPass(job, reason);
+      return;
+    }
+  }
   std::vector<std::string> blobs;
   try {
-    blobs = store_.photonBatches(request.getJob(), request.getCell());
+    blobs = store_.photonBatches(photonJob, request.getCell());
   } catch (const std::exception& e) {
     // A photon file damaged under a committed row (an operating-system crash
     // lost its pages, or someone wrote to it): the photons are gone, but the
     // pass that made them is deterministic. Run it again rather than fail
     // the job.
     refuse(e.what());
-    restartPhotonPass(request.getJob(), e.what());
+    if (photonJob != job) {
+      withdrawDamagedLender(photonJob, e.what());
+      restartPhotonPass(job, fmt::format("the photon tables of job {}, which it reused: {}", photonJob, e.what()));
+    } else {
+      restartPhotonPass(job, e.what());
+    }
     return;
   }
   auto list = reply.initBatches(static_cast<unsigned>(blobs.size()));
@@ -833,19 +854,28 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     toWire(settings, spec->initRoot<wire::JobSpec>());
     auto builder = spec->getRoot<wire::JobSpec>();
     const std::string packed = net::packToString(*spec);
+    // An earlier job's finished photon pass on the same store with the same
+    // photon settings gives the same tables, bit for bit: reused unless the
+    // submit asks for a pass of its own.
+    const std::string photonKey = photonPassKey(settings, *scene);
+    const std::optional<uint64_t> lender =
+        submit.getFreshPhotons() ? std::nullopt : store_.reusablePhotonPass(photonKey);
     uint64_t job;
     {
       sql::Transaction tx(store_.database());
       job = store_.createJob(packed, wallMs());
-      queuePhotonEmission(store_, job, builder.asReader(), *scene, &stopping_);
+      store_.setPhotonPass(job, photonKey, lender.value_or(0));
+      if (!lender) queuePhotonEmission(store_, job, builder.asReader(), *scene, &stopping_);
       tx.commit();
     }
-    JobContext context{std::move(spec), std::move(scene)};
+    JobContext context{std::move(spec), std::move(scene), lender.value_or(job)};
     jobs_.emplace(job, std::move(context));
-    // A job with nothing to emit (a cell or portal picture) goes straight to rendering.
+    // A job with nothing to emit (a cell or portal picture, or one reusing
+    // a photon pass) goes straight to rendering.
     advanceIfPhaseDone(job);
     answer.setJob(job);
-    spdlog::info("job {} submitted: {} photons, {} spp, {}x{}, scene {}", job, builder.getPhotons(), builder.getSpp(),
+    spdlog::info("job {} submitted: {} photons{}, {} spp, {}x{}, scene {}", job, builder.getPhotons(),
+                 lender ? fmt::format(" (the photon pass of job {}, reused)", *lender) : "", builder.getSpp(),
                  builder.getWidth(), builder.getHeight(), builder.getStore().cStr());
   } catch (const std::exception& e) {
     answer.setError(e.what());
@@ -950,6 +980,7 @@ void Coordinator::advanceIfPhaseDone(uint64_t jobId) {
     sql::Transaction tx(store_.database());
     store_.addCounter(jobId, "time.photons_ms", now - job->phaseStartedMs);
     queueCameraRays(store_, jobId, ctx->reader(), *ctx->scene);
+    if (!job->photonSource) store_.markPhotonPassComplete(jobId);
     store_.setJobState(jobId, JobState::Render, now);
     tx.commit();
     spdlog::info("job {}: photon phase done, rendering", jobId);
@@ -1003,11 +1034,23 @@ void Coordinator::restartPhotonPass(uint64_t jobId, const std::string& reason) {
     store_.restartJob(jobId, wallMs());
     queuePhotonEmission(store_, jobId, context.reader(), *context.scene);
     tx.commit();
+    context.photonJob = jobId;
   } catch (const std::exception& e) {
     failJob(jobId, fmt::format("{}; running its photon pass again failed: {}", reason, e.what()));
     return;
   }
   spdlog::error("job {}: {}; running its photon pass again", jobId, reason);
+}
+
+void Coordinator::withdrawDamagedLender(uint64_t lender, const std::string& reason) {
+  if (auto job = store_.job(lender); job && isActive(job->state)) {
+    restartPhotonPass(lender, reason);
+    return;
+  }
+  sql::Transaction tx(store_.database());
+  store_.withdrawPhotonPass(lender);
+  tx.commit();
+  spdlog::error("job {}: {}; its photon pass is not reused again", lender, reason);
 }
 
 void Coordinator::failJob(uint64_t jobId, const std::string& error) {

@@ -55,6 +55,7 @@ class Coordinator {
   struct JobContext {
     std::unique_ptr<capnp::MallocMessageBuilder> spec;   // root: wire::JobSpec
     std::unique_ptr<SceneStore> scene;
+    uint64_t photonJob = 0;   // whose photon tables its render leases read (JobRecord::photonJob)
     wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
   };
 
@@ -64,8 +65,12 @@ class Coordinator {
   void onResult(const std::string& identity, wire::Result::Reader result);
   void onFailure(const std::string& identity, wire::Failure::Reader failure);
   void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
-  // The job back to the start of its photon pass (its photons unreadable).
+  // The job back to the start of its photon pass, one of its own (its
+  // photons, or those of the job it reused, unreadable).
   void restartPhotonPass(uint64_t job, const std::string& reason);
+  // A reusing job's lender's photon tables were found damaged: the lender
+  // runs its pass again if it still runs, else it lends no more.
+  void withdrawDamagedLender(uint64_t lender, const std::string& reason);
   void onFetchFile(const std::string& identity, wire::FetchFile::Reader request);
   void onFetchImage(const std::string& identity, wire::FetchImage::Reader request);
   // The jobs of the leases the worker holds (what it may fetch files and photons of).

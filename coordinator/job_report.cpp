@@ -62,13 +62,19 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"light_hops", spec.getLightHops()},
                        {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
                        {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
-  stats["photons"] = {{"emitted", get(counters, "photons.emitted")},
-                      {"deposits", get(counters, "photons.deposits")},
-                      {"absorbed", get(counters, "photons.absorbed")},
-                      {"escaped", get(counters, "photons.escaped")},
-                      {"crossings", get(counters, "photons.crossings")},
-                      {"portal_copies", get(counters, "photons.portal_copies")},
-                      {"queued", store.queuedRays(job.id, 0)}};
+  // A job that reused an earlier job's photon pass shows that pass's photons.
+  const auto photonCounters = job.photonSource ? store.counters(job.photonSource) : counters;
+  stats["photons"] = {{"emitted", get(photonCounters, "photons.emitted")},
+                      {"deposits", get(photonCounters, "photons.deposits")},
+                      {"absorbed", get(photonCounters, "photons.absorbed")},
+                      {"escaped", get(photonCounters, "photons.escaped")},
+                      {"crossings", get(photonCounters, "photons.crossings")},
+                      {"portal_copies", get(photonCounters, "photons.portal_copies")},
+                      {"queued", store.queuedRays(job.photonJob(), 0)}};
+  // Whose photon pass it rendered with, and the photons its own leases
+  // emitted (0 when it reused one).
+  stats["photon_pass"] = {{"reused_from_job", job.photonSource ? nlohmann::json(job.photonSource) : nlohmann::json()},
+                          {"photons_emitted_by_this_job", get(counters, "photons.emitted")}};
   const int64_t camera = get(counters, "rays.camera");
   const int64_t crossings = get(counters, "rays.crossings");
   stats["rays"] = {{"camera", camera},
@@ -111,7 +117,7 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   nlohmann::json status = jobStatistics(store, job, spec);
   status.erase("cell_accelerators");   // one entry per cell: the statistics file has it
   const auto counters = store.counters(job.id);
-  const int64_t photonsDone = get(counters, "photons.absorbed") + get(counters, "photons.escaped");
+  const int64_t photonsDone = status["photons"]["absorbed"].get<int64_t>() + status["photons"]["escaped"].get<int64_t>();
   const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp();
   status["progress"] = {{"photons_done", photonsDone},
                         {"photons_total", spec.getPhotons()},

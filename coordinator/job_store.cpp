@@ -251,6 +251,18 @@ constexpr const char* kSchemaVersion4Leases = R"sql(
 // of an unfinished job with 24-byte records again (Coordinator's constructor).
 constexpr const char* kSchemaVersion5 =
     "ALTER TABLE jobs ADD COLUMN photon_record_bytes INTEGER NOT NULL DEFAULT 24";
+
+// Version 6: photon-pass reuse (coordinator/photon_reuse.h). Each job keeps
+// what decides its photon tables (store, its content, photon settings), the
+// earlier job whose tables it renders with (0: its own), and whether its own
+// pass is complete. Jobs of older versions lend nothing (no key).
+constexpr const char* kSchemaVersion6 = R"sql(
+      ALTER TABLE jobs ADD COLUMN photon_key TEXT NOT NULL DEFAULT '';
+      ALTER TABLE jobs ADD COLUMN photon_source INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE jobs ADD COLUMN photons_complete INTEGER NOT NULL DEFAULT 0;
+      UPDATE jobs SET photons_complete = 1 WHERE state IN ('render', 'done');
+      CREATE INDEX jobs_by_photon_key ON jobs(photon_key) WHERE photon_key != '';
+    )sql";
 }  // namespace
 
 void JobStore::migrate() {
@@ -275,6 +287,7 @@ void JobStore::migrate() {
     db_.exec(kSchemaVersion4Leases);
   });
   step(5, [&] { db_.exec(kSchemaVersion5); });
+  step(6, [&] { db_.exec(kSchemaVersion6); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -332,10 +345,14 @@ JobRecord readJob(sql::Statement& s) {
   job.phaseStartedMs = s.columnInt(5);
   job.finishedMs = s.columnInt(6);
   job.photonRecordBytes = int(s.columnInt(7));
+  job.photonKey = s.columnText(8);
+  job.photonSource = uint64_t(s.columnInt(9));
+  job.photonsComplete = s.columnInt(10) != 0;
   return job;
 }
 constexpr const char* kJobColumns =
-    "id, state, error, spec, created_ms, phase_started_ms, finished_ms, photon_record_bytes";
+    "id, state, error, spec, created_ms, phase_started_ms, finished_ms, photon_record_bytes, photon_key, "
+    "photon_source, photons_complete";
 }  // namespace
 
 std::optional<JobRecord> JobStore::job(uint64_t id) {
@@ -370,6 +387,55 @@ void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const st
   auto& s = db_.prepare(
       "UPDATE jobs SET state = ?, error = ?, phase_started_ms = ?, finished_ms = ? WHERE id = ?");
   s.bind(1, toString(state)).bind(2, error).bind(3, nowMs).bind(4, finished ? nowMs : int64_t(0)).bind(5, int64_t(job));
+  s.run();
+}
+
+void JobStore::setPhotonPass(uint64_t job, const std::string& key, uint64_t source) {
+  auto& s = db_.prepare("UPDATE jobs SET photon_key = ?, photon_source = ? WHERE id = ?");
+  s.bind(1, key).bind(2, int64_t(source)).bind(3, int64_t(job));
+  s.run();
+}
+
+std::optional<uint64_t> JobStore::reusablePhotonPass(const std::string& key) {
+  if (key.empty()) return std::nullopt;
+  std::vector<uint64_t> candidates;
+  auto& s = db_.prepare(
+      "SELECT id FROM jobs WHERE photon_key = ? AND photon_source = 0 AND photons_complete = 1 "
+      "AND state IN ('render', 'done') AND photon_record_bytes = ? ORDER BY id DESC");
+  s.bind(1, key).bind(2, int64_t(sizeof(PhotonRecord)));
+  while (s.step()) candidates.push_back(uint64_t(s.columnInt(0)));
+  s.reset();
+  for (uint64_t job : candidates)
+    if (photonFileHoldsItsBatches(job)) return job;
+  return std::nullopt;
+}
+
+// Cheap: the file is there and long enough for every batch its rows name.
+// Each batch's CRC is checked when a worker fetches it (photonBatches).
+bool JobStore::photonFileHoldsItsBatches(uint64_t job) {
+  auto& s = db_.prepare(
+      "SELECT COALESCE(MAX(file_offset + file_size), 0), COUNT(*) FILTER (WHERE file_offset IS NULL) "
+      "FROM photons WHERE job = ?");
+  s.bind(1, int64_t(job));
+  s.step();
+  const int64_t end = s.columnInt(0), blobs = s.columnInt(1);
+  s.reset();
+  if (blobs > 0) return false;   // tables of an older schema: not lent
+  if (end == 0) return true;
+  std::error_code error;
+  const auto size = std::filesystem::file_size(photons_.pathOf({job, 0}), error);
+  return !error && int64_t(size) >= end;
+}
+
+void JobStore::markPhotonPassComplete(uint64_t job) {
+  auto& s = db_.prepare("UPDATE jobs SET photons_complete = 1 WHERE id = ?");
+  s.bind(1, int64_t(job));
+  s.run();
+}
+
+void JobStore::withdrawPhotonPass(uint64_t job) {
+  auto& s = db_.prepare("UPDATE jobs SET photon_key = '' WHERE id = ?");
+  s.bind(1, int64_t(job));
   s.run();
 }
 
@@ -643,7 +709,8 @@ void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   counters.bind(1, int64_t(job)).bind(2, kPhotonPassRestarts);
   counters.run();
   addCounter(job, kPhotonPassRestarts, 1);
-  auto& records = db_.prepare("UPDATE jobs SET photon_record_bytes = ? WHERE id = ?");
+  auto& records = db_.prepare(
+      "UPDATE jobs SET photon_record_bytes = ?, photon_source = 0, photons_complete = 0 WHERE id = ?");
   records.bind(1, int64_t(sizeof(PhotonRecord))).bind(2, int64_t(job));
   records.run();
   setJobState(job, JobState::Photons, nowMs);

@@ -39,6 +39,14 @@ struct JobRecord {
   // The size of the records its photon tables hold: sizeof(PhotonRecord),
   // or 24 for a job begun by a portico before schema 5.
   int photonRecordBytes = 0;
+  // What decides its photon tables (photon_reuse.h; "" for none: a job that
+  // cannot lend its pass), the earlier job whose tables it renders with (0:
+  // its own), and whether its own photon pass is complete.
+  std::string photonKey;
+  uint64_t photonSource = 0;
+  bool photonsComplete = false;
+  // The job whose photon tables its render phase reads.
+  uint64_t photonJob() const { return photonSource ? photonSource : id; }
 };
 
 struct PendingCell {
@@ -66,7 +74,7 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 5;
+  static constexpr int kSchemaVersion = 6;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -79,6 +87,18 @@ class JobStore {
   std::optional<JobRecord> job(uint64_t id);
   std::vector<JobRecord> jobs(bool activeOnly);
   void setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error = "");
+
+  // Photon-pass reuse (photon_reuse.h). At submit: what decides the job's
+  // photon tables, and the earlier job whose tables it renders with (0: it
+  // runs its own pass).
+  void setPhotonPass(uint64_t job, const std::string& key, uint64_t source);
+  // The newest job with this key whose own photon pass is complete, that is
+  // rendering or done, and whose photon file still holds every batch its
+  // rows name; nullopt when there is none.
+  std::optional<uint64_t> reusablePhotonPass(const std::string& key);
+  void markPhotonPassComplete(uint64_t job);
+  // Its photon tables were found damaged: never offered for reuse again.
+  void withdrawPhotonPass(uint64_t job);
 
   // work: rays the batch holds or will generate (the scheduler's measure).
   // The payload goes to the job's batch file at once (a view into a Result
@@ -119,7 +139,8 @@ class JobStore {
   std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
   void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
   // Back to the start of the photon pass: the job's work, photons, film and
-  // counters dropped (its photon file cut to nothing), state photons; the
+  // counters dropped (its photon file cut to nothing), state photons, a
+  // photon pass of its own (no longer anyone else's, nor complete); the
   // counter kPhotonPassRestarts alone is kept, and incremented. The caller
   // queues the emission again, in the same transaction.
   static constexpr const char* kPhotonPassRestarts = "restarts.photon_pass";
@@ -155,6 +176,7 @@ class JobStore {
   int64_t takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches, uint32_t& attempt);
   void markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches, int64_t work);
   void rechecksumPhotonFiles();
+  bool photonFileHoldsItsBatches(uint64_t job);
   uint32_t batchSegment(uint64_t job);
   void retireBatchSegment(uint64_t job, uint32_t segment);
   sql::Database db_;

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 8;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera
+const protocolVersion :UInt32 = 9;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons
 
 enum Phase {
   photons @0;
@@ -168,6 +168,11 @@ struct Assign {
   # of a pass each cell holds a few photons; one lease for several of them
   # is one round trip and one Result instead of one each.
   moreCells @9 :List(CellBatches);
+  # The job whose photon tables a render lease reads: the lease's own job,
+  # or the earlier job whose finished photon pass it reuses (same store,
+  # same photon settings). Workers cache photon maps under it, so a reused
+  # pass reuses their cached maps too.
+  photonJob @10 :UInt64;
 }
 
 struct CellBatches {
@@ -192,7 +197,7 @@ struct Failure {
 }
 
 struct FetchPhotons {
-  job @0 :UInt64;
+  job @0 :UInt64;           # the lease's job; the coordinator serves the tables of its photonJob
   cell @1 :UInt32;
 }
 
@@ -223,6 +228,9 @@ struct FileChunk {
 
 struct Submit {
   spec @0 :JobSpec;
+  # A photon pass of its own, even when an earlier job's finished pass on
+  # the same store with the same photon settings could be reused.
+  freshPhotons @1 :Bool;
 }
 
 struct SubmitReply {

@@ -115,22 +115,22 @@ void CellCache::rebuildAccelerator(LoadedCell& cell, const std::string& spec) {
   throw std::logic_error("rebuildAccelerator: the cell is not in the cache");
 }
 
-const IndirectLight* CellCache::indirectLight(uint64_t job, uint32_t cell) {
-  auto it = maps_.find({job, cell});
+const IndirectLight* CellCache::indirectLight(const PhotonMapKey& key) {
+  auto it = maps_.find(key);
   if (it == maps_.end()) return nullptr;
   touch(it->second);
   return it->second.map.get();
 }
 
-const IndirectLight& CellCache::storeIndirectLight(uint64_t job, uint32_t cell, std::unique_ptr<IndirectLight> map) {
-  Entry& entry = maps_[{job, cell}];
+const IndirectLight& CellCache::storeIndirectLight(const PhotonMapKey& key, std::unique_ptr<IndirectLight> map) {
+  Entry& entry = maps_[key];
   if (entry.map) {
     held_ -= entry.bytes;
     recency_.erase(entry.position);
   }
   entry.bytes = map->bytes();
   entry.map = std::move(map);
-  entry.mapKey = MapKey{job, cell};
+  entry.mapKey = key;
   ++statistics_.photonMapsBuilt;
   insert(entry);
   return *entry.map;

@@ -31,6 +31,18 @@ struct LoadedCell {
   uint64_t bytes() const { return geometry->bytes() + accelerator->stats().bytes; }
 };
 
+// Which photon map: the job whose photon tables it is built from (the
+// lease's own job, or the earlier job whose photon pass it reuses), the
+// cell, and how it is built from them (photonMapBuild, lease_load.h): jobs
+// that share a photon pass may keep different photons or precompute
+// irradiance with another k.
+struct PhotonMapKey {
+  uint64_t photonJob = 0;
+  uint32_t cell = 0;
+  uint32_t build = 0;
+  auto operator<=>(const PhotonMapKey&) const = default;
+};
+
 struct CacheStatistics {
   int64_t cellsLoaded = 0, cellHits = 0, bytesRead = 0, photonMapsBuilt = 0;
   double acceleratorBuildMs = 0;
@@ -62,9 +74,9 @@ class CellCache {
   LoadedCell* heldCell(const std::string& directory, uint32_t cell, const std::string& acceleratorSpec);
   // Replaces a loaded cell's accelerator with one built from `spec`.
   void rebuildAccelerator(LoadedCell& cell, const std::string& spec);
-  // The photon map (and irradiance cache) of (job, cell), or nullptr when not cached; pinned.
-  const IndirectLight* indirectLight(uint64_t job, uint32_t cell);
-  const IndirectLight& storeIndirectLight(uint64_t job, uint32_t cell, std::unique_ptr<IndirectLight> light);
+  // The photon map (and irradiance cache) under `key`, or nullptr when not cached; pinned.
+  const IndirectLight* indirectLight(const PhotonMapKey& key);
+  const IndirectLight& storeIndirectLight(const PhotonMapKey& key, std::unique_ptr<IndirectLight> light);
   // Evicts unpinned entries, least recently used first, until `bytes` more
   // fit in the budget (or nothing unpinned is left).
   void makeRoom(uint64_t bytes);
@@ -75,7 +87,7 @@ class CellCache {
 
  private:
   using CellKey = std::tuple<std::string, uint32_t, std::string>;
-  using MapKey = std::pair<uint64_t, uint32_t>;
+  using MapKey = PhotonMapKey;
   struct Entry {
     std::unique_ptr<LoadedCell> cell;
     std::unique_ptr<IndirectLight> map;

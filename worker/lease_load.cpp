@@ -82,6 +82,22 @@ std::unique_ptr<IndirectLight> assembleIndirectLight(CellCache& cache, LoadedLea
 }
 }  // namespace
 
+uint32_t photonMapBuild(const JobSettings& parameters) {
+  if (parameters.gather == 0) return 0;   // bounced photons only, no irradiance cache
+  if (parameters.irradiance != JobSettings::Irradiance::Precomputed) return 1;
+  return 2 | (parameters.irradianceK() << 2);
+}
+
+PhotonMapKey photonMapKey(wire::Assign::Reader assign, const JobSettings& parameters, uint32_t cell) {
+  // A coordinator always names it (protocol 9); 0 would mean the lease's own job.
+  const uint64_t photonJob = assign.getPhotonJob() ? assign.getPhotonJob() : assign.getJob();
+  return {photonJob, cell, photonMapBuild(parameters)};
+}
+
+PhotonMapKey photonMapKey(wire::Assign::Reader assign) {
+  return photonMapKey(assign, jobSettingsFromWire(assign.getSpec()), assign.getCell());
+}
+
 LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assign::Reader assign,
                       std::optional<std::string> photonRecords, const std::string& storeDirectory) {
   auto spec = assign.getSpec();
@@ -91,15 +107,16 @@ LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assig
   lease.scene = &cache.scene(storeDirectory);
   // The coordinator resolved every automatic value (resolveJobSettings).
   lease.parameters = jobSettingsFromWire(spec);
+  lease.photonJob = photonMapKey(assign, lease.parameters, cellId).photonJob;
   lease.renderPhase = assign.getPhase() == wire::Phase::RENDER;
   lease.accel = lease.renderPhase ? lease.parameters.renderAccel : lease.parameters.accel;
   lease.cell = &cellWithAccelerator(cache, chooser, lease, cellId, assign.getCellWork(), lease.renderPhase);
   if (lease.renderPhase) {
-    lease.indirect = cache.indirectLight(assign.getJob(), cellId);
+    lease.indirect = cache.indirectLight(lease.mapKey(cellId));
     if (!lease.indirect) {
       if (!photonRecords) throw std::logic_error("render lease without photons");
       lease.indirect = &cache.storeIndirectLight(
-          assign.getJob(), cellId, assembleIndirectLight(cache, lease, cellId, std::move(*photonRecords)));
+          lease.mapKey(cellId), assembleIndirectLight(cache, lease, cellId, std::move(*photonRecords)));
     }
   }
   return lease;

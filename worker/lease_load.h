@@ -15,16 +15,27 @@
 
 namespace portico {
 
+// How a cell's photon map is built from its photon table, as a number: which
+// photons it keeps (all for final gathering, else those that bounced), and
+// whether it precomputes irradiance, with which k. Part of PhotonMapKey.
+uint32_t photonMapBuild(const JobSettings& parameters);
+// The photon map a render lease of `assign` reads for `cell` (its own cell
+// or one it forwards rays to).
+PhotonMapKey photonMapKey(wire::Assign::Reader assign, const JobSettings& parameters, uint32_t cell);
+PhotonMapKey photonMapKey(wire::Assign::Reader assign);
+
 struct LoadedLease {
   const SceneStore* scene = nullptr;
   std::string store;               // the store directory the scene was read from
   JobSettings parameters;
+  uint64_t photonJob = 0;          // whose photon tables its maps come from (Assign.photonJob)
   std::string accel;               // the structure this lease's cells are traced with
   bool renderPhase = false;
   LoadedCell* cell = nullptr;      // the lease's own cell
   const IndirectLight* indirect = nullptr;   // its photon map (render phase)
   int64_t irradiancePoints = 0;    // precomputed by this lease
   int64_t irradianceMicroseconds = 0;
+  PhotonMapKey mapKey(uint32_t cell) const { return {photonJob, cell, photonMapBuild(parameters)}; }
 };
 
 LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assign::Reader assign,

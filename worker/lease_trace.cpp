@@ -79,7 +79,7 @@ void traceMoreCells(CellCache& cache, AcceleratorChooser& chooser, const LoadedL
 // tables are sorted by content and film sums are exact. At most `limit`
 // rays are forwarded (the last destination's in full), so a lease stays
 // about a lease's work. Returns the rays forwarded.
-int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, uint64_t job, int64_t limit,
+int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t limit,
                            KernelOutputs& out, const std::atomic<bool>* stop) {
   int64_t forwarded = 0;
   for (bool progress = true; progress && forwarded < limit;) {
@@ -87,7 +87,7 @@ int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, uint64_t 
     for (auto it = out.crossings.begin(); it != out.crossings.end() && forwarded < limit;) {
       const uint32_t destination = it->first;
       LoadedCell* held = cache.heldCell(lease.store, destination, lease.accel);
-      const IndirectLight* photons = held && lease.renderPhase ? cache.indirectLight(job, destination) : nullptr;
+      const IndirectLight* photons = held && lease.renderPhase ? cache.indirectLight(lease.mapKey(destination)) : nullptr;
       if (!held || (lease.renderPhase && !photons)) {
         ++it;
         continue;
@@ -121,7 +121,7 @@ TracedLease traceLoadedLease(CellCache& cache, AcceleratorChooser& chooser, cons
   lease.cell->raysTraced += traced.out.counters.raySegments;
   chooser.learn(lease.renderPhase, assign.getLeaseWork(), traced.out.counters.raySegments);
   if (forwardRays > 0)
-    traced.forwarded = forwardToHeldCells(cache, lease, assign.getJob(), std::max(forwardRays, assign.getLeaseWork()),
+    traced.forwarded = forwardToHeldCells(cache, lease, std::max(forwardRays, assign.getLeaseWork()),
                                           traced.out, stop);
   return traced;
 }

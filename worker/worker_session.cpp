@@ -20,6 +20,7 @@
 
 #include "common/net/message.h"
 #include "worker/crash_report.h"
+#include "worker/lease_load.h"
 #include "worker/lease_runner.h"
 
 namespace portico {
@@ -95,7 +96,7 @@ FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::option
 bool WorkerSession::readyToTrace(const net::Decoded& decoded) {
   if (mirror_) return false;
   auto assign = decoded.envelope().getAssign();
-  return assign.getPhase() != wire::Phase::RENDER || cache_.indirectLight(assign.getJob(), assign.getCell()) != nullptr;
+  return assign.getPhase() != wire::Phase::RENDER || cache_.indirectLight(photonMapKey(assign)) != nullptr;
 }
 
 // The tracing thread: traces `first`, then, while the next queued lease is
@@ -284,7 +285,7 @@ void WorkerSession::advanceLease() {
       return;
     }
   }
-  if (assign.getPhase() == wire::Phase::RENDER && !cache_.indirectLight(assign.getJob(), assign.getCell())) {
+  if (assign.getPhase() == wire::Phase::RENDER && !cache_.indirectLight(photonMapKey(assign))) {
     capnp::MallocMessageBuilder message;
     auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
     fetch.setJob(assign.getJob());

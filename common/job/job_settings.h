@@ -57,6 +57,10 @@ struct JobSettings {
   // Unset: the store's camera; always set once resolved, so that every
   // worker traces the same camera rays.
   std::optional<JobCamera> camera;
+  // Not what the job computes but how: a photon pass of its own rather than
+  // an earlier job's finished one (`--fresh-photons`). Carried by the submit
+  // message (wire::Submit.freshPhotons), not by the stored spec.
+  bool freshPhotons = false;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;

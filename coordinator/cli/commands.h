@@ -46,6 +46,12 @@ struct LocalRunOptions {
   std::string keys;   // CURVE keys for the local services ("" for none)
 };
 int runRender(const JobSettings& render, const LocalRunOptions& local);
+// `render --views FILE.json -o DIR/`: several views after one photon pass (views_command.cpp).
+struct ViewsOptions {
+  std::string file;            // the views file (view_list.h)
+  std::string format = "exr";  // each image is DIR/<name>.<format>
+};
+int runViews(const JobSettings& base, const LocalRunOptions& local, const ViewsOptions& views);
 
 // How the client commands reach a running coordinator.
 struct ConnectOptions {

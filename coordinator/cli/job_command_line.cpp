@@ -18,6 +18,7 @@ void addRender(CLI::App& app, CommandTable& table) {
   struct Options {
     JobSettings render;
     LocalRunOptions local;
+    ViewsOptions views;
   };
   auto o = std::make_shared<Options>();
   auto* renderCommand = app.add_subcommand("render", "render locally: starts a coordinator and workers");
@@ -30,7 +31,17 @@ void addRender(CLI::App& app, CommandTable& table) {
   renderCommand->add_option("--log-level", o->local.logLevel, "services' log level")->capture_default_str();
   renderCommand->add_option("--keys", o->local.keys, "CURVE keys directory for the local services (`portico keys generate`)")
       ->check(CLI::ExistingDirectory);
-  table.add(renderCommand, [o] { return runRender(o->render, o->local); });
+  auto* views = renderCommand->add_option(
+      "--views", o->views.file,
+      "a JSON file of views (name, look_from, look_at, optional up, fov, width, height, spp) rendered after one "
+      "photon pass; -o then names a directory, each image is DIR/<name>.<format>");
+  views->check(CLI::ExistingFile);
+  renderCommand->add_option("--format", o->views.format, "with --views: the images' format")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"exr", "png", "hdr", "tif", "tiff", "jpg", "jpeg"}))
+      ->needs(views);
+  table.add(renderCommand,
+            [o] { return o->views.file.empty() ? runRender(o->render, o->local) : runViews(o->render, o->local, o->views); });
 }
 
 // The coordinator to reach and the job asked about (status: 0 for every job).

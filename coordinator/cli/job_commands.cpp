@@ -137,6 +137,9 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
           "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
       ->check(CLI::IsMember({"radiance", "cells", "portals"}))
       ->default_str(toString(o.aov));
+  command.add_flag("--fresh-photons", o.freshPhotons,
+                   "run a photon pass of its own, even where an earlier job's finished one on the same store with "
+                   "the same photon settings could be reused");
 }
 
 void addConnectOptions(CLI::App& command, ConnectOptions& o) {
@@ -174,7 +177,9 @@ void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message) {
   checkOutputPath(o.output);
   settings.output = std::filesystem::absolute(o.output).lexically_normal().string();
   // Automatic values stay automatic: the coordinator resolves them (resolveJobSettings).
-  toWire(settings, message.initRoot<wire::Envelope>().initSubmit().initSpec());
+  auto submit = message.initRoot<wire::Envelope>().initSubmit();
+  toWire(settings, submit.initSpec());
+  submit.setFreshPhotons(settings.freshPhotons);
 }
 
 int runSubmit(const ConnectOptions& connect, const JobSettings& render) {

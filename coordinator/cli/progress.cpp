@@ -40,6 +40,8 @@ std::string describeStatus(const nlohmann::json& s) {
     text += fmt::format("photons: emitted {} deposited {} absorbed {} escaped {} queued {}\n",
                         photons.value("emitted", 0), photons.value("deposits", 0), photons.value("absorbed", 0),
                         photons.value("escaped", 0), photons.value("queued", 0));
+    if (s.contains("photon_pass") && s["photon_pass"]["reused_from_job"].is_number())
+      text += fmt::format("photon pass: job {}'s, reused\n", s["photon_pass"]["reused_from_job"].get<uint64_t>());
     text += fmt::format("rays: traced {} crossings {} ({:.3f} per camera ray)\n", s["rays"].value("traced", 0),
                         s["rays"].value("crossings", 0), s["rays"].value("crossings_per_camera_ray", 0.0));
     text += fmt::format("cells: loaded {} cache hits {} bytes read {}\n", s["cells"].value("loaded", 0),
