@@ -190,6 +190,73 @@ TEST_F(PhotonReuse, AReusingJobSurvivesACoordinatorRestartWithTheSameBits) {
   EXPECT_EQ(differingFloats(dir_ / "r-reusing.exr", dir_ / "r-fresh.exr"), 0u);
 }
 
+// A lender's photon file that lost bytes (an operating-system crash) is
+// not offered; one whose bytes changed under the same size fails its CRC
+// when a worker fetches it: the reusing job runs a photon pass of its own
+// (same bits), and the damaged pass is never offered again.
+TEST_F(PhotonReuse, ADamagedLenderIsNotReusedAndAReusingJobThatFindsItDamagedRunsItsOwnPass) {
+  const fs::path clusterDir = dir_ / "damage-cluster";
+  LocalCluster cluster(clusterDir, 1);
+  const uint64_t first = submit(cluster, "d-first", kRoomA);
+  ASSERT_EQ(cluster.wait(first).value("state", ""), "done");
+  const fs::path photons = clusterDir / "jobs.db-photons" / fmt::format("job-{}.bin", first);
+  ASSERT_TRUE(fs::exists(photons));
+  {
+    std::fstream file(photons, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(100);
+    file.put('\x5a');
+    file.put('\xa5');
+  }
+  // A new worker, which has cached no photon map of job 1's: it fetches the tables.
+  cluster.worker(0).stop();
+  cluster.addWorker({});
+  const uint64_t reusing = submit(cluster, "d-reusing", kRoomB);
+  const nlohmann::json status = cluster.wait(reusing);
+  ASSERT_EQ(status.value("state", ""), "done") << status.dump();
+  EXPECT_TRUE(reusedFrom(status).is_null()) << status.dump();
+  EXPECT_EQ(status["photon_pass_restarts"].get<int64_t>(), 1);
+  EXPECT_EQ(status["photon_pass"]["photons_emitted_by_this_job"].get<int64_t>(), 20000);
+  // Job 1 lends no more; the reusing job's own pass is the one offered now.
+  const uint64_t next = submit(cluster, "d-next", kRoomB);
+  const nlohmann::json nextStatus = cluster.wait(next);
+  EXPECT_EQ(reusedFrom(nextStatus), reusing) << nextStatus.dump();
+  EXPECT_EQ(differingFloats(dir_ / "d-reusing.exr", dir_ / "d-next.exr"), 0u);
+  // A photon file cut short is not offered at all.
+  fs::resize_file(clusterDir / "jobs.db-photons" / fmt::format("job-{}.bin", reusing), 64);
+  const uint64_t afterCut = submit(cluster, "d-after-cut", kRoomB);
+  const nlohmann::json cutStatus = cluster.wait(afterCut);
+  EXPECT_TRUE(reusedFrom(cutStatus).is_null()) << cutStatus.dump();
+  EXPECT_EQ(cutStatus["photon_pass_restarts"].get<int64_t>(), 0);
+  EXPECT_EQ(differingFloats(dir_ / "d-reusing.exr", dir_ / "d-after-cut.exr"), 0u);
+}
+
+// A store regenerated in place (new files renamed over the old, even with
+// the same content) is another store: its jobs run their own photon pass.
+TEST_F(PhotonReuse, AStoreRegeneratedInPlaceIsNotMistakenForTheOldOne) {
+  const fs::path store = dir_ / "regenerated";
+  const std::vector<std::string> import{kBin + "portico", "scene", "import",
+                                        std::string(PORTICO_SOURCE_DIR) + "/tests/scenes/two_rooms/scene.json",
+                                        store.string()};
+  ASSERT_EQ(runCommand(import, dir_ / "regenerate-1.log"), 0) << readFile(dir_ / "regenerate-1.log");
+  LocalCluster cluster(dir_ / "regenerate-cluster", 1);
+  const auto submitTo = [&](const std::string& name) {
+    int code = 0;
+    auto argv = with({kBin + "portico", "submit", "--coordinator", cluster.endpoint(), store.string(), "-o",
+                      (dir_ / (name + ".exr")).string()},
+                     with(kSmall, kRoomB));
+    const std::string out = captureOutput(argv, dir_, name, &code);
+    EXPECT_EQ(code, 0) << readFile(dir_ / (name + ".log"));
+    return code == 0 ? std::stoull(out) : 0;
+  };
+  const uint64_t first = submitTo("g-first");
+  ASSERT_EQ(cluster.wait(first).value("state", ""), "done");
+  EXPECT_EQ(reusedFrom(cluster.wait(submitTo("g-same"))), first);
+  ASSERT_EQ(runCommand(import, dir_ / "regenerate-2.log"), 0) << readFile(dir_ / "regenerate-2.log");
+  const nlohmann::json after = cluster.wait(submitTo("g-after"));
+  EXPECT_EQ(after.value("state", ""), "done") << after.dump();
+  EXPECT_TRUE(reusedFrom(after).is_null()) << after.dump();
+}
+
 // Each refusal is one line naming the view and the problem, before any
 // service starts (nothing is written in the output directory).
 TEST_F(PhotonReuse, BadViewsFilesAreRefusedInOneLineNamingTheViewAndTheProblem) {
