@@ -73,8 +73,14 @@ LocalServices::LocalServices(const LocalRunOptions& local) {
   waitForEndpoint(endpointFile, *coordinator_, coordinatorLog_);
 }
 
+// Left by an exception (a job refused at submit, which said why): nothing
+// in the directory is worth keeping.
 LocalServices::~LocalServices() {
-  if (!stopped_) stop(true);
+  if (stopped_) return;
+  try {
+    stop(false);
+  } catch (const std::exception&) {
+  }
 }
 
 std::optional<std::string> LocalServices::failure() {

@@ -231,6 +231,41 @@ TEST_F(JobStoreTest, LeasesLostWithTheirWorkerCountAsAttemptsOfTheirBatches) {
   EXPECT_EQ(store.openLease(store.pendingCells(1)[0], "w3", 1000, 3, batches).attempt, 2u);
 }
 
+// Back to version 5's jobs table: no photon-pass reuse.
+void dropVersionSixColumns(JobStore& store) {
+  store.database().exec("DROP INDEX jobs_by_photon_key");
+  for (const char* column : {"photon_key", "photon_source", "photons_complete"})
+    store.database().exec(std::string("ALTER TABLE jobs DROP COLUMN ") + column);
+}
+
+TEST_F(JobStoreTest, APhotonPassIsOfferedOnceCompleteWithItsFileWholeAndNoLongerOnceRestarted) {
+  JobStore store(path_.string());
+  const uint64_t lender = store.createJob("spec", 1);
+  store.setPhotonPass(lender, "key", 0);
+  store.addPhotons(lender, 3, 10, std::string(160, 'p'));
+  EXPECT_EQ(store.reusablePhotonPass("key"), std::nullopt);   // its pass is not complete
+  store.markPhotonPassComplete(lender);
+  store.setJobState(lender, JobState::Render, 2);
+  EXPECT_EQ(store.reusablePhotonPass("key"), lender);
+  EXPECT_EQ(store.reusablePhotonPass("other key"), std::nullopt);
+  EXPECT_EQ(store.reusablePhotonPass(""), std::nullopt);
+  const uint64_t borrower = store.createJob("spec", 3);
+  store.setPhotonPass(borrower, "key", lender);
+  EXPECT_EQ(store.job(borrower)->photonJob(), lender);
+  store.markPhotonPassComplete(borrower);
+  store.setJobState(borrower, JobState::Done, 4);
+  EXPECT_EQ(store.reusablePhotonPass("key"), lender);   // a borrower lends nothing
+  // A file cut short is not offered.
+  std::filesystem::resize_file(store.photonFile(lender), 100);
+  EXPECT_EQ(store.reusablePhotonPass("key"), std::nullopt);
+  // A borrower that runs its pass again runs its own.
+  store.restartJob(borrower, 5);
+  EXPECT_EQ(store.job(borrower)->photonJob(), borrower);
+  EXPECT_FALSE(store.job(borrower)->photonsComplete);
+  store.withdrawPhotonPass(lender);
+  EXPECT_EQ(store.job(lender)->photonKey, "");
+}
+
 TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
   {
     JobStore store(path_.string());
@@ -243,6 +278,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
       store.database().exec(std::string("ALTER TABLE photons DROP COLUMN ") + column);
     store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
+    dropVersionSixColumns(store);
     store.database().setUserVersion(1);
   }
   JobStore migrated(path_.string());
@@ -646,6 +682,7 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
       update.run();
     }
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
+    dropVersionSixColumns(store);
     store.database().setUserVersion(3);
   }
   overwriteByte(path_.string() + "-photons/job-1.bin", 240 + 7);   // the second batch
