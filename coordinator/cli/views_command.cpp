@@ -73,7 +73,7 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
       j.state = status.value("state", "");
       if (!ended(j.state)) continue;
       const auto& reused = status["photon_pass"]["reused_from_job"];
-      std::cout << fmt::format("view {}: job {} {} in {:.2f} s{}{}\n", j.view->name, j.job, j.state,
+      std::cout << fmt::format("view {}: job {} {} in {:.2f} s{}{}", j.view->name, j.job, j.state,
                                status.value("elapsed_s", 0.0),
                                j.state == "done" ? ", " + status["settings"].value("output", "") : "",
                                reused.is_number() ? fmt::format(" (photon pass of job {})", reused.get<uint64_t>())
@@ -104,10 +104,18 @@ int runViews(const JobSettings& base, const LocalRunOptions& local, const ViewsO
   net::CoordinatorClient client(services.endpoint(), services.keys());
   std::vector<ViewJob> jobs;
   jobs.push_back({&views[0], client.submit(*submits[0]), "photons"});
+  std::cout << fmt::format("view {}: job {} (the photon pass)", views[0].name, jobs[0].job) << std::endl;
   // The others once the first's photon pass is complete: they reuse it.
   follow(client, services, jobs, [&] { return jobs[0].state != "photons"; });
-  if (!interrupted() && (jobs[0].state == "render" || jobs[0].state == "done"))
-    for (size_t i = 1; i < views.size(); ++i) jobs.push_back({&views[i], client.submit(*submits[i]), "render"});
+  if (!interrupted() && (jobs[0].state == "render" || jobs[0].state == "done")) {
+    for (size_t i = 1; i < views.size(); ++i) {
+      jobs.push_back({&views[i], client.submit(*submits[i]), "render"});
+      std::cout << fmt::format("view {}: job {}", views[i].name, jobs.back().job) << std::endl;
+    }
+  } else if (views.size() > 1) {
+    std::cerr << fmt::format("the other {} views were not rendered: the first view's job is {}\n", views.size() - 1,
+                             jobs[0].state);
+  }
   follow(client, services, jobs, [&] {
     for (const ViewJob& j : jobs)
       if (!ended(j.state)) return false;
