@@ -251,6 +251,25 @@ constexpr const char* kSchemaVersion4Leases = R"sql(
 // of an unfinished job with 24-byte records again (Coordinator's constructor).
 constexpr const char* kSchemaVersion5 =
     "ALTER TABLE jobs ADD COLUMN photon_record_bytes INTEGER NOT NULL DEFAULT 24";
+
+// Version 6: render passes (coordinator/render_passes.h). A job in its
+// render phase without a render_progress row renders its one pass.
+constexpr const char* kSchemaVersion6 = R"sql(
+      CREATE TABLE render_progress (
+        job INTEGER PRIMARY KEY REFERENCES jobs(id),
+        passes_started INTEGER NOT NULL,
+        stop_reason TEXT NOT NULL DEFAULT '',
+        block_sums BLOB,
+        block_deviations BLOB
+      );
+      CREATE TABLE render_passes (
+        job INTEGER NOT NULL REFERENCES jobs(id),
+        pass INTEGER NOT NULL,
+        finished_ms INTEGER NOT NULL,
+        error_estimate REAL,
+        PRIMARY KEY (job, pass)
+      );
+    )sql";
 }  // namespace
 
 void JobStore::migrate() {
@@ -275,6 +294,7 @@ void JobStore::migrate() {
     db_.exec(kSchemaVersion4Leases);
   });
   step(5, [&] { db_.exec(kSchemaVersion5); });
+  step(6, [&] { db_.exec(kSchemaVersion6); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -634,7 +654,7 @@ void JobStore::dropJobWork(uint64_t job) {
 
 void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   dropJobWork(job);
-  for (const char* table : {"photons", "film"}) {
+  for (const char* table : {"photons", "film", "render_progress", "render_passes"}) {
     auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
     s.bind(1, int64_t(job));
     s.run();

@@ -53,6 +53,21 @@ inline CLI::Validator realNumber(double min, double max) {
       fmt::format("FLOAT in [{:g} - {:g}]", min, max));
 }
 
+// A finite number above 0 and at most max (0, negatives and NaN refused).
+inline CLI::Validator positiveNumber(double max) {
+  return CLI::Validator(
+      [max](std::string& text) -> std::string {
+        const std::string expected = fmt::format("a number above 0 and at most {:g}", max);
+        double value = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (text.empty() || error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
+          return fmt::format("'{}' is not {}", text, expected);
+        if (!(value > 0) || value > max) return fmt::format("{} is out of range: expected {}", text, expected);
+        return {};
+      },
+      fmt::format("FLOAT in (0 - {:g}]", max));
+}
+
 // A byte size as parseByteSize reads it ("512MiB", "4GiB"), at most 1 PiB.
 inline CLI::Validator byteSize() {
   return CLI::Validator(
