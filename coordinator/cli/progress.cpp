@@ -23,6 +23,7 @@ std::string passesText(const nlohmann::json& s) {
   if (most <= 1) return "";
   const auto& current = passes["current"];
   const uint32_t pass = current.is_number() ? current.get<uint32_t>() : passes.value("done", 0u);
+  if (pass == 0) return "";   // still in the photon pass
   const auto& estimate = passes["error_estimate"];
   std::string text = fmt::format("  pass {}/{} error {}", pass, most,
                                  estimate.is_number() ? fmt::format("{:.2f} %", 100 * estimate.get<double>()) : "-");
@@ -105,7 +106,8 @@ void ProgressDisplay::update(const nlohmann::json& s) {
     return;
   }
   const int64_t now = steadyMs();
-  const std::string state = s.value("state", "");
+  // A line per state, and per render pass of a job rendered in passes.
+  const std::string state = s.value("state", "") + passesText(s);
   if (now - lastLineMs_ >= 5000 || state != lastState_) {
     lastLineMs_ = now;
     lastState_ = state;

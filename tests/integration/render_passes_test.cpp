@@ -86,18 +86,23 @@ TEST_F(RenderPasses, TheSameNumberOfPassesGivesTheSameBitsWithOneAndTwoWorkers) 
 
 TEST_F(RenderPasses, ATimeLimitStopsBeforeAPassWouldEndPastItAfterAtLeastOnePass) {
   const std::vector<std::string> small{"--width", "64", "--height", "64", "--max-passes", "4096"};
-  auto second = small;
-  second.insert(second.end(), {"--time-limit", "1"});
-  ASSERT_EQ(render("second", 2, second), 0) << readFile(dir_ / "second.log");
-  const auto stats = passes("second");
+  auto limited = small;
+  limited.insert(limited.end(), {"--time-limit", "3"});
+  ASSERT_EQ(render("limited", 2, limited), 0) << readFile(dir_ / "limited.log");
+  const auto stats = passes("limited");
   EXPECT_EQ(stats["stopped"], "time_limit") << stats.dump();
-  EXPECT_GE(stats["done"].get<int>(), 2) << stats.dump();
   EXPECT_LT(stats["done"].get<int>(), 4096);
-  // The passes ended within the limit, give or take the prediction's error (a pass).
   const auto& ends = stats["ends_ms"];
-  const int64_t last = ends.back().get<int64_t>();
-  const int64_t pass = last - ends[ends.size() - 2].get<int64_t>();
-  EXPECT_LE(last, 1000 + 2 * pass) << stats.dump();
+  ASSERT_EQ(ends.size(), stats["done"].get<size_t>());
+  // The first pass (which also builds the photon maps) predicts the second:
+  // under 1.5 s, a second pass fits in the 3 s.
+  if (ends[0].get<int64_t>() <= 1500) {
+    ASSERT_GE(ends.size(), 2u) << stats.dump();
+    // The passes ended within the limit, give or take the prediction's error (a pass or two).
+    const int64_t last = ends.back().get<int64_t>();
+    const int64_t pass = last - ends[ends.size() - 2].get<int64_t>();
+    EXPECT_LE(last, 3000 + 2 * pass) << stats.dump();
+  }
 
   auto instant = small;
   instant.insert(instant.end(), {"--time-limit", "0.001"});
