@@ -955,6 +955,7 @@ void Coordinator::advanceIfPhaseDone(uint64_t jobId) {
     queueCameraRays(store_, jobId, ctx->reader(), *ctx->scene);
     store_.setJobState(jobId, JobState::Render, now);
     tx.commit();
+    ctx->renderPass = 0;   // also after a photon pass run again mid-render
     spdlog::info("job {}: photon phase done, rendering", jobId);
   } else if (!startNextRenderPass(*job, *ctx, now)) {
     finishJob(jobId);
