@@ -24,6 +24,7 @@
 #include "coordinator/job_report.h"
 #include "coordinator/peer_rights.h"
 #include "coordinator/photon_reuse.h"
+#include "coordinator/render_passes.h"
 
 namespace portico {
 
@@ -452,6 +453,7 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
   context.spec = std::make_unique<capnp::MallocMessageBuilder>();
   toWire(resolveJobSettings(stored, *context.scene), context.spec->initRoot<wire::JobSpec>());
   context.photonJob = record->photonJob();
+  context.renderPass = loadRenderProgress(store_.database(), job).passesStarted - 1;
   return jobs_.emplace(job, std::move(context)).first->second;
 }
 
@@ -538,6 +540,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   assign.setCell(chosen->cell);
   assign.setSpec(job->reader());
   assign.setPhotonJob(job->photonJob);
+  if (chosen->phase == 1) assign.getSpec().setSeed(passSeed(job->reader().getSeed(), job->renderPass));
   assign.setLeaseWork(leaseWork);
   assign.setCellWork(std::max(chosen->work, leaseWork));
   const auto copyBatches = [](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
@@ -983,15 +986,38 @@ void Coordinator::advanceIfPhaseDone(uint64_t jobId) {
     if (!job->photonSource) store_.markPhotonPassComplete(jobId);
     store_.setJobState(jobId, JobState::Render, now);
     tx.commit();
+    ctx->renderPass = 0;   // also after a photon pass run again mid-render
     spdlog::info("job {}: photon phase done, rendering", jobId);
-  } else {
-    {
-      sql::Transaction tx(store_.database());
-      store_.addCounter(jobId, "time.render_ms", now - job->phaseStartedMs);
-      tx.commit();
-    }
+  } else if (!startNextRenderPass(*job, *ctx, now)) {
     finishJob(jobId);
   }
+}
+
+bool Coordinator::startNextRenderPass(const JobRecord& job, JobContext& ctx, int64_t now) {
+  PassEnd end;
+  {
+    sql::Transaction tx(store_.database());
+    end = endRenderPass(store_, job, ctx.reader(), now);
+    if (end.stop == PassStop::None)
+      queueCameraRays(store_, job.id, ctx.reader(), *ctx.scene);
+    else if (!end.recordedBefore)
+      store_.addCounter(job.id, "time.render_ms", now - job.phaseStartedMs);
+    tx.commit();
+  }
+  if (ctx.reader().getMaxPasses() > 1)
+    spdlog::info("job {}: render pass {} done, error estimate {}{}", job.id, end.pass,
+                 end.errorEstimate ? fmt::format("{:.3f} %", 100 * *end.errorEstimate) : "none yet",
+                 end.stop == PassStop::None ? ", next pass" : fmt::format(", stopping: {}", toString(end.stop)));
+  if (end.stop != PassStop::None) return false;
+  ctx.renderPass = end.pass;   // the next pass's index: passes count from 1, indices from 0
+  // The average of the passes so far, for whoever watches the file; the
+  // job goes on whether or not it can be written.
+  try {
+    writeJobOutputs(store_, job, ctx.reader());
+  } catch (const std::exception& e) {
+    spdlog::warn("job {}: the image after render pass {} could not be written: {}", job.id, end.pass, e.what());
+  }
+  return true;
 }
 
 void Coordinator::finishJob(uint64_t jobId) {

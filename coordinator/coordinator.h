@@ -56,6 +56,7 @@ class Coordinator {
     std::unique_ptr<capnp::MallocMessageBuilder> spec;   // root: wire::JobSpec
     std::unique_ptr<SceneStore> scene;
     uint64_t photonJob = 0;   // whose photon tables its render leases read (JobRecord::photonJob)
+    uint32_t renderPass = 0;   // the render pass being rendered (0: the first), whose seed render leases carry
     wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
   };
 
@@ -106,6 +107,9 @@ class Coordinator {
   // Leases jobs.db holds open that no worker is tracing go back to the queue.
   void requeueUntracedLeases();
   void advanceIfPhaseDone(uint64_t job);
+  // The render phase ran out of work: the pass ends (render_passes.h);
+  // true when another pass was queued.
+  bool startNextRenderPass(const JobRecord& job, JobContext& context, int64_t nowMs);
   void finishJob(uint64_t job);
   void failJob(uint64_t job, const std::string& error);
   void checkLiveness();

@@ -24,6 +24,12 @@ constexpr uint64_t kMaxImagePixels = uint64_t(1) << 28;   // 16384 x 16384
 constexpr uint64_t kMaxCameraSamples = uint64_t(1) << 36;
 constexpr int kMaxLightHops = 1 << 20;      // -1: every light; -2: the store's default
 constexpr double kMinExposure = 1e-9, kMaxExposure = 1e9;
+// Render passes (--max-passes), each of the job's spp.
+constexpr uint32_t kMaxPasses = 4096;
+// --target-error: a relative standard error above 0, at most 100 %.
+constexpr double kMaxTargetError = 1.0;
+// --time-limit, seconds of render phase: above 0, at most a year.
+constexpr double kMaxTimeLimitSeconds = 365.0 * 24 * 3600;
 // Portals of one cell: kMaxPortalsPerCell in common/scene/store/portal_geometry.h.
 
 }  // namespace portico::limits

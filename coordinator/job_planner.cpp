@@ -36,6 +36,21 @@ void checkPortalsPerCell(const SceneStore& scene) {
         throw std::invalid_argument(fmt::format("scene {}: cell {} has more than {} portals (duplicates?)",
                                                 scene.directory(), cell, kMaxPortalsPerCell));
 }
+// A hand-made submit may hold anything: NaN, a negative or zero target, an
+// endless time limit.
+void validateRenderPasses(const JobSettings& settings) {
+  if (settings.targetError && !(*settings.targetError > 0 && *settings.targetError <= limits::kMaxTargetError))
+    throw std::invalid_argument(fmt::format("target error {} must be a number above 0 and at most {:g}",
+                                            *settings.targetError, limits::kMaxTargetError));
+  if (settings.timeLimitSeconds &&
+      !(*settings.timeLimitSeconds > 0 && *settings.timeLimitSeconds <= limits::kMaxTimeLimitSeconds))
+    throw std::invalid_argument(fmt::format("time limit {} s must be a number above 0 and at most {:g} s",
+                                            *settings.timeLimitSeconds, limits::kMaxTimeLimitSeconds));
+  if (settings.maxPasses < 1 || settings.maxPasses > limits::kMaxPasses)
+    throw std::invalid_argument(
+        fmt::format("max passes {} must be between 1 and {}", settings.maxPasses, limits::kMaxPasses));
+}
+
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 std::string text(const Vec3& v) { return fmt::format("{},{},{}", v.x, v.y, v.z); }
@@ -94,6 +109,7 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   if (settings.photonK == 0) settings.photonK = defaults.photonK;
   if (settings.exposure == 0) settings.exposure = defaults.exposure;
   settings.camera = resolveCamera(settings.camera, scene);
+  if (settings.maxPasses == 0) settings.maxPasses = settings.progressive() ? kProgressiveMaxPasses : 1;
   return settings;
 }
 
@@ -126,6 +142,7 @@ void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
   if (!(settings.exposure >= limits::kMinExposure && settings.exposure <= limits::kMaxExposure))
     throw std::invalid_argument(fmt::format("exposure {} must be a number from {:g} to {:g}", settings.exposure,
                                             limits::kMinExposure, limits::kMaxExposure));
+  validateRenderPasses(settings);
   // A bad --accel is refused here, naming the problem, rather than failing
   // every cell's lease in the workers.
   validateAcceleratorSpec(parseAcceleratorSpec(settings.accel));

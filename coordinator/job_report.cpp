@@ -13,6 +13,7 @@
 #include "common/image/image_writer.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
+#include "coordinator/render_passes.h"
 
 namespace portico {
 
@@ -43,6 +44,28 @@ void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohm
   }
   stats["accelerators"] = builds;
   stats["cell_accelerators"] = cells;
+}
+// Passes done, each one's error estimate and end (ms of render), the
+// settings that stop them and why they stopped (null while they go on).
+nlohmann::json renderPassStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  const RenderProgress progress = loadRenderProgress(store.database(), job.id);
+  nlohmann::json estimates = nlohmann::json::array(), ends = nlohmann::json::array();
+  for (const RenderPassRecord& pass : progress.passes) {
+    estimates.push_back(pass.errorEstimate ? nlohmann::json(*pass.errorEstimate) : nlohmann::json());
+    ends.push_back(pass.finishedMs - job.phaseStartedMs);
+  }
+  nlohmann::json passes = {{"done", progress.passesDone()},
+                           {"max_passes", spec.getMaxPasses()},
+                           {"error_estimates", estimates},
+                           {"ends_ms", ends}};
+  passes["current"] = job.state == JobState::Render ? nlohmann::json(progress.passesStarted) : nlohmann::json();
+  passes["error_estimate"] = estimates.empty() ? nlohmann::json() : estimates.back();
+  passes["target_error"] =
+      spec.getTargetError().isValue() ? nlohmann::json(spec.getTargetError().getValue()) : nlohmann::json();
+  passes["time_limit_s"] =
+      spec.getTimeLimit().isSeconds() ? nlohmann::json(spec.getTimeLimit().getSeconds()) : nlohmann::json();
+  passes["stopped"] = progress.stopReason.empty() ? nlohmann::json() : nlohmann::json(progress.stopReason);
+  return passes;
 }
 }  // namespace
 
@@ -110,6 +133,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                       {"total", (job.finishedMs ? job.finishedMs : job.phaseStartedMs) - job.createdMs}};
   stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
   addAcceleratorChoices(counters, stats);
+  stats["render_passes"] = renderPassStatistics(store, job, spec);
   return stats;
 }
 
@@ -118,7 +142,10 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   status.erase("cell_accelerators");   // one entry per cell: the statistics file has it
   const auto counters = store.counters(job.id);
   const int64_t photonsDone = status["photons"]["absorbed"].get<int64_t>() + status["photons"]["escaped"].get<int64_t>();
-  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp();
+  // The passes started so far: a job in passes does not know how many it will take.
+  const RenderProgress passes = loadRenderProgress(store.database(), job.id);
+  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() *
+                          std::max(passes.passesStarted, passes.passesDone());
   status["progress"] = {{"photons_done", photonsDone},
                         {"photons_total", spec.getPhotons()},
                         {"camera_rays_done", get(counters, "rays.camera")},
@@ -133,7 +160,7 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   const double elapsed = double(nowMs - job.createdMs) / 1000.0;
   status["elapsed_s"] = elapsed;
   status["rays_per_s"] = elapsed > 0 ? double(get(counters, "rays.traced")) / elapsed : 0.0;
-  if (isActive(job.state) && fraction > 0.01) status["eta_s"] = elapsed * (1.0 - fraction) / fraction;
+  if (isActive(job.state) && fraction > 0.01 && spec.getMaxPasses() == 1) status["eta_s"] = elapsed * (1.0 - fraction) / fraction;
   nlohmann::json pending = nlohmann::json::array();
   for (const auto& [cell, work] : store.pendingWorkByCell(job.id, phaseOf(job.state), 8))
     pending.push_back({{"cell", cell}, {"work", work}});
@@ -163,14 +190,18 @@ LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Read
   const uint32_t width = spec.getWidth(), height = spec.getHeight();
   const uint64_t pixels = uint64_t(width) * height;
   const std::vector<FixedRgb> film = store.film(job.id, pixels);
+  // The film holds the sum of the passes done: the image is their average
+  // (one pass: x / 1.0 is x, the same bits as ever).
+  const double passes = std::max<uint32_t>(1, loadRenderProgress(store.database(), job.id).passesDone());
+  const auto average = [passes](int64_t sum) { return static_cast<float>(static_cast<double>(sum) / kFilmScale / passes); };
   LinearImage image;
   image.width = width;
   image.height = height;
   image.rgb.resize(pixels * 3);
   for (uint64_t p = 0; p < pixels; ++p) {
-    image.rgb[3 * p + 0] = fromFixed(film[p].r);
-    image.rgb[3 * p + 1] = fromFixed(film[p].g);
-    image.rgb[3 * p + 2] = fromFixed(film[p].b);
+    image.rgb[3 * p + 0] = average(film[p].r);
+    image.rgb[3 * p + 1] = average(film[p].g);
+    image.rgb[3 * p + 2] = average(film[p].b);
   }
   return image;
 }

@@ -263,6 +263,24 @@ constexpr const char* kSchemaVersion6 = R"sql(
       UPDATE jobs SET photons_complete = 1 WHERE state IN ('render', 'done');
       CREATE INDEX jobs_by_photon_key ON jobs(photon_key) WHERE photon_key != '';
     )sql";
+// Version 7: render passes (coordinator/render_passes.h). A job in its
+// render phase without a render_progress row renders its one pass.
+constexpr const char* kSchemaVersion7 = R"sql(
+      CREATE TABLE render_progress (
+        job INTEGER PRIMARY KEY REFERENCES jobs(id),
+        passes_started INTEGER NOT NULL,
+        stop_reason TEXT NOT NULL DEFAULT '',
+        block_sums BLOB,
+        block_deviations BLOB
+      );
+      CREATE TABLE render_passes (
+        job INTEGER NOT NULL REFERENCES jobs(id),
+        pass INTEGER NOT NULL,
+        finished_ms INTEGER NOT NULL,
+        error_estimate REAL,
+        PRIMARY KEY (job, pass)
+      );
+    )sql";
 }  // namespace
 
 void JobStore::migrate() {
@@ -288,6 +306,7 @@ void JobStore::migrate() {
   });
   step(5, [&] { db_.exec(kSchemaVersion5); });
   step(6, [&] { db_.exec(kSchemaVersion6); });
+  step(7, [&] { db_.exec(kSchemaVersion7); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -700,7 +719,7 @@ void JobStore::dropJobWork(uint64_t job) {
 
 void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   dropJobWork(job);
-  for (const char* table : {"photons", "film"}) {
+  for (const char* table : {"photons", "film", "render_progress", "render_passes"}) {
     auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
     s.bind(1, int64_t(job));
     s.run();

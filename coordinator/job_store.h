@@ -74,7 +74,7 @@ struct LeaseRecord {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 6;
+  static constexpr int kSchemaVersion = 7;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -138,9 +138,10 @@ class JobStore {
   int64_t openLeaseCount(uint64_t job);
   std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
   void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
-  // Back to the start of the photon pass: the job's work, photons, film and
-  // counters dropped (its photon file cut to nothing), state photons, a
-  // photon pass of its own (no longer anyone else's, nor complete); the
+  // Back to the start of the photon pass: the job's work, photons, film,
+  // render passes and counters dropped (its photon file cut to nothing),
+  // state photons, a photon pass of its own (no longer anyone else's, nor
+  // complete); the
   // counter kPhotonPassRestarts alone is kept, and incremented. The caller
   // queues the emission again, in the same transaction.
   static constexpr const char* kPhotonPassRestarts = "restarts.photon_pass";

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 9;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons
+const protocolVersion :UInt32 = 10;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes)
 
 enum Phase {
   photons @0;
@@ -90,6 +90,19 @@ struct JobSpec {
   irradiance @15 :Irradiance;  # what a final-gather hit reads
   renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
   camera @17 :JobCamera;   # absent (in a Submit): the store's camera; always present once resolved
+  # Progressive rendering (docs/architecture.md, "Render passes"): the render
+  # phase runs passes of `spp` samples per pixel, each with its own seed,
+  # until the error estimate reaches targetError, the next pass would end
+  # past timeLimit, or maxPasses passes are done.
+  targetError :union {
+    none @18 :Void;
+    value @19 :Float64;    # relative standard error of 16x16 blocks, as a fraction (0.02: 2 %)
+  }
+  timeLimit :union {
+    none @20 :Void;
+    seconds @21 :Float64;  # of render phase
+  }
+  maxPasses @22 :UInt32;   # 0 (in a Submit): 1 without a target or time limit, else kProgressiveMaxPasses
 }
 
 # A camera chosen at render time (common/job/job_settings.h JobCamera).
@@ -156,7 +169,7 @@ struct Assign {
   job @2 :UInt64;
   phase @3 :Phase;
   cell @4 :UInt32;
-  spec @5 :JobSpec;
+  spec @5 :JobSpec;        # in a render lease, seed is its render pass's (coordinator/render_passes.h)
   batches @6 :List(RayBatch);
   # The scheduler's work measure (rays held or to be generated): this lease's
   # batches, and everything the cell had pending in this phase when it was

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/image/block_rule.h"
 #include "common/image/image_writer.h"
 
 namespace portico {
@@ -32,8 +33,9 @@ struct ImageComparison {
 // Blocks of blockSize x blockSize pixels; a block is checked when its
 // reference mean exceeds `threshold` times the reference image mean, and is
 // over the limit when its relative error exceeds blockLimit.
-ImageComparison compareImages(const LinearImage& image, const LinearImage& reference, int blockSize = 16,
-                              double threshold = 0.05, double blockLimit = 0.10);
+ImageComparison compareImages(const LinearImage& image, const LinearImage& reference,
+                              int blockSize = kErrorBlockSize, double threshold = kDimBlockFractionOfMean,
+                              double blockLimit = 0.10);
 
 std::string describe(const ImageComparison& comparison);
 

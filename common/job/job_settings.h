@@ -19,6 +19,11 @@ namespace portico {
 // for voxel cells (scene import --grid).
 constexpr int kAutomaticLightHops = -2;
 
+// Render passes at most of a job with a target error or a time limit and no
+// --max-passes: a bound for a target never reached (64 passes of the
+// default 16 spp are 1024 samples per pixel).
+constexpr uint32_t kProgressiveMaxPasses = 64;
+
 // A job's own camera, chosen at render time (`--look-from`, `--look-at`,
 // `--up`, `--fov`): photon maps do not depend on it. A zero up or fov means
 // the store camera's; resolveJobSettings fills them and the cell.
@@ -61,6 +66,16 @@ struct JobSettings {
   // an earlier job's finished one (`--fresh-photons`). Carried by the submit
   // message (wire::Submit.freshPhotons), not by the stored spec.
   bool freshPhotons = false;
+  // Progressive rendering: the render phase runs passes of `spp` samples per
+  // pixel, each with its own seed, and stops after the first pass whose
+  // error estimate (relative standard error of 16x16 blocks, from the
+  // passes' spread; at least 2 passes) is at most targetError, before a
+  // pass predicted to end past timeLimitSeconds of render, or after
+  // maxPasses passes. Unset and 0: one pass, today's image bit for bit.
+  std::optional<double> targetError;
+  std::optional<double> timeLimitSeconds;
+  uint32_t maxPasses = 0;            // 0: 1 without a target or time limit, else kProgressiveMaxPasses
+  bool progressive() const { return targetError || timeLimitSeconds; }
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;

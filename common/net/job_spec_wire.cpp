@@ -32,6 +32,9 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
     camera.setFovY(c.fovYDegrees);
     camera.setCell(c.cell);
   }
+  if (settings.targetError) spec.getTargetError().setValue(*settings.targetError);
+  if (settings.timeLimitSeconds) spec.getTimeLimit().setSeconds(*settings.timeLimitSeconds);
+  spec.setMaxPasses(settings.maxPasses);
 }
 
 JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
@@ -63,6 +66,9 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
                                 Vec3(camera.getUpX(), camera.getUpY(), camera.getUpZ()), camera.getFovY(),
                                 camera.getCell()};
   }
+  if (spec.getTargetError().isValue()) settings.targetError = spec.getTargetError().getValue();
+  if (spec.getTimeLimit().isSeconds()) settings.timeLimitSeconds = spec.getTimeLimit().getSeconds();
+  settings.maxPasses = spec.getMaxPasses();
   return settings;
 }
 

@@ -10,6 +10,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <system_error>
 
@@ -38,19 +39,39 @@ inline CLI::Validator wholeNumber(int64_t min, uint64_t max) {
       fmt::format("INT in [{} - {}]", min, max));
 }
 
+// The whole text as a finite number; nullopt for anything else.
+inline std::optional<double> finiteNumber(const std::string& text) {
+  double value = 0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (text.empty() || error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
+    return std::nullopt;
+  return value;
+}
+
 // A finite number in [min, max].
 inline CLI::Validator realNumber(double min, double max) {
   return CLI::Validator(
       [min, max](std::string& text) -> std::string {
         const std::string expected = fmt::format("a number from {:g} to {:g}", min, max);
-        double value = 0;
-        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
-        if (text.empty() || error != std::errc() || end != text.data() + text.size() || !std::isfinite(value))
-          return fmt::format("'{}' is not {}", text, expected);
-        if (value < min || value > max) return fmt::format("{} is out of range: expected {}", text, expected);
+        const std::optional<double> value = finiteNumber(text);
+        if (!value) return fmt::format("'{}' is not {}", text, expected);
+        if (*value < min || *value > max) return fmt::format("{} is out of range: expected {}", text, expected);
         return {};
       },
       fmt::format("FLOAT in [{:g} - {:g}]", min, max));
+}
+
+// A finite number above 0 and at most max (0, negatives and NaN refused).
+inline CLI::Validator positiveNumber(double max) {
+  return CLI::Validator(
+      [max](std::string& text) -> std::string {
+        const std::string expected = fmt::format("a number above 0 and at most {:g}", max);
+        const std::optional<double> value = finiteNumber(text);
+        if (!value) return fmt::format("'{}' is not {}", text, expected);
+        if (!(*value > 0) || *value > max) return fmt::format("{} is out of range: expected {}", text, expected);
+        return {};
+      },
+      fmt::format("FLOAT in (0 - {:g}]", max));
 }
 
 // A byte size as parseByteSize reads it ("512MiB", "4GiB"), at most 1 PiB.

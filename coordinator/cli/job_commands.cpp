@@ -122,6 +122,25 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
           "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
       ->check(CLI::IsMember({"precomputed", "knn"}))
       ->default_str(toString(o.irradiance));
+  // Render passes (coordinator/render_passes.h): without a target or a
+  // time limit, one pass, as ever.
+  command
+      .add_option_function<double>(
+          "--target-error", [&o](double error) { o.targetError = error; },
+          "render in passes until the estimated relative standard error of 16x16 blocks is at most this "
+          "(0.02: 2 %; estimated from 2 passes on)")
+      ->check(positiveNumber(limits::kMaxTargetError));
+  command
+      .add_option_function<double>(
+          "--time-limit", [&o](double seconds) { o.timeLimitSeconds = seconds; },
+          "render in passes, starting none predicted to end past this many seconds of render (at least one pass)")
+      ->check(positiveNumber(limits::kMaxTimeLimitSeconds));
+  command
+      .add_option("--max-passes", o.maxPasses,
+                  fmt::format("most render passes, each of --spp samples per pixel (default: {} with --target-error "
+                              "or --time-limit, else 1; alone, exactly this many)",
+                              kProgressiveMaxPasses))
+      ->check(wholeNumber(1, limits::kMaxPasses));
   command.add_option("--exposure", o.exposure, "PNG exposure")
       ->capture_default_str()
       ->check(realNumber(limits::kMinExposure, limits::kMaxExposure));

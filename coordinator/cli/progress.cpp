@@ -15,6 +15,34 @@ int64_t steadyMs() {
       .count();
 }
 
+// "  pass 3/64 error 1.24 %" for a job rendered in passes; "" for one pass.
+std::string passesText(const nlohmann::json& s) {
+  if (!s.contains("render_passes")) return "";
+  const auto& passes = s["render_passes"];
+  const uint32_t most = passes.value("max_passes", 1u);
+  if (most <= 1) return "";
+  const auto& current = passes["current"];
+  const uint32_t pass = current.is_number() ? current.get<uint32_t>() : passes.value("done", 0u);
+  if (pass == 0) return "";   // still in the photon pass
+  const auto& estimate = passes["error_estimate"];
+  std::string text = fmt::format("  pass {}/{} error {}", pass, most,
+                                 estimate.is_number() ? fmt::format("{:.2f} %", 100 * estimate.get<double>()) : "-");
+  if (passes["stopped"].is_string()) text += fmt::format(" ({})", passes["stopped"].get<std::string>());
+  return text;
+}
+
+// A line of `portico status` for a job rendered in passes: the estimate after each.
+std::string passesDescription(const nlohmann::json& s) {
+  if (!s.contains("render_passes") || s["render_passes"].value("max_passes", 1u) <= 1) return "";
+  const auto& passes = s["render_passes"];
+  std::string text = fmt::format("render passes: {} done (at most {}), error after each:", passes.value("done", 0u),
+                                 passes.value("max_passes", 1u));
+  for (const auto& estimate : passes["error_estimates"])
+    text += estimate.is_number() ? fmt::format(" {:.2f} %", 100 * estimate.get<double>()) : std::string(" -");
+  if (passes["stopped"].is_string()) text += fmt::format("; stopped: {}", passes["stopped"].get<std::string>());
+  return text + "\n";
+}
+
 std::string summaryLine(const nlohmann::json& s) {
   const auto& p = s["progress"];
   std::string line = fmt::format("job {} {:8} photons {}/{}  camera rays {}/{}  {:.2f} Mrays/s",
@@ -22,7 +50,7 @@ std::string summaryLine(const nlohmann::json& s) {
                                  p.value("photons_total", 0), p.value("camera_rays_done", 0),
                                  p.value("camera_rays_total", 0), s.value("rays_per_s", 0.0) / 1e6);
   if (s.contains("eta_s")) line += fmt::format("  ETA {:.0f} s", s["eta_s"].get<double>());
-  return line;
+  return line + passesText(s);
 }
 }  // namespace
 
@@ -46,6 +74,7 @@ std::string describeStatus(const nlohmann::json& s) {
                         s["rays"].value("crossings", 0), s["rays"].value("crossings_per_camera_ray", 0.0));
     text += fmt::format("cells: loaded {} cache hits {} bytes read {}\n", s["cells"].value("loaded", 0),
                         s["cells"].value("cache_hits", 0), s["cells"].value("bytes_read", 0));
+    text += passesDescription(s);
     if (!s["pending_cells"].empty()) {
       text += "pending work by cell:";
       for (const auto& c : s["pending_cells"]) text += fmt::format(" {}:{}", c.value("cell", 0), c.value("work", 0));
@@ -79,7 +108,8 @@ void ProgressDisplay::update(const nlohmann::json& s) {
     return;
   }
   const int64_t now = steadyMs();
-  const std::string state = s.value("state", "");
+  // A line per state, and per render pass of a job rendered in passes.
+  const std::string state = s.value("state", "") + passesText(s);
   if (now - lastLineMs_ >= 5000 || state != lastState_) {
     lastLineMs_ = now;
     lastState_ = state;
@@ -92,8 +122,8 @@ void ProgressDisplay::finish(const nlohmann::json& s) {
   if (terminal_) std::fprintf(stderr, "\n");
   const std::string state = s.value("state", "?");
   if (state == "done")
-    std::cerr << fmt::format("job {} done in {:.1f} s: {}\n", s.value("job", 0), s.value("elapsed_s", 0.0),
-                             s["settings"].value("output", ""));
+    std::cerr << fmt::format("job {} done in {:.1f} s: {}{}\n", s.value("job", 0), s.value("elapsed_s", 0.0),
+                             s["settings"].value("output", ""), passesText(s));
   else
     std::cerr << fmt::format("job {} {}: {}\n", s.value("job", 0), state, s.value("error", ""));
 }

@@ -20,7 +20,7 @@ class ProgressDisplay {
   bool quiet_;
   bool terminal_;
   int64_t lastLineMs_ = 0;
-  std::string lastState_;
+  std::string lastState_;   // and render pass: a new one gets a line
 };
 
 }  // namespace portico::cli

@@ -278,6 +278,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
       store.database().exec(std::string("ALTER TABLE photons DROP COLUMN ") + column);
     store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
+    store.database().exec("DROP TABLE render_progress; DROP TABLE render_passes");   // schema 7
     dropVersionSixColumns(store);
     store.database().setUserVersion(1);
   }
@@ -682,6 +683,7 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
       update.run();
     }
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
+    store.database().exec("DROP TABLE render_progress; DROP TABLE render_passes");   // schema 7
     dropVersionSixColumns(store);
     store.database().setUserVersion(3);
   }

@@ -5,11 +5,13 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <limits>
 #include <string>
 
 #include "common/net/job_spec_wire.h"
 #include "common/scene/import/building_importer.h"
 #include "common/scene/store/scene_store.h"
+#include "coordinator/job_limits.h"
 #include "coordinator/job_planner.h"
 
 namespace portico {
@@ -70,6 +72,38 @@ TEST(JobSettings, ASubmitThatLeavesValuesOutGetsTheDefaults) {
   EXPECT_NO_THROW(validateJobSettings(resolved, twoRooms(0)));
 }
 
+TEST(JobSettings, RenderPassesAreOneUnlessATargetOrTimeLimitAsksAndBadBoundsAreRefused) {
+  const SceneStore& rooms = twoRooms(0);
+  EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).maxPasses, 1u);
+  JobSettings target;
+  target.targetError = 0.02;
+  EXPECT_EQ(resolveJobSettings(target, rooms).maxPasses, kProgressiveMaxPasses);
+  JobSettings limit;
+  limit.timeLimitSeconds = 3;
+  limit.maxPasses = 5;
+  EXPECT_EQ(resolveJobSettings(limit, rooms).maxPasses, 5u);
+  EXPECT_NO_THROW(validateJobSettings(resolveJobSettings(limit, rooms), rooms));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (double bad : {0.0, -0.01, nan, 1.5}) {
+    JobSettings settings;
+    settings.targetError = bad;
+    EXPECT_THROW(validateJobSettings(resolveJobSettings(settings, rooms), rooms), std::invalid_argument) << bad;
+  }
+  for (double bad : {0.0, -2.0, nan, std::numeric_limits<double>::infinity()}) {
+    JobSettings settings;
+    settings.timeLimitSeconds = bad;
+    try {
+      validateJobSettings(resolveJobSettings(settings, rooms), rooms);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("time limit"), std::string::npos) << e.what();
+    }
+  }
+  JobSettings many;
+  many.maxPasses = limits::kMaxPasses + 1;
+  EXPECT_THROW(validateJobSettings(resolveJobSettings(many, rooms), rooms), std::invalid_argument);
+}
+
 TEST(JobSettings, TheWireFormKeepsEveryField) {
   JobSettings settings;
   settings.store = "/stores/a";
@@ -90,6 +124,9 @@ TEST(JobSettings, TheWireFormKeepsEveryField) {
   settings.irradiance = JobSettings::Irradiance::Knn;
   settings.aov = JobSettings::Aov::Portals;
   settings.camera = JobCamera{Vec3(1, 2, 3), Vec3(4, 5, 6), Vec3(0, 0, 1), 35.5f, 7};
+  settings.targetError = 0.015;
+  settings.timeLimitSeconds = 12.5;
+  settings.maxPasses = 9;
   capnp::MallocMessageBuilder message;
   toWire(settings, message.initRoot<wire::JobSpec>());
   EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);
