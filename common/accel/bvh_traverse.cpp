@@ -95,7 +95,7 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
     slabs.farOrigin[axis] = origin[axis] - towardNear;
   }
   if constexpr (Width == 8) {
-    if (bvhAvx2InUse()) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, best);
+    if (bvhAvx2InUse() && bvhAvx2Suits(slabs)) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, best);
   }
   return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, best);
 }
