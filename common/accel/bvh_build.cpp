@@ -4,8 +4,9 @@
 // One 32-byte reference per triangle (its box, and its id in the box's
 // spare lane) in one array, partitioned in place: a node's triangles are a
 // contiguous range of it. A node starts as one child holding its whole
-// range; the child of largest surface area is split by the best of 16
-// binned SAH planes per axis (centroids binned; ranges of 8192 references
+// range; the child of largest surface area is split by the best of 32
+// binned SAH planes per axis (16 below 1024 references; centroids
+// binned; ranges of 8192 references
 // or more bin every k-th, 4096 to 8191 of them), until the node has Width
 // children or none is worth splitting. Costs count triangles in packets of four, as the leaves test
 // them (Embree's block size), so a range of at most four triangles is one

@@ -15,7 +15,8 @@
 // (traversal_margin.h), far above eps plus the rounding
 // of the slab arithmetic (origin +- margin rounded once per ray, then one
 // subtraction and one multiplication per plane: a few ulps of R and of the
-// origin's coordinates): so the computed entry into every box on X's path is
+// origin's coordinates; the AVX2 test's fused multiply-add rounds within
+// the same bounds, bvh_traverse_avx2.cpp): so the computed entry into every box on X's path is
 // at most tX and its exit at least tX, and X's leaf is reached unless the
 // search has a hit strictly nearer than that entry. A child is visited when
 // its entry is <= the best hit so far (and a stacked one is skipped only
