@@ -4,8 +4,9 @@
 // One 32-byte reference per triangle (its box, and its id in the box's
 // spare lane) in one array, partitioned in place: a node's triangles are a
 // contiguous range of it. A node starts as one child holding its whole
-// range; the child of largest surface area is split by the best of 16
-// binned SAH planes per axis (centroids binned; ranges of 8192 references
+// range; the child of largest surface area is split by the best of 32
+// binned SAH planes per axis (16 below 1024 references; centroids
+// binned; ranges of 8192 references
 // or more bin every k-th, 4096 to 8191 of them), until the node has Width
 // children or none is worth splitting. Costs count triangles in packets of four, as the leaves test
 // them (Embree's block size), so a range of at most four triangles is one
@@ -28,7 +29,12 @@ namespace portico {
 
 namespace {
 
+
+// Bins per axis: 32 for ranges of kFineBinning references or more, where a
+// better plane pays for the longer sweep many times over, 16 below.
+constexpr int kFineBins = 32;
 constexpr int kBins = 16;
+constexpr uint32_t kFineBinning = 1024;
 // Ranges of at least this many references are binned into two sets of bins.
 constexpr uint32_t kTwoBinSets = 256;
 // Ranges of twice this many references or more bin every k-th, this many
@@ -69,27 +75,62 @@ struct Range {
   uint32_t count() const { return end - begin; }
 };
 
-struct Bin {
-  __m128 lo, hi;
-  uint32_t count;
+// The bins of the three axes: the box of the references in each bin, and
+// their counts side by side (count[bin][axis], lane 3 unused), so that the
+// SAH sweep takes the three axes in the lanes of one SSE register.
+template <int kBins>
+struct BinSet {
+  __m128 lo[3][kBins], hi[3][kBins];
+  alignas(16) int32_t count[kBins][4];
+
+  void clear() {
+    const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) lo[axis][b] = infinity, hi[axis][b] = minusInfinity;
+    std::memset(count, 0, sizeof(count));
+  }
+  void merge(const BinSet& other) {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) {
+        lo[axis][b] = _mm_min_ps(lo[axis][b], other.lo[axis][b]);
+        hi[axis][b] = _mm_max_ps(hi[axis][b], other.hi[axis][b]);
+      }
+    for (int b = 0; b < kBins; ++b)
+      for (int axis = 0; axis < 3; ++axis) count[b][axis] += other.count[b][axis];
+  }
 };
+
+// Half the surface areas of three boxes, one per lane: box k is (lo[k],
+// hi[k]) with its axes in lanes 0-2. The same products and sums as halfArea.
+inline __m128 halfAreas3(const __m128 (&lo)[3], const __m128 (&hi)[3]) {
+  __m128 x = _mm_sub_ps(hi[0], lo[0]), y = _mm_sub_ps(hi[1], lo[1]), z = _mm_sub_ps(hi[2], lo[2]);
+  __m128 w = _mm_setzero_ps();
+  _MM_TRANSPOSE4_PS(x, y, z, w);   // x: the three boxes' x extents, and so on
+  return _mm_add_ps(_mm_add_ps(_mm_mul_ps(x, y), _mm_mul_ps(y, z)), _mm_mul_ps(z, x));
+}
+
+// Packets of four for counts in lanes, as floats.
+inline __m128 packets4(__m128i counts) {
+  return _mm_cvtepi32_ps(_mm_srli_epi32(_mm_add_epi32(counts, _mm_set1_epi32(kPacketSize - 1)), 2));
+}
 
 // How a range's centroids map to bins: bin = (c - base) * scale, per axis.
 struct Binning {
   __m128 base, scale;
-  explicit Binning(const Range& range) : base(range.centroidLo) {
+  int binCount;
+  Binning(const Range& range, int bins) : base(range.centroidLo), binCount(bins) {
     alignas(16) float extent[4];
     _mm_store_ps(extent, _mm_sub_ps(range.centroidHi, range.centroidLo));
     alignas(16) float s[4] = {0, 0, 0, 0};
     for (int axis = 0; axis < 3; ++axis)
-      s[axis] = extent[axis] > 0 ? float(kBins) * 0.99999f / extent[axis] : 0.0f;
+      s[axis] = extent[axis] > 0 ? float(bins) * 0.99999f / extent[axis] : 0.0f;
     scale = _mm_load_ps(s);
   }
   // The bins of a centroid along the three axes (lane 3 unused).
   __m128i bins(__m128 centroid) const {
     const __m128i index = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(centroid, base), scale));
-    // Clamped to [0, kBins - 1]: rounding may stray by one at either end.
-    const __m128i top = _mm_set1_epi32(kBins - 1);
+    // Clamped to [0, bins - 1]: rounding may stray by one at either end.
+    const __m128i top = _mm_set1_epi32(binCount - 1);
     const __m128i clampedHigh = _mm_or_si128(_mm_and_si128(_mm_cmpgt_epi32(index, top), top),
                                              _mm_andnot_si128(_mm_cmpgt_epi32(index, top), index));
     return _mm_andnot_si128(_mm_cmplt_epi32(clampedHigh, _mm_setzero_si128()), clampedHigh);
@@ -98,6 +139,7 @@ struct Binning {
 
 struct Split {
   int axis = -1;
+  int bins = kBins;     // per axis
   int bin = 0;          // references with bin < this go left
   float cost = 0;       // SAH, in packet tests per unit of the parent's half area
 };
@@ -156,76 +198,94 @@ class Builder {
 
   // The best binned SAH split of the range (axis -1: every centroid in one bin).
   Split findSplit(const Range& range) const {
-    const Binning binning(range);
+    return range.count() >= kFineBinning ? findSplitWith<kFineBins>(range) : findSplitWith<kBins>(range);
+  }
+
+  template <int kBins>
+  Split findSplitWith(const Range& range) const {
+    const Binning binning(range, kBins);
     // Two sets of bins, for alternate references, merged after: consecutive
     // references (neighbours in space) often fall in the same bins, and one
     // set would chain every update on the one before.
-    Bin bins[3][kBins], odd[3][kBins];
-    for (int axis = 0; axis < 3; ++axis)
-      for (int b = 0; b < kBins; ++b) bins[axis][b] = {_mm_set1_ps(kInfinity), _mm_set1_ps(-kInfinity), 0};
-    if (range.count() >= kTwoBinSets)
-      for (int axis = 0; axis < 3; ++axis)
-        for (int b = 0; b < kBins; ++b) odd[axis][b] = bins[axis][b];
-    const auto add = [&binning](Bin (&set)[3][kBins], const PrimitiveReference& reference) {
+    const bool twoSets = range.count() >= kTwoBinSets;
+    BinSet<kBins> bins, odd;
+    bins.clear();
+    if (twoSets) odd.clear();
+    const auto add = [&binning](BinSet<kBins>& set, const PrimitiveReference& reference) {
       alignas(16) int32_t index[4];
       _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(_mm_add_ps(reference.lo, reference.hi)));
       for (int axis = 0; axis < 3; ++axis) {
-        Bin& bin = set[axis][index[axis]];
-        bin.lo = _mm_min_ps(bin.lo, reference.lo);
-        bin.hi = _mm_max_ps(bin.hi, reference.hi);
-        ++bin.count;
+        set.lo[axis][index[axis]] = _mm_min_ps(set.lo[axis][index[axis]], reference.lo);
+        set.hi[axis][index[axis]] = _mm_max_ps(set.hi[axis][index[axis]], reference.hi);
+        ++set.count[index[axis]][axis];
       }
     };
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
     uint32_t i = range.begin;
-    const bool twoSets = range.count() >= kTwoBinSets;
     for (; twoSets && i + stride < range.end; i += 2 * stride) {
       add(bins, references_[i]);
       add(odd, references_[i + stride]);
     }
     for (; i < range.end; i += stride) add(bins, references_[i]);
-    for (int axis = 0; twoSets && axis < 3; ++axis)
-      for (int b = 0; b < kBins; ++b) {
-        Bin& bin = bins[axis][b];
-        bin.lo = _mm_min_ps(bin.lo, odd[axis][b].lo);
-        bin.hi = _mm_max_ps(bin.hi, odd[axis][b].hi);
-        bin.count += odd[axis][b].count;
+    if (twoSets) bins.merge(odd);
+    Split best = sweep(bins);
+    best.bins = kBins;
+    return best;
+  }
+
+  // The cheapest plane of the binned range, the three axes at once (one per
+  // lane): right to left, the boxes and counts of bins b..kBins - 1; then
+  // left to right, those of bins 0..b - 1 and the cost of each plane. Ties
+  // go to the lower axis, then the lower bin.
+  template <int kBins>
+  static Split sweep(const BinSet<kBins>& bins) {
+    const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
+    __m128 rightArea[kBins];
+    __m128i rightCount[kBins];
+    __m128 lo[3] = {infinity, infinity, infinity}, hi[3] = {minusInfinity, minusInfinity, minusInfinity};
+    __m128i count = _mm_setzero_si128();
+    for (int b = kBins - 1; b > 0; --b) {
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = _mm_min_ps(lo[axis], bins.lo[axis][b]);
+        hi[axis] = _mm_max_ps(hi[axis], bins.hi[axis][b]);
       }
+      count = _mm_add_epi32(count, _mm_load_si128(reinterpret_cast<const __m128i*>(bins.count[b])));
+      rightCount[b] = count;
+      rightArea[b] = halfAreas3(lo, hi);
+    }
+    __m128 bestCost = infinity;
+    __m128i bestBin = _mm_setzero_si128();
+    for (int axis = 0; axis < 3; ++axis) lo[axis] = infinity, hi[axis] = minusInfinity;
+    count = _mm_setzero_si128();
+    const __m128i zero = _mm_setzero_si128();
+    for (int b = 1; b < kBins; ++b) {
+      for (int axis = 0; axis < 3; ++axis) {
+        lo[axis] = _mm_min_ps(lo[axis], bins.lo[axis][b - 1]);
+        hi[axis] = _mm_max_ps(hi[axis], bins.hi[axis][b - 1]);
+      }
+      count = _mm_add_epi32(count, _mm_load_si128(reinterpret_cast<const __m128i*>(bins.count[b - 1])));
+      const __m128 cost = _mm_add_ps(_mm_mul_ps(halfAreas3(lo, hi), packets4(count)),
+                                     _mm_mul_ps(rightArea[b], packets4(rightCount[b])));
+      const __m128i empty = _mm_or_si128(_mm_cmpeq_epi32(count, zero), _mm_cmpeq_epi32(rightCount[b], zero));
+      const __m128i better = _mm_andnot_si128(empty, _mm_castps_si128(_mm_cmplt_ps(cost, bestCost)));
+      bestCost = _mm_or_ps(_mm_and_ps(_mm_castsi128_ps(better), cost), _mm_andnot_ps(_mm_castsi128_ps(better), bestCost));
+      bestBin = _mm_or_si128(_mm_and_si128(better, _mm_set1_epi32(b)), _mm_andnot_si128(better, bestBin));
+    }
+    alignas(16) float costs[4];
+    alignas(16) int32_t binOf[4];
+    _mm_store_ps(costs, bestCost);
+    _mm_store_si128(reinterpret_cast<__m128i*>(binOf), bestBin);
     Split best;
     best.cost = kInfinity;
-    for (int axis = 0; axis < 3; ++axis) {
-      // Right to left: the boxes and counts of bins b.. kBins - 1.
-      float rightArea[kBins];
-      uint32_t rightCount[kBins];
-      __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
-      uint32_t count = 0;
-      for (int b = kBins - 1; b > 0; --b) {
-        lo = _mm_min_ps(lo, bins[axis][b].lo);
-        hi = _mm_max_ps(hi, bins[axis][b].hi);
-        count += bins[axis][b].count;
-        rightCount[b] = count;
-        rightArea[b] = count ? halfArea(lo, hi) : 0.0f;
-      }
-      lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
-      count = 0;
-      for (int b = 1; b < kBins; ++b) {
-        lo = _mm_min_ps(lo, bins[axis][b - 1].lo);
-        hi = _mm_max_ps(hi, bins[axis][b - 1].hi);
-        count += bins[axis][b - 1].count;
-        if (count == 0 || rightCount[b] == 0) continue;
-        const float cost = halfArea(lo, hi) * float(packets(count)) + rightArea[b] * float(packets(rightCount[b]));
-        if (cost < best.cost) {
-          best.cost = cost, best.axis = axis, best.bin = b;
-        }
-      }
-    }
+    for (int axis = 0; axis < 3; ++axis)
+      if (costs[axis] < best.cost) best.cost = costs[axis], best.axis = axis, best.bin = binOf[axis];
     return best;
   }
 
   // Partitions the range by the split, measuring the two sides' boxes (the
   // split's own come from sampled bins in large ranges).
   void partition(const Range& range, const Split& split, Range& left, Range& right) {
-    const Binning binning(range);
+    const Binning binning(range, split.bins);
     const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
     __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
     __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;

@@ -15,7 +15,8 @@
 // (traversal_margin.h), far above eps plus the rounding
 // of the slab arithmetic (origin +- margin rounded once per ray, then one
 // subtraction and one multiplication per plane: a few ulps of R and of the
-// origin's coordinates): so the computed entry into every box on X's path is
+// origin's coordinates; the AVX2 test's fused multiply-add rounds within
+// the same bounds, bvh_traverse_avx2.cpp): so the computed entry into every box on X's path is
 // at most tX and its exit at least tX, and X's leaf is reached unless the
 // search has a hit strictly nearer than that entry. A child is visited when
 // its entry is <= the best hit so far (and a stacked one is skipped only
@@ -95,7 +96,7 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
     slabs.farOrigin[axis] = origin[axis] - towardNear;
   }
   if constexpr (Width == 8) {
-    if (bvhAvx2InUse()) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, best);
+    if (bvhAvx2InUse() && bvhAvx2Suits(slabs)) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, best);
   }
   return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, best);
 }

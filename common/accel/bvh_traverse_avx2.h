@@ -23,8 +23,13 @@ bool bvhAvx2InUse();
 // every tree of the process.
 void useBvhAvx2(bool use);
 
+// Whether the AVX2 box test keeps its guarantee for this ray: origin' *
+// inverse is finite on every axis whose inverse is (it overflows only for
+// directions near the smallest normal floats, which then take the SSE test).
+bool bvhAvx2Suits(const BvhSlabs& slabs);
+
 // The traversal of 8-wide trees with all eight boxes in one AVX2 test
-// (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse().
+// (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse() and bvhAvx2Suits.
 template <bool AnyHit>
 bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best);
 

@@ -232,13 +232,20 @@ inline PacketLanes packetLanes(const TrianglePacket& packet, const PacketRay& pa
   const Int4 negative = (U < zero) | (lanes.V < zero) | (lanes.W < zero);
   const Int4 positive = (U > zero) | (lanes.V > zero) | (lanes.W > zero);
   lanes.anyZero = (U == zero) | (lanes.V == zero) | (lanes.W == zero);
+  // Most packets end here: no lane passes the sign test nor needs the
+  // double-precision decision, so none can be a candidate whatever t is.
+  const Int4 signsAgree = ~(negative & positive) | lanes.anyZero;
+  if (_mm_movemask_ps(reinterpret_cast<__m128>(signsAgree)) == 0) {
+    lanes.candidate = Int4{};
+    return lanes;
+  }
   lanes.det = U + lanes.V + lanes.W;
   const Float4 T =
       U * (packetRay.scaleZ * az) + lanes.V * (packetRay.scaleZ * bz) + lanes.W * (packetRay.scaleZ * cz);
   lanes.t = T / lanes.det;
   Int4 inRange = (lanes.t > packetRay.tMin) & (lanes.t < packetRay.tMax);
   if constexpr (!AnyHit) inRange &= lanes.t <= Float4{bestT, bestT, bestT, bestT};
-  lanes.candidate = (~(negative & positive) & inRange) | lanes.anyZero;
+  lanes.candidate = (signsAgree & inRange) | lanes.anyZero;
   return lanes;
 }
 

@@ -46,7 +46,8 @@ struct TraceResult {
 // A warm-up pass over up to 10k rays, then the median of `runs` passes timed
 // by the thread's CPU time.
 TraceResult traceRays(const Accelerator& accelerator, const std::vector<Ray>& rays, uint32_t runs);
-// Builds `runs` times (once when a build takes over 20 s) and keeps the last.
+// Builds `runs` times (once when a build takes over 20 s) and keeps the last;
+// medianMs: the median build's CPU time over every thread of the process.
 std::unique_ptr<Accelerator> timedBuild(const AcceleratorSpec& spec, const MeshView& mesh, uint32_t runs,
                                         double& medianMs);
 
