@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "common/image/image_writer.h"
+#include "common/image/linear_image.h"
 
 namespace portico {
 
