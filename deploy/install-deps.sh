@@ -15,7 +15,7 @@ set -euo pipefail
 mitsuba=0
 packages=(
   cmake ninja-build g++ pkg-config make
-  libembree-dev libopenimageio-dev openimageio-tools
+  libembree-dev libopenimageio-dev openimageio-tools libopenexr-dev libpng-dev
   libzmq3-dev cppzmq-dev
   capnproto libcapnp-dev
   libsqlite3-dev sqlite3

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "common/image/block_rule.h"
-#include "common/image/image_writer.h"
+#include "common/image/linear_image.h"
 
 namespace portico {
 

@@ -1,20 +1,57 @@
 #include "common/image/image_writer.h"
 
-#include <OpenImageIO/imageio.h>
+#include <dlfcn.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
 #include <stdexcept>
+#include <vector>
+
+#include "common/image/exr_file.h"
+#include "common/image/image_formats_module.h"
+#include "common/image/png_file.h"
 
 namespace portico {
 
 namespace {
-bool isHighDynamicRange(const std::string& path) {
+std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+bool isHighDynamicRange(const std::string& ext) {
   return ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
+}
+
+// The module beside the running program (every program lands in bin/), loaded once.
+PorticoWriteImageFn imageFormatsModule() {
+  static std::once_flag once;
+  static PorticoWriteImageFn entry = nullptr;
+  static std::string failure;
+  std::call_once(once, [] {
+    std::error_code error;
+    const auto program = std::filesystem::read_symlink("/proc/self/exe", error);
+    const auto module = (program.parent_path() / kImageFormatsModule).string();
+    void* handle = dlopen(module.c_str(), RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+      failure = fmt::format("cannot load {} ({})", module, dlerror());
+      return;
+    }
+    entry = reinterpret_cast<PorticoWriteImageFn>(dlsym(handle, kImageFormatsEntry));
+    if (!entry) failure = fmt::format("{} has no {}", module, kImageFormatsEntry);
+  });
+  if (!entry) throw std::runtime_error(failure);
+  return entry;
+}
+
+void writeWithModule(const std::string& path, const LinearImage& image, bool isFloat, const void* pixels) {
+  char error[512] = "";
+  if (imageFormatsModule()(path.c_str(), image.width, image.height, isFloat ? 1 : 0, pixels, error, sizeof error) != 0)
+    throw std::runtime_error(fmt::format("image {}: {}", path, error));
 }
 }  // namespace
 
@@ -31,46 +68,34 @@ void writeImage(const std::string& path, const LinearImage& image, float exposur
     throw std::runtime_error(fmt::format("image {}: {} values for {}x{} pixels", path, image.rgb.size(),
                                          image.width, image.height));
   const std::filesystem::path target(path);
-  // Keep the extension on the temporary name: OpenImageIO picks the format from it.
+  // Keep the extension on the temporary name: it says the format.
   const std::filesystem::path temporary =
       target.parent_path() / (".tmp-" + target.stem().string() + target.extension().string());
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw std::runtime_error(fmt::format("image {}: unsupported format ({})", path, OIIO::geterror()));
-  const bool hdr = isHighDynamicRange(path);
-  OIIO::ImageSpec spec(image.width, image.height, 3, hdr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-  if (hdr) spec.attribute("compression", "zip");
-  if (!out->open(temporary.string(), spec))
-    throw std::runtime_error(fmt::format("image {}: cannot open for writing: {}", path, out->geterror()));
-  bool ok;
-  if (hdr) {
-    ok = out->write_image(OIIO::TypeDesc::FLOAT, image.rgb.data());
-  } else {
-    std::vector<uint8_t> bytes(image.rgb.size());
-    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = toneMapToByte(image.rgb[i], exposure);
-    ok = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-  }
-  ok = ok && out->close();
-  if (!ok) {
-    std::filesystem::remove(temporary);
-    throw std::runtime_error(fmt::format("image {}: write failed: {}", path, out->geterror()));
+  const std::string ext = lowerExtension(path);
+  try {
+    if (ext == ".exr") {
+      writeExr(temporary.string(), image);
+    } else if (isHighDynamicRange(ext)) {
+      writeWithModule(temporary.string(), image, true, image.rgb.data());
+    } else {
+      std::vector<uint8_t> bytes(image.rgb.size());
+      for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = toneMapToByte(image.rgb[i], exposure);
+      if (ext == ".png")
+        writePng(temporary.string(), image.width, image.height, bytes);
+      else
+        writeWithModule(temporary.string(), image, false, bytes.data());
+    }
+  } catch (const std::exception& e) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    // Name the file the user asked for, not the temporary one.
+    std::string message = e.what();
+    for (size_t at = message.find(temporary.string()); at != std::string::npos;
+         at = message.find(temporary.string(), at + path.size()))
+      message.replace(at, temporary.string().size(), path);
+    throw std::runtime_error(message);
   }
   std::filesystem::rename(temporary, target);
-}
-
-LinearImage readImage(const std::string& path) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw std::runtime_error(fmt::format("image {}: cannot read: {}", path, OIIO::geterror()));
-  const OIIO::ImageSpec& spec = in->spec();
-  LinearImage image;
-  image.width = spec.width;
-  image.height = spec.height;
-  std::vector<float> all(size_t(spec.width) * spec.height * spec.nchannels);
-  if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, all.data()))
-    throw std::runtime_error(fmt::format("image {}: read failed: {}", path, in->geterror()));
-  image.rgb.resize(size_t(spec.width) * spec.height * 3);
-  for (size_t p = 0; p < size_t(spec.width) * spec.height; ++p)
-    for (int c = 0; c < 3; ++c) image.rgb[p * 3 + c] = all[p * spec.nchannels + std::min(c, spec.nchannels - 1)];
-  return image;
 }
 
 }  // namespace portico

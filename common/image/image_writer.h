@@ -1,25 +1,21 @@
-// Writes a linear RGB float image: EXR keeps radiance as it is; PNG (and
-// other 8-bit formats) get exposure, clamping and the sRGB curve. The format
-// follows the file name's extension.
+// Writes a linear RGB float image: EXR (and HDR, TIFF) keep radiance as it
+// is; PNG (and JPEG) get exposure, clamping and the sRGB curve. The format
+// follows the file name's extension. EXR and PNG are written by their own
+// libraries; the other formats by OpenImageIO, which is loaded (from
+// portico_image_formats.so beside the program) only when one is asked for:
+// it costs a process ~0.5 s of start-up.
 #pragma once
 
 #include <cstdint>
 #include <string>
-#include <vector>
+
+#include "common/image/linear_image.h"
 
 namespace portico {
-
-struct LinearImage {
-  uint32_t width = 0, height = 0;
-  std::vector<float> rgb;   // row 0 at the top, 3 floats per pixel
-};
 
 // Throws std::runtime_error naming the path on failure. The image is written
 // to a temporary file beside `path` and renamed, so a reader never sees half a file.
 void writeImage(const std::string& path, const LinearImage& image, float exposure = 1.0f);
-
-// Reads any image OpenImageIO reads as linear RGB floats (for tests and comparisons).
-LinearImage readImage(const std::string& path);
 
 // sRGB OETF of clamp(v * exposure) to 8 bits.
 uint8_t toneMapToByte(float radiance, float exposure);

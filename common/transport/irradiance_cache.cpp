@@ -26,32 +26,32 @@ IrradianceCache::IrradianceCache(const PhotonMap& map, uint32_t stride, uint32_t
     normals_.push_back(normal);
     values_.push_back(map.radiance(photon.position, normal, othersScale, k, maxRadius, &points));
   }
-  tree_ = PointKdTree(positions_);
-  // In node order, a lookup's reads of normals and positions follow its
-  // reads of the tree. Ties between equally near points break by the new
+  tree_ = NearestPointTree(positions_);
+  // In leaf order, a lookup's reads of normals and values follow its reads
+  // of the tree. Ties between equally near points break by the new
   // numbers, which depend only on the points, as the old ones did.
-  const std::vector<uint32_t> oldIndex = tree_.renumberInNodeOrder();
+  const std::vector<uint32_t>& oldIndex = tree_.order();
   const auto permute = [&](std::vector<Vec3>& values) {
     std::vector<Vec3> permuted(values.size());
     for (size_t i = 0; i < values.size(); ++i) permuted[i] = values[oldIndex[i]];
     values = std::move(permuted);
   };
-  permute(positions_);
   permute(normals_);
   permute(values_);
+  positions_.clear();
+  positions_.shrink_to_fit();   // the tree holds them, in its order
 }
 
 bool IrradianceCache::lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo) const {
-  if (positions_.empty()) return false;
-  uint64_t heap[1];
   const auto compatible = [&](uint32_t i) {
     if (dot(normals_[i], n) < kMinNormalCosine) return false;
-    const Vec3 offset = positions_[i] - p;
+    const Vec3 offset = tree_.position(i) - p;
     const float height = dot(offset, n);
     return height * height <= kMaxPlaneSlope * kMaxPlaneSlope * dot(offset, offset);
   };
-  if (tree_.search(p, 1, maxRadiusSquared_, compatible, heap) == 0) return false;
-  radiancePerAlbedo = values_[PointKdTree::candidateIndex(heap[0])];
+  const uint32_t point = tree_.nearest(p, maxRadiusSquared_, compatible);
+  if (point == NearestPointTree::kNone) return false;
+  radiancePerAlbedo = values_[point];
   return true;
 }
 

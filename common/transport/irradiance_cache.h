@@ -4,7 +4,7 @@
 // with the normal of the surface each lies on. A final-gather ray's hit
 // then reads the nearest point on a surface facing its way instead of
 // searching k photons: one nearest-neighbour query in a tree `stride` times
-// smaller.
+// smaller, with buckets of points (nearest_point_tree.h).
 //
 // The subset is about one photon in `stride`, chosen by a hash of its index
 // in the map, and each point's estimate uses only the other photons (scaled
@@ -27,7 +27,7 @@
 
 #include "common/math.h"
 #include "common/transport/photon_map.h"
-#include "common/transport/point_kd_tree.h"
+#include "common/transport/nearest_point_tree.h"
 
 namespace portico {
 
@@ -51,15 +51,16 @@ class IrradianceCache {
   // at construction. False when there is none (the caller estimates).
   bool lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo) const;
 
-  size_t size() const { return positions_.size(); }
+  size_t size() const { return tree_.size(); }
   // Whether the map's photon of this index carries a point: one in
   // `stride` on average, by a hash of the index.
   static bool isPoint(uint32_t photon, uint32_t stride);
   uint64_t bytes() const;
 
  private:
-  std::vector<Vec3> positions_, normals_, values_;
-  PointKdTree tree_;
+  std::vector<Vec3> positions_;          // while building; then the tree's
+  std::vector<Vec3> normals_, values_;   // in the tree's point order
+  NearestPointTree tree_;
   float maxRadiusSquared_ = 0;
 };
 

@@ -1,14 +1,13 @@
 // The canvas behind `portico bench --plot` and `portico scene plan`: pixels,
-// lines, a 5x7 bitmap font, and a PNG writer (zlib deflate, filter 0).
+// lines, a 5x7 bitmap font; libpng writes it (common/image/png_file.h).
 #include "coordinator/cli/png_canvas.h"
-
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 #include <string>
+
+#include "common/image/png_file.h"
 
 namespace portico::cli {
 
@@ -166,59 +165,12 @@ void Canvas::text(int x, int y, const std::string& s, const Color& color, bool v
   }
 }
 
-namespace {
-
-// ---------------------------------------------------------------------------
-// PNG
-
-void appendBigEndian(std::vector<uint8_t>& out, uint32_t value) {
-  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(uint8_t(value >> shift));
-}
-
-void appendChunk(std::vector<uint8_t>& out, const char type[4], const std::vector<uint8_t>& data) {
-  appendBigEndian(out, uint32_t(data.size()));
-  const size_t start = out.size();
-  out.insert(out.end(), type, type + 4);
-  out.insert(out.end(), data.begin(), data.end());
-  appendBigEndian(out, uint32_t(crc32(0, out.data() + start, uInt(out.size() - start))));
-}
-
-std::vector<uint8_t> encodePng(const Canvas& canvas) {
-  const size_t stride = size_t(canvas.width()) * 3;
-  std::vector<uint8_t> raw;
-  raw.reserve((stride + 1) * canvas.height());
-  for (int y = 0; y < canvas.height(); ++y) {
-    raw.push_back(0);  // filter: none
-    const uint8_t* row = canvas.pixels().data() + y * stride;
-    raw.insert(raw.end(), row, row + stride);
-  }
-  uLongf compressedSize = compressBound(uLong(raw.size()));
-  std::vector<uint8_t> compressed(compressedSize);
-  if (compress2(compressed.data(), &compressedSize, raw.data(), uLong(raw.size()), 9) != Z_OK)
-    throw std::runtime_error("zlib could not compress the plot");
-  compressed.resize(compressedSize);
-
-  std::vector<uint8_t> png{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  std::vector<uint8_t> header;
-  appendBigEndian(header, uint32_t(canvas.width()));
-  appendBigEndian(header, uint32_t(canvas.height()));
-  header.insert(header.end(), {8, 2, 0, 0, 0});  // 8-bit RGB, deflate, no filter set, no interlace
-  appendChunk(png, "IHDR", header);
-  appendChunk(png, "IDAT", compressed);
-  appendChunk(png, "IEND", {});
-  return png;
-}
-
-
-}  // namespace
-
 void writePng(const std::string& path, const Canvas& canvas, const std::string& what) {
-  const std::vector<uint8_t> png = encodePng(canvas);
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(png.data()), std::streamsize(png.size()));
-  if (!out)
-    throw std::runtime_error("cannot write the " + what + " to " + path +
-                             " (check the directory exists and is writable)");
+  try {
+    portico::writePng(path, uint32_t(canvas.width()), uint32_t(canvas.height()), canvas.pixels());
+  } catch (const std::exception& e) {
+    throw std::runtime_error("cannot write the " + what + " to " + path + " (" + e.what() + ")");
+  }
 }
 
 }  // namespace portico::cli

@@ -1,6 +1,6 @@
 // An RGB raster for the pictures `portico` draws itself (`bench --plot`,
 // `scene plan`): filled rectangles, lines (solid or dashed), text in a
-// built-in 5x7 bitmap font, written as PNG with zlib. No OpenImageIO (it
+// built-in 5x7 bitmap font, written as PNG with libpng. No OpenImageIO (it
 // would add ~160 ms to every `portico` start).
 #pragma once
 

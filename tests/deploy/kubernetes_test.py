@@ -280,11 +280,12 @@ check("install-deps.sh" not in runtime_stage and "-dev" not in runtime_stage,
 runtime_packages = set(re.findall(r"\b(lib[a-z0-9.+-]+|zlib1g)\b", runtime_stage))
 if shutil.which("dpkg") and shutil.which("readelf"):
     needed = set()
-    for program in ("portico", "portico-coordinator", "portico-worker"):
+    programs = ("portico", "portico-coordinator", "portico-worker", "portico_image_formats.so")
+    for program in programs:
         dynamic = subprocess.run(["readelf", "-d", str(bin_dir / program)], capture_output=True, text=True).stdout
         needed |= set(re.findall(r"\(NEEDED\).*\[(.+)\]", dynamic))
-    ldd = subprocess.run(["ldd", str(bin_dir / "portico"), str(bin_dir / "portico-coordinator"),
-                          str(bin_dir / "portico-worker")], capture_output=True, text=True).stdout
+    ldd = subprocess.run(["ldd"] + [str(bin_dir / program) for program in programs],
+                         capture_output=True, text=True).stdout
     paths = dict(re.findall(r"^\s*(\S+) => (\S+)", ldd, re.M))
     base = {"libc6", "libgcc-s1", "libstdc++6"}   # in every Debian image
     for library in sorted(needed):

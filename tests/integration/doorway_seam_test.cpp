@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "common/image/image_writer.h"
+#include "common/image/image_reader.h"
 #include "common/util/child_process.h"
 
 namespace portico {

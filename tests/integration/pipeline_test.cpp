@@ -11,7 +11,7 @@
 #include <random>
 #include <thread>
 
-#include "common/image/image_writer.h"
+#include "common/image/image_reader.h"
 #include "common/net/client.h"
 #include "tests/integration/service_harness.h"
 

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "common/image/image_compare.h"
+#include "common/image/image_reader.h"
 #include "common/util/child_process.h"
 
 namespace portico {

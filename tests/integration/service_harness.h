@@ -23,7 +23,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "common/image/image_writer.h"
+#include "common/image/image_reader.h"
 #include "common/net/client.h"
 #include "common/net/curve_keys.h"
 #include "common/util/child_process.h"

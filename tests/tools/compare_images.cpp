@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "common/image/image_compare.h"
+#include "common/image/image_reader.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {
