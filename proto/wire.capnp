@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 8;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera
+const protocolVersion :UInt32 = 9;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: JobSpec.cameraName (a store camera by name)
 
 enum Phase {
   photons @0;
@@ -90,6 +90,7 @@ struct JobSpec {
   irradiance @15 :Irradiance;  # what a final-gather hit reads
   renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
   camera @17 :JobCamera;   # absent (in a Submit): the store's camera; always present once resolved
+  cameraName @18 :Text;    # in a Submit: the store camera of this name ("": none); "" once resolved
 }
 
 # A camera chosen at render time (common/job/job_settings.h JobCamera).

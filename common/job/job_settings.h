@@ -57,6 +57,10 @@ struct JobSettings {
   // Unset: the store's camera; always set once resolved, so that every
   // worker traces the same camera rays.
   std::optional<JobCamera> camera;
+  // A store camera by name (`--camera NAME`; empty: none), instead of a
+  // camera of the job's own. Resolved at submit into `camera` and cleared:
+  // workers see only the resolved camera.
+  std::string cameraName;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;
@@ -70,6 +74,10 @@ struct JobSettings {
 
   bool operator==(const JobSettings&) const = default;
 };
+
+// Why the settings' camera choice cannot be taken ("" when it can): a store
+// camera by name and a camera of the job's own both given.
+std::string cameraChoiceProblem(const JobSettings& settings);
 
 const char* toString(JobSettings::Irradiance irradiance);
 const char* toString(JobSettings::Aov aov);

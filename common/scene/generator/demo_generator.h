@@ -11,6 +11,10 @@
 // light; "dark-room" has none and is lit only through its door, which faces
 // a corridor light: the case photon mapping is for.
 //
+// Cameras: "overview" (the default, in the sky), one per room named as the
+// room, standing in its doorway and looking in, and "corridor", at the
+// corridor's west end looking along it.
+//
 // Cells: 0 corridor, 1-3 north rooms ("room-1".."room-3", west to east),
 // 4 "room-4", 5 "dark-room", 6 "room-5" (south, west to east), 7 "sky".
 // The layout is fixed; the seed varies the door positions, light sizes,
