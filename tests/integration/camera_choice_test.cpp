@@ -127,8 +127,9 @@ TEST_F(CameraChoice, ANamedCameraGivesTheBitsOfItsPlacementGivenAsOptions) {
   const std::string out =
       captureOutput({kBin + "portico", "scene", "info", "--json", "--no-compress", store_.string()}, dir_, "info-for-room", &code);
   ASSERT_EQ(code, 0) << readFile(dir_ / "info-for-room.log");
+  const nlohmann::json info = nlohmann::json::parse(out);
   nlohmann::json room;
-  for (const nlohmann::json& camera : nlohmann::json::parse(out).at("cameras"))
+  for (const nlohmann::json& camera : info.at("cameras"))
     if (camera.at("name") == "room-2") room = camera;
   ASSERT_FALSE(room.is_null()) << out;
   const auto vec = [](const nlohmann::json& v) {
