@@ -77,6 +77,7 @@ JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore
   }
   return camera;
 }
+
 // The store camera `name`, or a one-line refusal naming it and a few that exist.
 const Camera& namedCamera(const std::string& name, const SceneStore& scene) {
   if (name.size() > kMaxCameraNameBytes)
