@@ -148,6 +148,11 @@ TEST_F(CameraChoice, ANamedCameraGivesTheBitsOfItsPlacementGivenAsOptions) {
   size_t lit = 0;
   for (float value : named.rgb) lit += value > 0;
   EXPECT_GT(lit, named.rgb.size() / 2) << "a view from a lit room's door is mostly lit";
+  // Its top row shows the room's ceiling, which hides only from a camera
+  // above it, not the dark sky beyond.
+  size_t litTop = 0;
+  for (size_t x = 0; x < 3 * size_t(named.width); ++x) litTop += named.rgb[x] > 0;
+  EXPECT_GT(litTop, 3 * size_t(named.width) * 9 / 10);
 }
 
 // An unknown name, or a name beside --look-from: one line naming the camera
