@@ -25,7 +25,8 @@ constexpr float kWallHeight = 2.8f;   // the ceiling's height
 // Cut-away: each room's cell box reaches kCutawayGap above its ceiling, and
 // its top face there is the portal to the sky. Photons going up hit the
 // ceiling well before the portal; camera rays come in through the portal and
-// pass the ceiling (a material hidden from the camera) into the room.
+// pass the ceiling (a material hidden from the camera, seen from above)
+// into the room.
 constexpr float kCutawayGap = 0.1f;
 constexpr float kCellTop = kWallHeight + kCutawayGap;
 constexpr float kDoorWidth = 0.9f;

@@ -14,8 +14,9 @@ struct Material {
   std::string name;
   Vec3 albedo;     // linear RGB reflectance in [0,1]; Lambertian BRDF = albedo / pi
   Vec3 emission;   // RGB radiance, one-sided (front = geometric normal side)
-  // Cut-away: camera rays pass through it (it still blocks and reflects
-  // light); lets a view from above show a room whose ceiling still lights it.
+  // Cut-away: camera rays reaching its back pass through it (it still blocks
+  // and reflects light); lets a view from above show a room whose ceiling
+  // (facing down) still lights it, while a camera in the room sees it.
   bool hiddenFromCamera = false;
   bool emissive() const { return maxComponent(emission) > 0.0f; }
 };
