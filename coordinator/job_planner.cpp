@@ -63,6 +63,9 @@ JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore
   const JobCamera stores{own.origin, own.target, own.up, own.fovYDegrees, own.cell};
   // The store's camera, given or left out, is used exactly as stored.
   if (!chosen || *chosen == stores) return stores;
+  // A named store camera, resolved already, keeps its stored cell.
+  for (const Camera& named : scene.cameras())
+    if (*chosen == JobCamera{named.origin, named.target, named.up, named.fovYDegrees, named.cell}) return *chosen;
   JobCamera camera = *chosen;
   if (camera.up == Vec3(0.0f)) camera.up = own.up;
   if (camera.fovYDegrees == 0) camera.fovYDegrees = own.fovYDegrees;
@@ -89,13 +92,40 @@ JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore
   }
   return camera;
 }
+
+// The store camera `name`, or a one-line refusal naming it and a few that exist.
+const Camera& namedCamera(const std::string& name, const SceneStore& scene) {
+  if (name.size() > kMaxCameraNameBytes)
+    throw std::invalid_argument(fmt::format("--camera: a name of {} bytes; store cameras have at most {}", name.size(),
+                                            kMaxCameraNameBytes));
+  if (const Camera* camera = scene.findCamera(name)) return *camera;
+  constexpr size_t kListed = 6;
+  std::string known;
+  for (size_t k = 0; k < std::min(kListed, scene.cameras().size()); ++k)
+    known += (k ? ", " : "") + scene.cameras()[k].name;
+  if (scene.cameras().size() > kListed) known += fmt::format(" and {} more", scene.cameras().size() - kListed);
+  throw std::invalid_argument(fmt::format("--camera '{}': scene {} has no camera of that name (it has {}; `portico "
+                                          "scene info` lists them)",
+                                          name, scene.directory(), known));
+}
 }  // namespace
 
 JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   const JobSettings defaults;
+  // A store camera by name becomes the job's camera, exactly as stored (its
+  // cell too), and brings its image size unless the job gives one.
+  const Camera* sizeFrom = &scene.camera();
+  if (!settings.cameraName.empty()) {
+    if (const std::string problem = cameraChoiceProblem(settings); !problem.empty())
+      throw std::invalid_argument(problem);
+    const Camera& named = namedCamera(settings.cameraName, scene);
+    settings.camera = JobCamera{named.origin, named.target, named.up, named.fovYDegrees, named.cell};
+    settings.cameraName.clear();
+    sizeFrom = &named;
+  }
   if (settings.width == 0 || settings.height == 0) {
-    settings.width = scene.camera().width;
-    settings.height = scene.camera().height;
+    settings.width = sizeFrom->width;
+    settings.height = sizeFrom->height;
   }
   if (settings.accel.empty()) settings.accel = defaults.accel;
   // Render leases may build another structure: they trace many rays per

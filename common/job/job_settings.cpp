@@ -2,6 +2,12 @@
 
 namespace portico {
 
+std::string cameraChoiceProblem(const JobSettings& settings) {
+  if (settings.cameraName.empty() || !settings.camera) return {};
+  return "--camera '" + settings.cameraName +
+         "' and --look-from both choose the job's camera: give one of them (--camera for a camera of the store)";
+}
+
 const char* toString(JobSettings::Irradiance irradiance) {
   return irradiance == JobSettings::Irradiance::Knn ? "knn" : "precomputed";
 }

@@ -79,6 +79,10 @@ struct JobSettings {
   std::optional<double> timeLimitSeconds;
   uint32_t maxPasses = 0;            // 0: 1 without a target or time limit, else kProgressiveMaxPasses
   bool progressive() const { return targetError || timeLimitSeconds; }
+  // A store camera by name (`--camera NAME`; empty: none), instead of a
+  // camera of the job's own. Resolved at submit into `camera` and cleared:
+  // workers see only the resolved camera.
+  std::string cameraName;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;
@@ -92,6 +96,10 @@ struct JobSettings {
 
   bool operator==(const JobSettings&) const = default;
 };
+
+// Why the settings' camera choice cannot be taken ("" when it can): a store
+// camera by name and a camera of the job's own both given.
+std::string cameraChoiceProblem(const JobSettings& settings);
 
 const char* toString(JobSettings::Irradiance irradiance);
 const char* toString(JobSettings::Aov aov);

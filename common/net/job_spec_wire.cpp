@@ -23,6 +23,7 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
   spec.setAov(settings.aov == JobSettings::Aov::Cells     ? wire::Aov::CELLS
               : settings.aov == JobSettings::Aov::Portals ? wire::Aov::PORTALS
                                                           : wire::Aov::RADIANCE);
+  spec.setCameraName(settings.cameraName);
   if (settings.camera) {
     const JobCamera& c = *settings.camera;
     auto camera = spec.initCamera();
@@ -59,6 +60,7 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   settings.aov = spec.getAov() == wire::Aov::CELLS     ? JobSettings::Aov::Cells
                  : spec.getAov() == wire::Aov::PORTALS ? JobSettings::Aov::Portals
                                                        : JobSettings::Aov::Radiance;
+  settings.cameraName = spec.getCameraName();
   if (spec.hasCamera()) {
     const auto camera = spec.getCamera();
     settings.camera = JobCamera{Vec3(camera.getFromX(), camera.getFromY(), camera.getFromZ()),

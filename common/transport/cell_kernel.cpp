@@ -194,8 +194,11 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         cross(current, event, out);
         return;
       case CellEvent::Kind::Surface:
-        // Cut-away surfaces are invisible to the camera: look past them.
+        // Cut-away surfaces (ceilings, their lamps) are invisible to the
+        // camera from behind, as a ceiling is seen from above: look past
+        // them. From the front (from the room below) they show.
         if (scene_.materials()[tracer_.cell().material(event.primitive)].hiddenFromCamera &&
+            dot(tracer_.cell().mesh().geometricNormal(event.primitive), current.direction) >= 0.0f &&
             ++hiddenSkipped < kMaxHiddenSurfaces) {
           // Hits count only beyond tMin (every accelerator keeps the
           // interval open), so this looks strictly past the hidden surface.

@@ -72,6 +72,10 @@ void addCameraOptions(CLI::App& command, JobSettings& o) {
                                   "camera's)")
       ->check(realNumber(1e-3, 179.999))
       ->needs(from);
+  // Resolved by the coordinator, which reads the store (the client may not).
+  command.add_option("--camera", o.cameraName,
+                     "a named camera of the store (`portico scene info` lists them; default: the store's default "
+                     "camera); not with --look-from");
 }
 }  // namespace
 
@@ -190,6 +194,7 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 }  // namespace
 
 void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message) {
+  if (const std::string problem = cameraChoiceProblem(o); !problem.empty()) throw std::invalid_argument(problem);
   JobSettings settings = o;
   settings.store = std::filesystem::absolute(o.store).lexically_normal().string();
   // As the user who asks: the coordinator checks it again as itself.

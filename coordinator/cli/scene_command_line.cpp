@@ -42,7 +42,9 @@ void addImport(CLI::App& scene, CommandTable& table) {
                      "cut the scene into RGxRGxRG uniform voxel cells instead of its own cells (0: off)")
       ->capture_default_str()
       ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
-  import->add_option("--camera", o->import.camera, "the building.json's camera of this name (default: the first)");
+  import->add_option("--camera", o->import.camera,
+                     "the store's default camera: the building.json's camera of this name (default: the first; every "
+                     "camera is stored, for render --camera NAME)");
   import->add_option("--lights", o->ifcLights,
                      "IFC input: lamps from the model's light fixtures (fixtures), one ceiling panel per space (panels), "
                      "or fixtures where the model has some, else panels (auto)")

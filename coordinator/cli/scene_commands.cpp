@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <iostream>
@@ -120,6 +121,35 @@ int runSceneInfo(const std::string& directory, bool json) {
   return runSceneInfo(directory, SceneInfoOptions{json, /*compress=*/false});
 }
 
+namespace {
+std::array<float, 3> xyz(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+// Every named camera, as `render --camera NAME` takes it.
+nlohmann::json camerasJson(const SceneStore& store) {
+  nlohmann::json cameras = nlohmann::json::array();
+  for (const Camera& camera : store.cameras())
+    cameras.push_back({{"name", camera.name},
+                       {"cell", camera.cell},
+                       {"origin", xyz(camera.origin)},
+                       {"look_at", xyz(camera.target)},
+                       {"up", xyz(camera.up)},
+                       {"fov", camera.fovYDegrees},
+                       {"width", camera.width},
+                       {"height", camera.height}});
+  return cameras;
+}
+
+// "cameras (N): a, b, c, ... and M more": a tower's hundreds stay one line.
+std::string describeCameraNames(const SceneStore& store) {
+  constexpr size_t kListed = 8;
+  const std::vector<Camera>& cameras = store.cameras();
+  std::string line = fmt::format("cameras ({}, --camera NAME; the first is the default):", cameras.size());
+  for (size_t k = 0; k < std::min(kListed, cameras.size()); ++k) line += (k ? ", " : " ") + cameras[k].name;
+  if (cameras.size() > kListed) line += fmt::format(" and {} more (--json lists them)", cameras.size() - kListed);
+  return line;
+}
+}  // namespace
+
 int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) {
   const SceneStore store = SceneStore::open(directory);
   uint64_t maxTriangles = 0, emptyCells = 0;
@@ -156,6 +186,7 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
                     {"width", camera.width},
                     {"height", camera.height},
                     {"cell", camera.cell}};
+  info["cameras"] = camerasJson(store);
   nlohmann::json cells = nlohmann::json::array();
   for (const CellInfo& cell : store.cells())
     cells.push_back({{"id", cell.id}, {"name", cell.name}, {"triangles", cell.triangleCount}, {"bytes", cell.byteCount}});
@@ -182,6 +213,7 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
   std::cout << fmt::format("camera: {}x{} in cell {}{}\n", camera.width, camera.height, camera.cell,
                            camera.cell < store.cells().size() ? fmt::format(" ('{}')", store.cells()[camera.cell].name)
                                                               : std::string());
+  std::cout << describeCameraNames(store) << "\n";
   // A store of 10^4 cells would bury the summary: list the largest few.
   constexpr size_t kListedCells = 64, kLargestCells = 10;
   std::vector<const CellInfo*> listed;

@@ -86,20 +86,31 @@ class ViewReader {
       else if (key == "width") view.width = whole(key, value, 1, limits::kMaxImageSide);
       else if (key == "height") view.height = whole(key, value, 1, limits::kMaxImageSide);
       else if (key == "spp") view.spp = whole(key, value, 1, limits::kMaxSpp);
-      // A store's named camera (`--camera NAME`) would map onto its job
-      // setting here, standing in for look_from and look_at.
-      else if (key == "camera") fail("\"camera\" (a store's named camera) is not supported: give look_from and look_at");
-      else fail(fmt::format("unknown key \"{}\" (known: name, look_from, look_at, up, fov, width, height, spp)", key));
+      else if (key == "camera") view.cameraName = cameraName(key, value);
+      else fail(fmt::format("unknown key \"{}\" (known: name, camera, look_from, look_at, up, fov, width, height, spp)",
+                            key));
     }
     if (view.name.empty()) fail("\"name\" is missing");
     // One without the other would be the store camera's size: both or neither.
     if (view.width.has_value() != view.height.has_value()) fail("\"width\" and \"height\" go together");
-    if (!from) fail("\"look_from\" is missing");
+    // A store camera (`--camera NAME`) or a camera of the view's own, not both.
+    if (!view.cameraName.empty()) {
+      if (from || at || view.camera.up != Vec3(0, 0, 0) || view.camera.fovYDegrees != 0)
+        fail("\"camera\" names a store camera: it takes no look_from, look_at, up or fov");
+      return view;
+    }
+    if (!from) fail("\"look_from\" is missing (or name a store camera with \"camera\")");
     if (!at) fail("\"look_at\" is missing");
     return view;
   }
 
  private:
+  std::string cameraName(const std::string& key, const nlohmann::json& value) const {
+    if (!value.is_string() || value.get<std::string>().empty())
+      fail(fmt::format("\"{}\" must be a store camera's name (scene info lists them)", key));
+    return value.get<std::string>();
+  }
+
   double number(const std::string& key, const nlohmann::json& value, double least, double most) const {
     if (value.is_string()) fail(fmt::format("\"{}\" is {}, not a number", key, value.get<std::string>()));
     if (!value.is_number()) fail(fmt::format("\"{}\" must be a number, not {}", key, value.type_name()));
@@ -169,6 +180,12 @@ void checkViewsAgainstStore(const std::vector<View>& views, const SceneStore& sc
     const auto fail = [&](const std::string& problem) {
       throw std::invalid_argument(fmt::format("{}: view {} (\"{}\"): {}", origin, i + 1, view.name, problem));
     };
+    if (!view.cameraName.empty()) {
+      if (!scene.findCamera(view.cameraName))
+        fail(fmt::format("\"camera\" '{}': scene {} has no camera of that name (scene info lists them)",
+                         view.cameraName, scene.directory()));
+      continue;
+    }
     if (view.camera.lookAt == view.camera.lookFrom) fail("\"look_at\" is the \"look_from\" point: no direction to look");
     if (!scene.locateCell(view.camera.lookFrom))
       fail(fmt::format("\"look_from\" {},{},{} is outside every cell of scene {}", view.camera.lookFrom.x,
@@ -179,7 +196,10 @@ void checkViewsAgainstStore(const std::vector<View>& views, const SceneStore& sc
 JobSettings viewSettings(const JobSettings& base, const View& view, const std::string& directory,
                          const std::string& extension) {
   JobSettings settings = base;
-  settings.camera = view.camera;
+  if (view.cameraName.empty())
+    settings.camera = view.camera;
+  else
+    settings.cameraName = view.cameraName;
   if (view.width) settings.width = *view.width;
   if (view.height) settings.height = *view.height;
   if (view.spp) settings.spp = *view.spp;

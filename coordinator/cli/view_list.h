@@ -4,11 +4,13 @@
 //
 //   [{"name": "hall", "look_from": [1, 1.6, 2], "look_at": [5, 1.2, 2]},
 //    {"name": "door", "look_from": [3, 1.6, 8], "look_at": [3, 1.2, 4],
-//     "up": [0, 1, 0], "fov": 60, "width": 320, "height": 240, "spp": 4}]
+//     "up": [0, 1, 0], "fov": 60, "width": 320, "height": 240, "spp": 4},
+//    {"name": "corridor", "camera": "floor0-corridor"}]
 //
-// `name` (a safe file name: the image is DIR/<name>.<format>), `look_from`
-// and `look_at` are required; `up` and `fov` default to the store camera's,
-// `width`, `height` and `spp` to the command's options.
+// `name` (a safe file name: the image is DIR/<name>.<format>) is required,
+// and either `camera` (a store camera's name, as `--camera`) or `look_from`
+// and `look_at`, whose `up` and `fov` default to the store camera's;
+// `width`, `height` and `spp` default to the command's options.
 #pragma once
 
 #include <cstdint>
@@ -25,7 +27,8 @@ namespace portico::cli {
 
 struct View {
   std::string name;
-  JobCamera camera;   // up and fov 0: the store camera's
+  std::string cameraName;   // a store camera; empty: `camera`
+  JobCamera camera;         // up and fov 0: the store camera's
   std::optional<uint32_t> width, height, spp;
 };
 

@@ -257,6 +257,18 @@ TEST_F(PhotonReuse, AStoreRegeneratedInPlaceIsNotMistakenForTheOldOne) {
   EXPECT_TRUE(reusedFrom(after).is_null()) << after.dump();
 }
 
+// A view may name a store camera: it renders as `--camera NAME` alone does.
+TEST_F(PhotonReuse, AViewNamingAStoreCameraHasTheBitsOfThatCameraRenderedAlone) {
+  const fs::path views =
+      writeFile("named.json", R"([{"name": "first", "look_from": [3.5, 1.5, 1], "look_at": [0, 1, 0]},
+                                  {"name": "stored", "camera": "default"}])");
+  ASSERT_EQ(renderViews("views-named", 2, views.string()), 0) << readFile(dir_ / "views-named.log");
+  EXPECT_EQ(reusedFrom(statistics(dir_ / "views-named" / "stored.exr")),
+            statistics(dir_ / "views-named" / "first.exr")["job"]);
+  ASSERT_EQ(renderAlone("alone-default", 2, {"--camera", "default"}), 0) << readFile(dir_ / "alone-default.log");
+  EXPECT_EQ(differingFloats(dir_ / "views-named" / "stored.exr", dir_ / "alone-default.exr"), 0u);
+}
+
 // Each refusal is one line naming the view and the problem, before any
 // service starts (nothing is written in the output directory).
 TEST_F(PhotonReuse, BadViewsFilesAreRefusedInOneLineNamingTheViewAndTheProblem) {
@@ -275,7 +287,9 @@ TEST_F(PhotonReuse, BadViewsFilesAreRefusedInOneLineNamingTheViewAndTheProblem) 
       {"nan", R"([{"name": "a", "look_from": [3,NaN,1], "look_at": [0,1,0]}])", {"view 1 (\"a\")", "look_from[1]", "NaN"}},
       {"unsafe-name", R"([{"name": "../a", "look_from": [3,1,1], "look_at": [0,1,0]}])", {"view 1", "safe file name"}},
       {"no-name", R"([{"look_from": [3,1,1], "look_at": [0,1,0]}])", {"view 1", "\"name\" is missing"}},
-      {"camera", R"([{"name": "a", "camera": "hall"}])", {"view 1 (\"a\")", "\"camera\""}},
+      {"unknown-camera", R"([{"name": "a", "camera": "hall"}])", {"view 1 (\"a\")", "no camera of that name"}},
+      {"camera-and-eye", R"([{"name": "a", "camera": "default", "look_from": [3,1,1]}])",
+       {"view 1 (\"a\")", "takes no look_from"}},
       {"outside", R"([{"name": "a", "look_from": [30,1,1], "look_at": [0,1,0]}])", {"view 1 (\"a\")", "outside every cell"}},
       {"width-alone", R"([{"name": "a", "look_from": [3,1,1], "look_at": [0,1,0], "width": 10}])",
        {"view 1 (\"a\")", "\"width\" and \"height\""}},

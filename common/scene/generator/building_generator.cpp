@@ -14,6 +14,7 @@
 #include "common/scene/generator/demo_furniture.h"
 #include "common/scene/generator/material_palette.h"
 #include "common/scene/generator/mesh_builder.h"
+#include "common/scene/generator/standing_camera.h"
 #include "common/scene/store/scene_store.h"
 #include "common/util/apportion.h"
 
@@ -68,6 +69,10 @@ struct TemplateCell {
   FloorRect lightArea;              // where ceiling lights may go
   StairPlan stair;                  // junctions only
   float weight = 1.0f;              // share of the room triangle budget
+  // Where a standing camera is put (rooms: just inside the door, where no
+  // furniture stands; corridors: at one end) and where it looks (the far
+  // wall's middle; the corridor's other end), at floor 0.
+  Vec3 viewFrom, viewTo;
 };
 
 struct TemplatePortal {
@@ -194,6 +199,8 @@ class FloorPlanner {
     const Frame frame{start, direction, acrossOf(direction)};
     const size_t corridor = addCell(CellKind::Corridor, fmt::format("corridor-{}", wing),
                                     frame.rect(0.0f, length, -c_, c_));
+    floor_.cells[corridor].viewFrom = frame.at(0.5f, 0.0f);
+    floor_.cells[corridor].viewTo = frame.at(length, 0.0f);
     if (pendingExit_) {   // the junction we leave opens into this corridor
       floor_.portals.push_back({*pendingExit_, corridor, frame.wallAtU(0.0f, -c_ + 0.05f, c_ - 0.05f, 0.0f, kOpeningHeight)});
       pendingExit_.reset();
@@ -220,6 +227,8 @@ class FloorPlanner {
                                 : random_.centimetres(u0 + 0.4f, u1 - 0.4f - kDoorWidth);
         floor_.portals.push_back({corridor, room, frame.wallAtV(sign * c_, doorU, doorU + kDoorWidth, 0.0f, kDoorHeight)});
         floor_.cells[room].keepOut.push_back(frame.rect(doorU - 0.3f, doorU + kDoorWidth + 0.3f, sign * c_, sign * (c_ + 1.3f)));
+        floor_.cells[room].viewFrom = frame.at(doorU + 0.5f * kDoorWidth, sign * (c_ + 0.6f));
+        floor_.cells[room].viewTo = frame.at(0.5f * (u0 + u1), sign * halfWidth_);
         // A window centred in the outer wall, kept within the facade strip.
         const float w0 = std::max(u0 + 0.5f, kFacadeDepth + 0.1f), w1 = std::min(u1 - 0.5f, length - kFacadeDepth - 0.1f);
         const float mid = 0.5f * (w0 + w1), half = std::min(1.0f, 0.5f * (w1 - w0));
@@ -424,6 +433,7 @@ Camera addSkyAndCamera(BuildingPlan& plan) {
   Bounds3 footprint;
   for (const PlannedCell& cell : plan.cells) footprint.extend(cell.box);
   Camera camera;
+  camera.name = "overview";
   const Vec3 centre((footprint.lo.x + footprint.hi.x) * 0.5f, plan.top - kStorey, (footprint.lo.z + footprint.hi.z) * 0.5f);
   const float scale = 1.1f * std::max((footprint.hi.x - footprint.lo.x) / 14.0f, (footprint.hi.z - footprint.lo.z) / 10.0f);
   camera.origin = centre + Vec3(0.0f, 16.0f * scale, -10.0f * scale);
@@ -441,6 +451,36 @@ Camera addSkyAndCamera(BuildingPlan& plan) {
   plan.skyId = uint32_t(plan.cells.size() - 1);
   camera.cell = plan.skyId;
   return camera;
+}
+
+// Standing cameras on every floor: in the room with the most lights (on a
+// tie the largest, then the first), named "floorF-room-...", and in the
+// floor's first corridor, "floorF-corridor".
+void addInteriorCameras(const BuildingPlan& plan, const Camera& overview, SceneStoreWriter& writer) {
+  const auto camera = [&](std::string name, uint32_t id) {
+    const PlannedCell& cell = plan.cells[id];
+    writer.addCamera(standingCamera(std::move(name), id, cell.box.lo.y, cell.source->viewFrom, cell.source->viewTo,
+                                    overview.width, overview.height));
+  };
+  const uint32_t floors = plan.floorCells == 0 ? 0 : uint32_t(plan.firstFacade / plan.floorCells);
+  for (uint32_t f = 0; f < floors; ++f) {
+    std::optional<uint32_t> room, corridor;
+    for (uint32_t id = uint32_t(f * plan.floorCells); id < uint32_t((f + 1) * plan.floorCells); ++id) {
+      const PlannedCell& cell = plan.cells[id];
+      if (cell.kind == CellKind::Corridor && !corridor) corridor = id;
+      if (cell.kind != CellKind::Room) continue;
+      if (!room) {
+        room = id;
+        continue;
+      }
+      const PlannedCell& best = plan.cells[*room];
+      if (cell.lights.size() > best.lights.size() ||
+          (cell.lights.size() == best.lights.size() && area(cell.source->rect) > area(best.source->rect)))
+        room = id;
+    }
+    if (room) camera(fmt::format("floor{}-{}", f, plan.cells[*room].source->name), *room);
+    if (corridor) camera(fmt::format("floor{}-corridor", f), *corridor);
+  }
 }
 
 // Portals: the floor's own, stairs between floors, windows, and the sky.
@@ -603,10 +643,12 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
   writer.setMeta("floors", std::to_string(preset.floors));
   writer.setMeta("furnishing", preset.style == furniture::Style::Regular ? "regular" : "hand-made");
   const FurnitureMaterials materials = addMaterials(writer);
-  writer.setCamera(addSkyAndCamera(plan));
+  const Camera overview = addSkyAndCamera(plan);
+  writer.setCamera(overview);
   addPortals(preset, floor, plan, writer);
   GeneratedBuildingStats stats;
   stats.lights = addLights(preset, plan, writer);
+  addInteriorCameras(plan, overview, writer);
   stats.triangles = writeCells(preset, seed, plan, materials, writer);
   writer.commit();
   stats.cells = uint32_t(plan.cells.size());

@@ -10,7 +10,10 @@
 // end); it holds a staircase whose opening in the ceiling is the portal to
 // the junction above. Every top-floor cell and every facade opens onto one
 // sky cell, which holds an overview camera (ceilings and lamps are hidden
-// from the camera: a cut-away of the top floor).
+// from the camera: a cut-away of the top floor). Every floor also has two
+// named standing cameras: "floorF-room-..." in the doorway of its room with
+// the most lights, looking in, and "floorF-corridor" at the end of its first
+// corridor, looking along it (floors count from 0, as in cell names).
 //
 // Rooms are furnished from the furniture library (room_furnisher.h) for a
 // triangle budget: the preset's total, with its largest room at the paper's

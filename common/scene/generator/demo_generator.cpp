@@ -10,6 +10,7 @@
 #include "common/scene/generator/demo_furniture.h"
 #include "common/scene/generator/material_palette.h"
 #include "common/scene/generator/mesh_builder.h"
+#include "common/scene/generator/standing_camera.h"
 #include "common/scene/store/scene_store.h"
 
 namespace portico {
@@ -24,7 +25,8 @@ constexpr float kWallHeight = 2.8f;   // the ceiling's height
 // Cut-away: each room's cell box reaches kCutawayGap above its ceiling, and
 // its top face there is the portal to the sky. Photons going up hit the
 // ceiling well before the portal; camera rays come in through the portal and
-// pass the ceiling (a material hidden from the camera) into the room.
+// pass the ceiling (a material hidden from the camera, seen from above)
+// into the room.
 constexpr float kCutawayGap = 0.1f;
 constexpr float kCellTop = kWallHeight + kCutawayGap;
 constexpr float kDoorWidth = 0.9f;
@@ -210,6 +212,7 @@ Camera overviewCamera() {
   // From the south, 58 degrees down (atan(16 / 10)) onto the floor's centre;
   // 40 degrees of vertical field fits the 14 m x 10 m floor in 480 x 320.
   Camera camera;
+  camera.name = "overview";
   camera.origin = Vec3(0.5f * kCorridorLength, 16.0f, -10.0f);
   camera.target = Vec3(0.5f * kCorridorLength, 0.0f, 0.0f);
   camera.up = Vec3(0.0f, 1.0f, 0.0f);
@@ -218,6 +221,22 @@ Camera overviewCamera() {
   camera.height = 320;
   camera.cell = kDemoSkyCell;
   return camera;
+}
+
+// A camera per room, named as the room, standing just inside its door
+// (where no furniture stands) and looking at the middle of the far wall;
+// one at the corridor's west end, looking along it.
+std::vector<Camera> interiorCameras(const std::vector<Room>& rooms, const Camera& overview) {
+  std::vector<Camera> cameras;
+  for (const Room& room : rooms) {
+    const float inward = room.plan.north ? 1.0f : -1.0f;
+    const Vec3 door(0.5f * (room.doorX0 + room.doorX1), 0.0f, room.corridorWallZ + inward * 0.6f);
+    const Vec3 farWall(0.5f * (room.plan.x0 + room.plan.x1), 0.0f, room.farWallZ);
+    cameras.push_back(standingCamera(room.plan.name, room.cell, 0.0f, door, farWall, overview.width, overview.height));
+  }
+  cameras.push_back(standingCamera("corridor", kDemoCorridorCell, 0.0f, Vec3(0.5f, 0.0f, 0.0f),
+                                   Vec3(kCorridorLength, 0.0f, 0.0f), overview.width, overview.height));
+  return cameras;
 }
 
 // The sky: above the whole floor (from the top of the cells' boxes), grown to
@@ -268,6 +287,7 @@ void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed) {
   writer.writeCell(sky);
 
   writer.setCamera(camera);
+  for (const Camera& inside : interiorCameras(rooms, camera)) writer.addCamera(inside);
   writer.commit();
 }
 

@@ -234,18 +234,19 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
   if (!givenCells) scene.cells[0].bounds = padded(scene.bounds);
 
   if (checkCells) checkObjectsInCells(scene, path);
-  // Every camera is checked, so that any of them can be chosen later.
-  for (const BuildingCamera& camera : building.cameras) {
+  // Every camera is stored under its name, the chosen one first (the
+  // store's default).
+  scene.cameras.push_back(chosen.camera);
+  for (const BuildingCamera& camera : building.cameras)
+    if (&camera != &chosen) scene.cameras.push_back(camera.camera);
+  for (Camera& camera : scene.cameras) {
     const std::optional<uint32_t> cell = options.gridResolution > 0
                                              ? std::optional<uint32_t>(0)
-                                             : smallestCellContaining(scene.cells, camera.camera.origin);
+                                             : smallestCellContaining(scene.cells, camera.origin);
     if (!cell)
       fail(fmt::format("camera '{}': origin {} lies outside every cell; move it into a cell or add a cell around it",
-                       camera.name, formatVec(camera.camera.origin)));
-    if (&camera == &chosen) {
-      scene.camera = camera.camera;
-      scene.camera.cell = *cell;
-    }
+                       camera.name, formatVec(camera.origin)));
+    camera.cell = *cell;
   }
   return scene;
 }
@@ -261,20 +262,22 @@ ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
   scene.cells.push_back(ImportedCell{kSingleCellName, padded(scene.bounds)});
   // A default view: from the middle of everything, looking down -z.
-  scene.camera.origin = scene.bounds.center();
-  scene.camera.target = scene.camera.origin - Vec3(0.0f, 0.0f, 1.0f);
-  scene.camera.up = Vec3(0.0f, 1.0f, 0.0f);
-  scene.camera.fovYDegrees = 60.0f;
-  scene.camera.width = 512;
-  scene.camera.height = 384;
-  scene.camera.cell = 0;
+  Camera& camera = scene.cameras.emplace_back();
+  camera.origin = scene.bounds.center();
+  camera.target = camera.origin - Vec3(0.0f, 0.0f, 1.0f);
+  camera.up = Vec3(0.0f, 1.0f, 0.0f);
+  camera.fovYDegrees = 60.0f;
+  camera.width = 512;
+  camera.height = 384;
+  camera.cell = 0;
   return scene;
 }
 
 void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
   for (const ImportedPortal& portal : scene.portals) writer.addPortal(portal.cellA, portal.cellB, portal.polygon);
   for (const ImportedLight& light : scene.lights) writer.addLight(light.areaLight());
-  writer.setCamera(scene.camera);
+  writer.setCamera(scene.cameras.front());
+  for (size_t k = 1; k < scene.cameras.size(); ++k) writer.addCamera(scene.cameras[k]);
   // One output cell in memory at a time.
   for (uint32_t id = 0; id < scene.cells.size(); ++id) {
     CellContent cell;

@@ -30,7 +30,8 @@ namespace portico {
 struct ImportOptions {
   // 0: the building.json's cells (or one cell). RG in [1, 256]: RG^3 voxels.
   uint32_t gridResolution = 0;
-  // The entry of the building.json's "cameras" to use, by "name"; empty: the first.
+  // The entry of the building.json's "cameras" that becomes the store's
+  // default camera, by "name"; empty: the first. Every entry is stored.
   std::string camera;
   // Called after each object's mesh file is read (objects read, objects in
   // all): reading tens of thousands of mesh files takes a minute.

@@ -404,7 +404,7 @@ std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) 
   std::vector<BuildingCamera> cameras;
   if (single) {
     cameras.push_back(readCamera(reader, *single, "camera"));
-    cameras.back().name = "camera";
+    cameras.back().name = kDefaultCameraName;
   } else if (list) {
     if (!list->is_array() || list->empty()) reader.fail("\"cameras\" must be a non-empty array");
     std::set<std::string> names;
@@ -415,11 +415,14 @@ std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) 
       if (const json* name = reader.member((*list)[i], "name")) camera.name = reader.string(*name, what + ".name");
       if (!names.insert(camera.name).second)
         reader.fail(fmt::format("{}: camera name '{}' is used twice", what, camera.name));
+      if (camera.name.empty() || camera.name.size() > kMaxCameraNameBytes)
+        reader.fail(fmt::format("{}.name: must be 1 to {} bytes", what, kMaxCameraNameBytes));
       cameras.push_back(std::move(camera));
     }
   } else {
     reader.fail("has no \"camera\" (origin, target, up, fov_y_deg, width, height)");
   }
+  for (BuildingCamera& camera : cameras) camera.camera.name = camera.name;
   return cameras;
 }
 

@@ -53,8 +53,8 @@ struct BuildingPortal {
 };
 
 struct BuildingCamera {
-  std::string name;          // "name" of an entry of "cameras"; "camera" for the single one
-  Camera camera;             // cell not set yet
+  std::string name;          // "name" of an entry of "cameras"; "default" for the single one
+  Camera camera;             // named as above; cell not set yet
 };
 
 struct BuildingDescription {

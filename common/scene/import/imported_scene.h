@@ -1,6 +1,6 @@
 // What the building importer has read and checked, before any of it is
 // written: the input meshes (held in memory), materials, lights, the given
-// cells and portals, the camera. Written either as its own cells
+// cells and portals, the named cameras. Written either as its own cells
 // (building_importer.cpp) or cut into voxel cells (voxel_cells.h).
 #pragma once
 
@@ -72,7 +72,7 @@ struct ImportedScene {
   std::vector<ImportedCell> cells;       // the given cells, or one around everything
   std::vector<ImportedPortal> portals;
   std::vector<ImportedLight> lights;
-  Camera camera;                         // cell: index into cells
+  std::vector<Camera> cameras;           // the default first; cell: index into cells
   Bounds3 bounds;                        // triangles, camera origins and given cells, not padded
   uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
   uint64_t triangleCount() const {

@@ -46,8 +46,8 @@ ImportedScene sceneFromStore(const std::string& directory) {
     scene.lights.push_back(ImportedLight{"light " + std::to_string(light.id), light.cell,
                                          Parallelogram{light.corner, light.edge1, light.edge2}, light.radiance,
                                          light.shape});
-  scene.camera = store.camera();
-  scene.bounds.extend(Bounds3(scene.camera.origin, scene.camera.origin));
+  scene.cameras = store.cameras();
+  for (const Camera& camera : scene.cameras) scene.bounds.extend(Bounds3(camera.origin, camera.origin));
   return scene;
 }
 

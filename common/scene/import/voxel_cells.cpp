@@ -187,9 +187,14 @@ void writeVoxelCells(const ImportedScene& scene, const VoxelGrid& grid, SceneSto
   addGridPortals(grid, writer);
   for (const ImportedLight& light : scene.lights)
     for (const AreaLight& piece : voxelLights(light, grid)) writer.addLight(piece);
-  Camera camera = scene.camera;
-  camera.cell = grid.locate(camera.origin);
-  writer.setCamera(camera);
+  for (size_t k = 0; k < scene.cameras.size(); ++k) {
+    Camera camera = scene.cameras[k];
+    camera.cell = grid.locate(camera.origin);
+    if (k == 0)
+      writer.setCamera(camera);
+    else
+      writer.addCamera(camera);
+  }
 
   // Pass 1: how many triangles each voxel gets. Pass 2: the references,
   // voxel by voxel, in input order (so the output does not depend on anything

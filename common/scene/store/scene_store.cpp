@@ -135,23 +135,33 @@ class CatalogueReader {
     return lights;
   }
 
-  Camera camera(size_t cellCount) {
-    sql::Statement& row = db_.prepare(
-        "SELECT origin_x, origin_y, origin_z, target_x, target_y, target_z, up_x, up_y, up_z, fov_y_deg, "
-        "width, height, cell FROM camera");
-    if (!row.step()) fail("table camera is empty");
-    Camera camera;
-    camera.origin = columnVec3(row, 0);
-    camera.target = columnVec3(row, 3);
-    camera.up = columnVec3(row, 6);
-    camera.fovYDegrees = static_cast<float>(row.columnDouble(9));
-    camera.width = static_cast<uint32_t>(row.columnInt(10));
-    camera.height = static_cast<uint32_t>(row.columnInt(11));
-    requireCell("the camera", row.columnInt(12), cellCount);
-    camera.cell = static_cast<uint32_t>(row.columnInt(12));
-    if (row.step()) fail("table camera has more than one row");
+  // Version 4 on: table cameras, the default first. Before: table camera,
+  // one row, read as the camera named "default".
+  std::vector<Camera> cameras(size_t cellCount, int version) {
+    const bool named = version >= 4;
+    sql::Statement& row = db_.prepare(fmt::format(
+        "SELECT {}, origin_x, origin_y, origin_z, target_x, target_y, target_z, up_x, up_y, up_z, fov_y_deg, "
+        "width, height, cell FROM {}",
+        named ? "id, name" : fmt::format("0, '{}'", kDefaultCameraName), named ? "cameras ORDER BY id" : "camera"));
+    std::vector<Camera> cameras;
+    while (row.step()) {
+      if (named) requireDenseId("cameras", row.columnInt(0), cameras.size());
+      Camera camera;
+      camera.name = row.columnText(1);
+      camera.origin = columnVec3(row, 2);
+      camera.target = columnVec3(row, 5);
+      camera.up = columnVec3(row, 8);
+      camera.fovYDegrees = static_cast<float>(row.columnDouble(11));
+      camera.width = static_cast<uint32_t>(row.columnInt(12));
+      camera.height = static_cast<uint32_t>(row.columnInt(13));
+      requireCell(fmt::format("camera '{}'", camera.name), row.columnInt(14), cellCount);
+      camera.cell = static_cast<uint32_t>(row.columnInt(14));
+      cameras.push_back(std::move(camera));
+    }
     row.reset();
-    return camera;
+    if (cameras.empty()) fail(fmt::format("table {} is empty", named ? "cameras" : "camera"));
+    if (!named && cameras.size() > 1) fail("table camera has more than one row");
+    return cameras;
   }
 
  private:
@@ -187,7 +197,7 @@ SceneStore SceneStore::open(const std::string& directory) {
     store.portals_ = reader.portals(store.cells_.size());
     store.materials_ = reader.materials(version);
     store.lights_ = reader.lights(store.cells_.size(), version);
-    store.camera_ = reader.camera(store.cells_.size());
+    store.cameras_ = reader.cameras(store.cells_.size(), version);
   } catch (const CatalogueError&) {
     throw;
   } catch (const std::runtime_error& e) {
@@ -201,6 +211,12 @@ std::string SceneStore::cellPath(uint32_t cell) const {
     throw std::runtime_error(
         fmt::format("scene store {}: no cell {} (the store has {} cells)", directory_, cell, cells_.size()));
   return (fs::path(directory_) / cells_[cell].file).string();
+}
+
+const Camera* SceneStore::findCamera(std::string_view name) const {
+  for (const Camera& camera : cameras_)
+    if (camera.name == name) return &camera;
+  return nullptr;
 }
 
 std::string SceneStore::cataloguePath() const {

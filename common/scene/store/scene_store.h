@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "common/scene/store/scene_types.h"
@@ -23,7 +24,11 @@ class SceneStore {
   const std::vector<Portal>& portals() const { return portals_; }      // indexed by portal id
   const std::vector<Material>& materials() const { return materials_; } // indexed by material id
   const std::vector<AreaLight>& lights() const { return lights_; }     // indexed by light id
-  const Camera& camera() const { return camera_; }
+  // Every named camera, the default first (never empty).
+  const std::vector<Camera>& cameras() const { return cameras_; }
+  const Camera& camera() const { return cameras_.front(); }   // the default camera
+  // The camera of this name; nullptr if the store has none.
+  const Camera* findCamera(std::string_view name) const;
   // Free-form facts about the store (format, generator, seed, ...).
   const std::map<std::string, std::string>& meta() const { return meta_; }
   std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
@@ -38,7 +43,7 @@ class SceneStore {
   std::vector<Portal> portals_;
   std::vector<Material> materials_;
   std::vector<AreaLight> lights_;
-  Camera camera_;
+  std::vector<Camera> cameras_;
   std::map<std::string, std::string> meta_;
 };
 
@@ -73,11 +78,14 @@ class SceneStoreWriter {
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned
+  // The default camera (camera.name: "default" unless given another).
   void setCamera(const Camera& camera);
+  // Another named camera; names are unique in a store (checked at commit).
+  void addCamera(const Camera& camera);
   void setMeta(const std::string& key, const std::string& value);
   // Writes cells/<id>.cell with its triangles and the portals that touch it.
   void writeCell(const CellContent& cell);
-  // Validates (every portal's cells written, camera cell exists, ...) and publishes.
+  // Validates (every portal's cells written, every camera's cell exists, ...) and publishes.
   // An existing directory is replaced only if it is empty or a scene store.
   // Every error is a std::runtime_error naming the object and the problem,
   // and leaves `directory` untouched.

@@ -16,7 +16,9 @@ namespace portico::scene_schema {
 //      read, as if every material had hidden_from_camera = 0.
 //   3: lights.shape ('parallelogram' or 'triangle'). Versions 1 and 2 are
 //      still read, every light a parallelogram.
-constexpr int kVersion = 3;
+//   4: table cameras (named; id 0 the default) replaces table camera.
+//      Versions 1 to 3 are still read, their one camera named "default".
+constexpr int kVersion = 4;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -24,7 +26,8 @@ constexpr std::string_view kCellDirectory = "cells";
 
 // Portal polygons are a BLOB of little-endian float32, xyz per vertex, in
 // order around the polygon: exact (no decimal round trip) and compact. All
-// other coordinates are REAL columns, which hold a float exactly.
+// other coordinates are REAL columns, which hold a float exactly. Camera 0
+// is the store's default camera.
 constexpr std::string_view kCreateTables = R"sql(
 CREATE TABLE meta(
   key   TEXT PRIMARY KEY,
@@ -58,8 +61,9 @@ CREATE TABLE lights(
   edge2_x REAL NOT NULL, edge2_y REAL NOT NULL, edge2_z REAL NOT NULL,
   radiance_r REAL NOT NULL, radiance_g REAL NOT NULL, radiance_b REAL NOT NULL,
   shape TEXT NOT NULL DEFAULT 'parallelogram' CHECK (shape IN ('parallelogram', 'triangle')));
-CREATE TABLE camera(
-  id INTEGER PRIMARY KEY CHECK (id = 0),
+CREATE TABLE cameras(
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL UNIQUE,
   origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
   target_x REAL NOT NULL, target_y REAL NOT NULL, target_z REAL NOT NULL,
   up_x REAL NOT NULL, up_y REAL NOT NULL, up_z REAL NOT NULL,

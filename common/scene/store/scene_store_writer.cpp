@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <system_error>
 #include <unordered_map>
@@ -64,7 +65,8 @@ struct SceneStoreWriter::Impl {
   // instead of scanning them all (an RG^3 voxel grid has 3 RG^2 (RG - 1)).
   std::unordered_map<uint32_t, std::vector<uint32_t>> portalsByCell;
   std::vector<AreaLight> lights;
-  std::optional<Camera> camera;
+  std::optional<Camera> camera;          // the default
+  std::vector<Camera> otherCameras;      // the other named cameras, in order
   std::map<std::string, std::string> meta;
   std::map<uint32_t, WrittenCell> cells;
 
@@ -79,6 +81,8 @@ struct SceneStoreWriter::Impl {
     return it == cells.end() ? fmt::format("cell {}", id) : fmt::format("cell {} ('{}')", id, it->second.info.name);
   }
 
+  void checkCamera(const Camera& camera) const;
+  void validateCameras() const;
   void validateCrossReferences() const;
   void writeCatalogue(const fs::path& databasePath) const;
   void publish();
@@ -176,16 +180,16 @@ uint32_t SceneStoreWriter::addLight(const AreaLight& light) {
 
 void SceneStoreWriter::setCamera(const Camera& camera) {
   impl_->requireUncommitted();
-  if (!isFinite(camera.origin) || !isFinite(camera.target) || !isFinite(camera.up))
-    impl_->fail("camera: origin, target or up is not finite");
-  if (camera.origin == camera.target) impl_->fail("camera: origin and target coincide");
-  if (length(cross(camera.target - camera.origin, camera.up)) == 0.0f)
-    impl_->fail("camera: up is parallel to the view direction");
-  if (!(camera.fovYDegrees > 0.0f && camera.fovYDegrees < 180.0f))
-    impl_->fail(fmt::format("camera: field of view {} degrees is outside (0, 180)", camera.fovYDegrees));
-  if (camera.width == 0 || camera.height == 0)
-    impl_->fail(fmt::format("camera: image size {}x{} is empty", camera.width, camera.height));
-  impl_->camera = camera;
+  Camera named = camera;
+  if (named.name.empty()) named.name = kDefaultCameraName;
+  impl_->checkCamera(named);
+  impl_->camera = std::move(named);
+}
+
+void SceneStoreWriter::addCamera(const Camera& camera) {
+  impl_->requireUncommitted();
+  impl_->checkCamera(camera);
+  impl_->otherCameras.push_back(camera);
 }
 
 void SceneStoreWriter::setMeta(const std::string& key, const std::string& value) {
@@ -238,6 +242,42 @@ void SceneStoreWriter::writeCell(const CellContent& cell) {
   impl_->cells.emplace(cell.id, std::move(written));
 }
 
+// Names are what `--camera NAME` takes: printable, no control characters.
+void SceneStoreWriter::Impl::checkCamera(const Camera& camera) const {
+  if (camera.name.empty()) fail("camera: a camera other than the default needs a name");
+  if (camera.name.size() > kMaxCameraNameBytes)
+    fail(fmt::format("camera '{}...': name longer than {} bytes", camera.name.substr(0, 32), kMaxCameraNameBytes));
+  for (const char c : camera.name)
+    if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f)
+      fail(fmt::format("camera '{}': name holds a control character", camera.name));
+  const std::string what = fmt::format("camera '{}'", camera.name);
+  if (!isFinite(camera.origin) || !isFinite(camera.target) || !isFinite(camera.up))
+    fail(fmt::format("{}: origin, target or up is not finite", what));
+  if (camera.origin == camera.target) fail(fmt::format("{}: origin and target coincide", what));
+  if (length(cross(camera.target - camera.origin, camera.up)) == 0.0f)
+    fail(fmt::format("{}: up is parallel to the view direction", what));
+  if (!(camera.fovYDegrees > 0.0f && camera.fovYDegrees < 180.0f))
+    fail(fmt::format("{}: field of view {} degrees is outside (0, 180)", what, camera.fovYDegrees));
+  if (camera.width == 0 || camera.height == 0)
+    fail(fmt::format("{}: image size {}x{} is empty", what, camera.width, camera.height));
+}
+
+// Every camera's eye lies in its cell; names are unique.
+void SceneStoreWriter::Impl::validateCameras() const {
+  if (!camera) fail("no camera was set (call setCamera before commit)");
+  std::set<std::string_view> names;
+  std::vector<const Camera*> all{&*camera};
+  for (const Camera& other : otherCameras) all.push_back(&other);
+  for (const Camera* each : all) {
+    if (!names.insert(each->name).second) fail(fmt::format("camera '{}': the name is used twice", each->name));
+    auto it = cells.find(each->cell);
+    if (it == cells.end()) fail(fmt::format("camera '{}': its cell {} was never written", each->name, each->cell));
+    if (!nearlyContains(it->second.info.bounds, each->origin))
+      fail(fmt::format("camera '{}': origin {} lies outside the bounds of its {}", each->name,
+                       formatVec(each->origin), describeCell(each->cell)));
+  }
+}
+
 void SceneStoreWriter::Impl::validateCrossReferences() const {
   if (cells.empty()) fail("no cells were written");
   // Ids are dense: std::map iterates in order, so the first gap is the first mismatch.
@@ -264,12 +304,7 @@ void SceneStoreWriter::Impl::validateCrossReferences() const {
       fail(fmt::format("light {}: its centre {} lies outside the bounds of {}", light.id, formatVec(light.center()),
                        describeCell(light.cell)));
   }
-  if (!camera) fail("no camera was set (call setCamera before commit)");
-  auto it = cells.find(camera->cell);
-  if (it == cells.end()) fail(fmt::format("camera: its cell {} was never written", camera->cell));
-  if (!nearlyContains(it->second.info.bounds, camera->origin))
-    fail(fmt::format("camera: origin {} lies outside the bounds of its {}", formatVec(camera->origin),
-                     describeCell(camera->cell)));
+  validateCameras();
 }
 
 void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const {
@@ -322,17 +357,23 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
     insert.bind(15, std::string(light.isTriangle() ? "triangle" : "parallelogram"));
     insert.run();
   }
-  sql::Statement& insert = db.prepare("INSERT INTO camera VALUES (0, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
-  for (int c = 0; c < 3; ++c) {
-    insert.bind(1 + c, double{camera->origin[c]});
-    insert.bind(4 + c, double{camera->target[c]});
-    insert.bind(7 + c, double{camera->up[c]});
-  }
-  insert.bind(10, double{camera->fovYDegrees})
-      .bind(11, int64_t{camera->width})
-      .bind(12, int64_t{camera->height})
-      .bind(13, int64_t{camera->cell})
-      .run();
+  int64_t cameraId = 0;
+  const auto insertCamera = [&](const Camera& c) {
+    sql::Statement& insert = db.prepare("INSERT INTO cameras VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    insert.bind(1, cameraId++).bind(2, c.name);
+    for (int k = 0; k < 3; ++k) {
+      insert.bind(3 + k, double{c.origin[k]});
+      insert.bind(6 + k, double{c.target[k]});
+      insert.bind(9 + k, double{c.up[k]});
+    }
+    insert.bind(12, double{c.fovYDegrees})
+        .bind(13, int64_t{c.width})
+        .bind(14, int64_t{c.height})
+        .bind(15, int64_t{c.cell})
+        .run();
+  };
+  insertCamera(*camera);
+  for (const Camera& other : otherCameras) insertCamera(other);
   transaction.commit();
 }
 

@@ -14,8 +14,9 @@ struct Material {
   std::string name;
   Vec3 albedo;     // linear RGB reflectance in [0,1]; Lambertian BRDF = albedo / pi
   Vec3 emission;   // RGB radiance, one-sided (front = geometric normal side)
-  // Cut-away: camera rays pass through it (it still blocks and reflects
-  // light); lets a view from above show a room whose ceiling still lights it.
+  // Cut-away: camera rays reaching its back pass through it (it still blocks
+  // and reflects light); lets a view from above show a room whose ceiling
+  // (facing down) still lights it, while a camera in the room sees it.
   bool hiddenFromCamera = false;
   bool emissive() const { return maxComponent(emission) > 0.0f; }
 };
@@ -75,7 +76,16 @@ struct Portal {
   std::vector<Vec3> polygon;
 };
 
+// The name a store's default camera has when it is given none (and the one
+// camera of a store written before cameras had names).
+inline constexpr const char* kDefaultCameraName = "default";
+// The longest camera name a store accepts (names are typed on command lines).
+inline constexpr size_t kMaxCameraNameBytes = 128;
+
+// A store camera. A store holds one or more, each with its own name; the
+// first is its default camera.
 struct Camera {
+  std::string name = kDefaultCameraName;
   Vec3 origin, target, up{0, 1, 0};
   float fovYDegrees = 60.0f;   // full vertical field of view
   uint32_t width = 256, height = 256;

@@ -1,5 +1,5 @@
 // validateSceneStore: the catalogue's cross references and geometry first
-// (portals, lights, camera), then every cell file through CellGeometry (the
+// (portals, lights, cameras), then every cell file through CellGeometry (the
 // reader the workers use), compared with what the catalogue says of it.
 #include "common/scene/store/scene_validation.h"
 
@@ -31,7 +31,7 @@ class Validator {
     checkPortals();
     checkPortalsPerCell();
     checkLights();
-    checkCamera();
+    checkCameras();
     for (const CellInfo& cell : store_.cells()) checkCellFile(cell);
     return std::move(problems_);
   }
@@ -136,12 +136,14 @@ class Validator {
     }
   }
 
-  void checkCamera() {
-    const Camera& camera = store_.camera();
-    if (!cellExists(camera.cell))
-      problem("camera: {}", missingCell(camera.cell));
-    else if (!nearlyContains(store_.cells()[camera.cell].bounds, camera.origin))
-      problem("camera: origin {} lies outside the bounds of its {}", formatVec(camera.origin), cellName(camera.cell));
+  void checkCameras() {
+    for (const Camera& camera : store_.cameras()) {
+      if (!cellExists(camera.cell))
+        problem("camera '{}': {}", camera.name, missingCell(camera.cell));
+      else if (!nearlyContains(store_.cells()[camera.cell].bounds, camera.origin))
+        problem("camera '{}': origin {} lies outside the bounds of its {}", camera.name, formatVec(camera.origin),
+                cellName(camera.cell));
+    }
   }
 
   // The file must load as the workers load it (format, id, index and

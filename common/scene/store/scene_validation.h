@@ -1,6 +1,6 @@
 // The validation pass of `portico scene info`: checks a scene store for
 // what SceneStore::open does not (it reads the catalogue only): portals on
-// their cells' boundaries, lights and camera inside their cells, and every
+// their cells' boundaries, lights and every camera inside their cells, and every
 // cell file readable and agreeing with the catalogue.
 #pragma once
 

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/net/job_spec_wire.h"
+#include "common/scene/generator/demo_generator.h"
 #include "common/scene/import/building_importer.h"
 #include "common/scene/store/scene_store.h"
 #include "coordinator/job_limits.h"
@@ -127,9 +128,52 @@ TEST(JobSettings, TheWireFormKeepsEveryField) {
   settings.targetError = 0.015;
   settings.timeLimitSeconds = 12.5;
   settings.maxPasses = 9;
+  settings.cameraName = "floor2-corridor";
   capnp::MallocMessageBuilder message;
   toWire(settings, message.initRoot<wire::JobSpec>());
   EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);
+}
+
+// The refusal resolveJobSettings gives ("" for none).
+std::string resolveRefusal(const JobSettings& settings, const SceneStore& scene) {
+  try {
+    resolveJobSettings(settings, scene);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// `--camera NAME`: the store camera as stored (its cell, its image size),
+// the name cleared once resolved; an unknown name or a name beside a camera
+// of the job's own is refused, naming it.
+TEST(JobSettings, ANamedCameraIsResolvedIntoTheJobsCamera) {
+  const fs::path directory = fs::temp_directory_path() / ("portico-job-settings-demo-" + std::to_string(getpid()));
+  generateDemoBuilding(directory.string(), 3);
+  const SceneStore demo = SceneStore::open(directory.string());
+  fs::remove_all(directory);
+  const Camera& dark = *demo.findCamera("dark-room");
+  JobSettings settings;
+  settings.cameraName = "dark-room";
+  const JobSettings resolved = resolveJobSettings(settings, demo);
+  EXPECT_EQ(resolved.camera, (JobCamera{dark.origin, dark.target, dark.up, dark.fovYDegrees, kDemoDarkRoomCell}));
+  EXPECT_EQ(resolved.cameraName, "");
+  EXPECT_EQ(resolved.width, dark.width);
+  EXPECT_EQ(resolved.height, dark.height);
+  EXPECT_EQ(resolveJobSettings(resolved, demo), resolved);
+  settings.cameraName = demo.camera().name;   // the default by name: the default
+  EXPECT_EQ(resolveJobSettings(settings, demo), resolveJobSettings(JobSettings{}, demo));
+
+  settings.cameraName = "attic";
+  std::string refusal = resolveRefusal(settings, demo);
+  EXPECT_NE(refusal.find("--camera 'attic'"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("overview, room-1, room-2"), std::string::npos) << refusal;
+  EXPECT_NE(refusal.find("and 2 more"), std::string::npos) << refusal;   // 8 cameras, 6 listed
+  EXPECT_EQ(refusal.find('\n'), std::string::npos) << refusal;
+  settings.cameraName = "corridor";
+  settings.camera = JobCamera{dark.origin, dark.target};
+  refusal = resolveRefusal(settings, demo);
+  EXPECT_NE(refusal.find("--camera 'corridor' and --look-from"), std::string::npos) << refusal;
 }
 
 TEST(JobSettings, TheCameraIsTheStoresUnlessChosenAndAChosenOneIsInTheCellOfItsEye) {

@@ -18,6 +18,7 @@
 #include "common/scene/generator/room_furnisher.h"
 #include "common/scene/store/scene_store.h"
 #include "tests/unit/scene/scene_test_support.h"
+#include "tests/unit/scene/standing_camera_checks.h"
 
 namespace portico {
 namespace {
@@ -117,6 +118,37 @@ TEST(BuildingGenerator, IsOneConnectedBuildingWithoutDegenerateTriangles) {
     }
     EXPECT_EQ(degenerate, 0u) << info.name;
     EXPECT_EQ(outside, 0u) << info.name << ": vertices outside the cell";
+  }
+}
+
+// Besides the overview (the default), every floor has a camera in a room's
+// doorway and one in its corridor, each standing in its cell and looking
+// across it; `--camera` finds them by these names.
+TEST(BuildingGenerator, EveryFloorHasARoomAndACorridorCamera) {
+  TempDirectory temp;
+  generateBuilding(*findBuildingPreset("l-shape", 0), 3, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  EXPECT_EQ(store.camera().name, "overview");
+  EXPECT_EQ(store.cells()[store.camera().cell].name, "sky");
+  const uint32_t floors = uint32_t(std::stoul(store.meta().at("floors")));
+  ASSERT_EQ(floors, 2u);
+  EXPECT_EQ(store.cameras().size(), 1 + 2 * floors);
+  for (uint32_t f = 0; f < floors; ++f) {
+    const std::string floor = "floor" + std::to_string(f) + "-", cellFloor = "f" + std::to_string(f) + "-";
+    const Camera* corridor = store.findCamera(floor + "corridor");
+    ASSERT_NE(corridor, nullptr) << floor;
+    EXPECT_EQ(store.cells()[corridor->cell].name, cellFloor + "corridor-0");
+    testing_support::expectStandingCameraInItsCell(store, *corridor);
+    const auto room = std::find_if(store.cameras().begin(), store.cameras().end(), [&](const Camera& camera) {
+      return camera.name.rfind(floor + "room-", 0) == 0;
+    });
+    ASSERT_NE(room, store.cameras().end()) << floor;
+    // Named after its cell: "floor1-room-0a2" stands in "f1-room-0a2".
+    EXPECT_EQ(store.cells()[room->cell].name, cellFloor + room->name.substr(floor.size()));
+    testing_support::expectStandingCameraInItsCell(store, *room);
+    bool lit = false;
+    for (const AreaLight& light : store.lights()) lit |= light.cell == room->cell;
+    EXPECT_TRUE(lit) << room->name << " stands in a room without a light";
   }
 }
 

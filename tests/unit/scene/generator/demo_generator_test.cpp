@@ -16,6 +16,7 @@
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/scene_store.h"
 #include "tests/unit/scene/scene_test_support.h"
+#include "tests/unit/scene/standing_camera_checks.h"
 
 namespace portico {
 namespace {
@@ -368,6 +369,21 @@ TEST_F(DemoBuilding, CameraSeesTheWholeFloor) {
       EXPECT_LE(std::abs(dot(d, right) / depth / (tanHalf * aspect)), 1.0f) << cell.name << " corner " << corner;
       EXPECT_LE(std::abs(dot(d, up) / depth / tanHalf), 1.0f) << cell.name << " corner " << corner;
     }
+  }
+}
+
+// "overview" (the default) and a standing camera in every room, named as
+// the room, and in the corridor.
+TEST_F(DemoBuilding, EveryRoomAndTheCorridorHasANamedCamera) {
+  EXPECT_EQ(store().camera().name, "overview");
+  EXPECT_EQ(store().camera().cell, kDemoSkyCell);
+  EXPECT_EQ(store().cameras().size(), kDemoCellCount);   // the overview and one per cell but the sky
+  for (const CellInfo& cell : store().cells()) {
+    if (cell.id == kDemoSkyCell) continue;
+    const Camera* camera = store().findCamera(cell.name);
+    ASSERT_NE(camera, nullptr) << cell.name;
+    EXPECT_EQ(camera->cell, cell.id);
+    testing_support::expectStandingCameraInItsCell(store(), *camera);
   }
 }
 

@@ -600,6 +600,27 @@ TEST(BuildingImport, CamerasAreChosenByName) {
   importBuilding({path}, temp / "second", options);
   EXPECT_EQ(SceneStore::open(temp / "second").camera().cell, 0u);
   EXPECT_EQ(SceneStore::open(temp / "second").camera().width, 64u);
+  // Every camera is stored by name, the chosen one first (the default).
+  for (const char* store : {"first", "second"}) {
+    const SceneStore stored = SceneStore::open(temp / store);
+    ASSERT_EQ(stored.cameras().size(), 2u) << store;
+    EXPECT_EQ(stored.camera().name, std::string(store) == "first" ? "hall" : "room");
+    ASSERT_NE(stored.findCamera("hall"), nullptr);
+    ASSERT_NE(stored.findCamera("room"), nullptr);
+    EXPECT_EQ(stored.findCamera("hall")->cell, 1u);
+    EXPECT_EQ(stored.findCamera("room")->cell, 0u);
+    EXPECT_EQ(stored.findCamera("room")->width, 64u);
+  }
+  // Re-cut into voxels, the cameras stay, each in the voxel of its eye.
+  ImportOptions grid;
+  grid.gridResolution = 2;
+  importBuilding({temp / "second"}, temp / "voxels", grid);
+  const SceneStore voxels = SceneStore::open(temp / "voxels");
+  ASSERT_EQ(voxels.cameras().size(), 2u);
+  EXPECT_EQ(voxels.camera().name, "room");
+  EXPECT_EQ(voxels.cameras()[1].name, "hall");
+  for (const Camera& camera : voxels.cameras())
+    EXPECT_TRUE(voxels.cells()[camera.cell].bounds.contains(camera.origin)) << camera.name;
   options.camera = "attic";
   const std::string error = errorOf([&] { importBuilding({path}, temp / "third", options); });
   EXPECT_NE(error.find("no camera named 'attic'"), std::string::npos) << error;

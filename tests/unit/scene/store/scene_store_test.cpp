@@ -47,6 +47,7 @@ struct TinyScene {
   std::vector<std::vector<Vec3>> portalPolygons;
   AreaLight light;
   Camera camera;
+  std::vector<Camera> extraCameras;   // named cameras beside the default
 
   TinyScene() {
     CellContent room;
@@ -98,6 +99,7 @@ struct TinyScene {
       writer.addPortal(portalCells[i].first, portalCells[i].second, portalPolygons[i]);
     writer.addLight(light);
     writer.setCamera(camera);
+    for (const Camera& extra : extraCameras) writer.addCamera(extra);
     for (uint32_t id : {2u, 0u, 1u}) writer.writeCell(cells[id]);
     writer.commit();
   }
@@ -167,7 +169,9 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   expectSameVec3(light.edge2, scene.light.edge2);
   expectSameVec3(light.radiance, scene.light.radiance);
 
+  ASSERT_EQ(store.cameras().size(), 1u);
   const Camera& camera = store.camera();
+  EXPECT_EQ(camera.name, "default");
   expectSameVec3(camera.origin, scene.camera.origin);
   expectSameVec3(camera.target, scene.camera.target);
   expectSameVec3(camera.up, scene.camera.up);
@@ -177,7 +181,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "3");
+  EXPECT_EQ(store.meta().at("format_version"), "4");
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -396,7 +400,7 @@ TEST(SceneStoreWriter, RejectsALightOrCameraInAnUnwrittenCell) {
         writer.writeCell(triangleCell(0));
         writer.setCamera(cameraIn(1));
       },
-      {"camera", "cell 1 was never written"});
+      {"camera 'default'", "cell 1 was never written"});
 }
 
 TEST(SceneStoreWriter, RejectsAPortalAddedAfterItsCell) {
@@ -434,13 +438,119 @@ TEST(SceneStore, OpenRejectsAnUnknownSchemaVersion) {
   EXPECT_NE(error.find("schema version 99"), std::string::npos) << error;
 }
 
+// A store as version 3 wrote it: one camera, in table camera.
+void keepOnlyTheDefaultCameraAsVersionThreeDid(sql::Database& db) {
+  db.exec(R"sql(
+    CREATE TABLE camera(
+      id INTEGER PRIMARY KEY CHECK (id = 0),
+      origin_x REAL NOT NULL, origin_y REAL NOT NULL, origin_z REAL NOT NULL,
+      target_x REAL NOT NULL, target_y REAL NOT NULL, target_z REAL NOT NULL,
+      up_x REAL NOT NULL, up_y REAL NOT NULL, up_z REAL NOT NULL,
+      fov_y_deg REAL NOT NULL, width INTEGER NOT NULL, height INTEGER NOT NULL,
+      cell INTEGER NOT NULL REFERENCES cells(id));
+    INSERT INTO camera SELECT 0, origin_x, origin_y, origin_z, target_x, target_y, target_z, up_x, up_y, up_z,
+                              fov_y_deg, width, height, cell FROM cameras WHERE id = 0;
+    DROP TABLE cameras;)sql");
+  db.setUserVersion(3);
+}
+
+// Several named cameras: the default first, the others in the order added,
+// every field exact; found by name.
+TEST(SceneStore, RoundTripsSeveralNamedCameras) {
+  TempDirectory temp;
+  TinyScene scene;
+  scene.camera.name = "overview";
+  Camera inRoom = scene.camera;
+  inRoom.name = "room-door";
+  inRoom.origin = Vec3(0.25f, 1.6f, 1.0f / 3.0f);
+  inRoom.target = Vec3(1.9f, 1.2f, 1.0f);
+  inRoom.up = Vec3(0, 1, 0);
+  inRoom.fovYDegrees = 61.5f;
+  inRoom.width = 32;
+  inRoom.height = 24;
+  inRoom.cell = 0;
+  Camera inHall = inRoom;
+  inHall.name = "hall end";
+  inHall.origin = Vec3(3.5f, 1.6f, 1.0f);
+  inHall.cell = 1;
+  scene.extraCameras = {inRoom, inHall};
+  scene.write(temp / "store");
+
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.cameras().size(), 3u);
+  const Camera* expected[] = {&scene.camera, &inRoom, &inHall};
+  for (size_t k = 0; k < 3; ++k) {
+    const Camera& camera = store.cameras()[k];
+    EXPECT_EQ(camera.name, expected[k]->name);
+    expectSameVec3(camera.origin, expected[k]->origin);
+    expectSameVec3(camera.target, expected[k]->target);
+    expectSameVec3(camera.up, expected[k]->up);
+    EXPECT_EQ(camera.fovYDegrees, expected[k]->fovYDegrees);
+    EXPECT_EQ(camera.width, expected[k]->width);
+    EXPECT_EQ(camera.height, expected[k]->height);
+    EXPECT_EQ(camera.cell, expected[k]->cell);
+    EXPECT_EQ(store.findCamera(expected[k]->name), &camera);
+  }
+  EXPECT_EQ(store.camera().name, "overview");
+  EXPECT_EQ(store.findCamera("nobody"), nullptr);
+}
+
+// A store written before cameras had names is read as one camera, "default".
+TEST(SceneStore, OpensAVersionThreeStoreAsOneCameraNamedDefault) {
+  TempDirectory temp;
+  TinyScene scene;
+  Camera inRoom = scene.camera;
+  inRoom.name = "room";
+  inRoom.origin = Vec3(1, 1, 1);
+  inRoom.cell = 0;
+  scene.extraCameras = {inRoom};
+  scene.write(temp / "store");
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    keepOnlyTheDefaultCameraAsVersionThreeDid(db);
+  }
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.cameras().size(), 1u);
+  EXPECT_EQ(store.camera().name, "default");
+  expectSameVec3(store.camera().origin, scene.camera.origin);
+  expectSameVec3(store.camera().target, scene.camera.target);
+  EXPECT_EQ(store.camera().cell, scene.camera.cell);
+  EXPECT_EQ(store.findCamera("default"), &store.camera());
+}
+
+TEST(SceneStoreWriter, RejectsCamerasWithoutAUsableName) {
+  const auto writeWith = [](Camera extra) {
+    TempDirectory temp;
+    TinyScene scene;
+    scene.extraCameras = {extra};
+    return errorOf([&] { scene.write(temp / "store"); });
+  };
+  Camera camera = TinyScene().camera;
+  camera.name = "default";
+  std::string error = writeWith(camera);
+  EXPECT_NE(error.find("camera 'default': the name is used twice"), std::string::npos) << error;
+  camera.name = "";
+  error = writeWith(camera);
+  EXPECT_NE(error.find("needs a name"), std::string::npos) << error;
+  camera.name = "tab\there";
+  error = writeWith(camera);
+  EXPECT_NE(error.find("control character"), std::string::npos) << error;
+  camera.name = "far";
+  camera.origin = Vec3(50, 1, 1);
+  error = writeWith(camera);
+  EXPECT_NE(error.find("camera 'far': origin (50, 1, 1) lies outside the bounds of its cell 2 ('sky')"),
+            std::string::npos)
+      << error;
+}
+
 // Version 1 (before materials.hidden_from_camera) is still read: nothing hidden.
 TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TempDirectory temp;
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 3);
+    EXPECT_EQ(db.userVersion(), 4);
+    keepOnlyTheDefaultCameraAsVersionThreeDid(db);
     db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
     db.exec("ALTER TABLE lights DROP COLUMN shape");
     db.setUserVersion(1);
@@ -470,6 +580,7 @@ TEST(SceneStore, OpensAVersionTwoStoreWithParallelogramLights) {
   EXPECT_TRUE(SceneStore::open(temp / "store").lights()[0].isTriangle());
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    keepOnlyTheDefaultCameraAsVersionThreeDid(db);
     db.exec("ALTER TABLE lights DROP COLUMN shape");
     db.setUserVersion(2);
   }

@@ -121,6 +121,32 @@ TEST(SceneValidation, ALightOutsideItsCellIsNamed) {
   EXPECT_TRUE(hasProblem(problems, {"light 0", "outside the bounds"})) << joined(problems);
 }
 
+// Every named camera is checked, each problem naming the camera; a camera
+// in a cell that does not exist is refused when the store is opened.
+TEST(SceneValidation, ACameraOutsideItsCellIsNamed) {
+  TempDirectory temp;
+  generateDemoBuilding(temp / "demo", 3);
+  {
+    sql::Database db(temp / "demo/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("UPDATE cameras SET origin_y = origin_y + 100 WHERE name IN ('corridor', 'room-2')");
+  }
+  const std::vector<std::string> problems = validateSceneStore(SceneStore::open(temp / "demo"));
+  EXPECT_EQ(problems.size(), 2u) << joined(problems);
+  EXPECT_TRUE(hasProblem(problems, {"camera 'corridor': origin", "outside the bounds of its cell 0 ('corridor')"}))
+      << joined(problems);
+  EXPECT_TRUE(hasProblem(problems, {"camera 'room-2': origin", "cell 2 ('room-2')"})) << joined(problems);
+  {
+    sql::Database db(temp / "demo/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("UPDATE cameras SET cell = 99 WHERE name = 'dark-room'");
+  }
+  try {
+    SceneStore::open(temp / "demo");
+    ADD_FAILURE() << "a camera in cell 99 of 8 was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera 'dark-room' refers to cell 99"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PortalGeometry, OnABoxFaceOrNot) {
   const Bounds3 box(Vec3(0, 0, 0), Vec3(4, 3, 2));
   EXPECT_EQ(portalBoundaryProblem(box, {Vec3(4, 0, 0.5f), Vec3(4, 0, 1.5f), Vec3(4, 2, 1.5f)}), "");
