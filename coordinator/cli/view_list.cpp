@@ -9,41 +9,13 @@
 #include <stdexcept>
 
 #include "coordinator/job_limits.h"
+#include "common/util/json_non_finite.h"
 
 namespace portico::cli {
 
 namespace {
 constexpr size_t kMostViews = 10000;
 constexpr size_t kLongestName = 100;
-
-// JSON has no NaN or infinity, but Python's json module writes them as bare
-// NaN, Infinity and -Infinity: such a token outside a string becomes a
-// string holding it, so that the view and the field holding it are named.
-std::string quoteNonFiniteTokens(const std::string& text) {
-  std::string out;
-  out.reserve(text.size());
-  bool inString = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (inString) {
-      out += c;
-      if (c == '\\' && i + 1 < text.size()) out += text[++i];
-      else if (c == '"') inString = false;
-      continue;
-    }
-    if (c == '"') inString = true;
-    bool replaced = false;
-    for (const std::string_view token : {"-Infinity", "Infinity", "NaN"})
-      if (text.compare(i, token.size(), token) == 0) {
-        out += fmt::format("\"{}\"", token);
-        i += token.size() - 1;
-        replaced = true;
-        break;
-      }
-    if (!replaced) out += c;
-  }
-  return out;
-}
 
 bool safeFileName(const std::string& name) {
   if (name.empty() || name.size() > kLongestName || name[0] == '.' || name[0] == '-') return false;
@@ -112,7 +84,9 @@ class ViewReader {
   }
 
   double number(const std::string& key, const nlohmann::json& value, double least, double most) const {
-    if (value.is_string()) fail(fmt::format("\"{}\" is {}, not a number", key, value.get<std::string>()));
+    if (value.is_string())
+      if (const auto literal = nonFiniteLiteral(value.get<std::string>()))
+        fail(fmt::format("\"{}\" is {}, not a number", key, *literal));
     if (!value.is_number()) fail(fmt::format("\"{}\" must be a number, not {}", key, value.type_name()));
     const double x = value.get<double>();
     if (!std::isfinite(x) || x < least || x > most)
@@ -167,7 +141,7 @@ std::vector<View> readViewList(const std::string& path) {
   const std::string text(std::istreambuf_iterator<char>(in), {});
   nlohmann::json document;
   try {
-    document = nlohmann::json::parse(quoteNonFiniteTokens(text));
+    document = nlohmann::json::parse(markNonFiniteLiterals(text));
   } catch (const nlohmann::json::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}: not JSON (byte {})", path, e.byte));
   }

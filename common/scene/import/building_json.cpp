@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "common/scene/store/portal_geometry.h"
+#include "common/util/json_non_finite.h"
 
 namespace portico {
 
@@ -31,48 +32,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-// JSON has no NaN or infinity, but Python's json module (and others) write
-// NaN, Infinity and -Infinity. They are turned into marker strings before
-// parsing, so the error can name the field instead of a character offset.
-constexpr const char* kNonFiniteMarker = "\x01non-finite:";
-
-std::string markNonFiniteLiterals(const std::string& text) {
-  static const char* const kLiterals[] = {"-Infinity", "Infinity", "NaN", "-inf", "inf", "-nan", "nan"};
-  std::string out;
-  out.reserve(text.size());
-  bool inString = false;
-  for (size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (inString) {
-      out += c;
-      if (c == '\\' && i + 1 < text.size()) {
-        out += text[++i];
-      } else if (c == '"') {
-        inString = false;
-      }
-      continue;
-    }
-    if (c == '"') {
-      inString = true;
-      out += c;
-      continue;
-    }
-    bool replaced = false;
-    for (const char* literal : kLiterals) {
-      const std::string_view word(literal);
-      if (text.compare(i, word.size(), word) != 0) continue;
-      const size_t end = i + word.size();
-      if (end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) || text[end] == '_')) continue;
-      out += fmt::format("\"\\u0001non-finite:{}\"", word);   // parses to kNonFiniteMarker + word
-      i = end - 1;
-      replaced = true;
-      break;
-    }
-    if (!replaced) out += c;
-  }
-  return out;
-}
 
 // Keys that describe rather than define (the reference scenes carry them):
 // accepted anywhere and ignored, like every key starting with '_'.
@@ -96,8 +55,7 @@ class Reader {
   float number(const json& value, const std::string& what) const {
     if (value.is_string()) {
       const std::string text = value.get<std::string>();
-      if (text.rfind(kNonFiniteMarker, 0) == 0)
-        fail(fmt::format("{} is {}, not a finite number", what, text.substr(std::string(kNonFiniteMarker).size())));
+      if (const auto literal = nonFiniteLiteral(text)) fail(fmt::format("{} is {}, not a finite number", what, *literal));
     }
     if (!value.is_number()) fail(fmt::format("{} must be a number, not {}", what, value.type_name()));
     const double number = value.get<double>();
