@@ -55,17 +55,22 @@ bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && 
 
 std::string text(const Vec3& v) { return fmt::format("{},{},{}", v.x, v.y, v.z); }
 
+// A store camera as a job's camera, exactly as stored (its cell too).
+JobCamera jobCameraOf(const Camera& stored) {
+  return {stored.origin, stored.target, stored.up, stored.fovYDegrees, stored.cell};
+}
+
 // The store's camera, or the job's with its automatic parts (up, fov) taken
 // from the store's and its cell located; refuses, naming the option, a
 // camera that cannot trace.
 JobCamera resolveCamera(const std::optional<JobCamera>& chosen, const SceneStore& scene) {
   const Camera& own = scene.camera();
-  const JobCamera stores{own.origin, own.target, own.up, own.fovYDegrees, own.cell};
+  const JobCamera stores = jobCameraOf(own);
   // The store's camera, given or left out, is used exactly as stored.
   if (!chosen || *chosen == stores) return stores;
   // A named store camera, resolved already, keeps its stored cell.
   for (const Camera& named : scene.cameras())
-    if (*chosen == JobCamera{named.origin, named.target, named.up, named.fovYDegrees, named.cell}) return *chosen;
+    if (*chosen == jobCameraOf(named)) return *chosen;
   JobCamera camera = *chosen;
   if (camera.up == Vec3(0.0f)) camera.up = own.up;
   if (camera.fovYDegrees == 0) camera.fovYDegrees = own.fovYDegrees;
@@ -119,7 +124,7 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
     if (const std::string problem = cameraChoiceProblem(settings); !problem.empty())
       throw std::invalid_argument(problem);
     const Camera& named = namedCamera(settings.cameraName, scene);
-    settings.camera = JobCamera{named.origin, named.target, named.up, named.fovYDegrees, named.cell};
+    settings.camera = jobCameraOf(named);
     settings.cameraName.clear();
     sizeFrom = &named;
   }

@@ -5,6 +5,7 @@
 
 #include <stdlib.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -142,10 +143,13 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   status.erase("cell_accelerators");   // one entry per cell: the statistics file has it
   const auto counters = store.counters(job.id);
   const int64_t photonsDone = status["photons"]["absorbed"].get<int64_t>() + status["photons"]["escaped"].get<int64_t>();
-  // The passes started so far: a job in passes does not know how many it will take.
-  const RenderProgress passes = loadRenderProgress(store.database(), job.id);
-  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() *
-                          std::max(passes.passesStarted, passes.passesDone());
+  // The passes started so far (the statistics' own count: the one being
+  // rendered, else those done, at least one): a job in passes does not
+  // know how many it will take.
+  const auto& passes = status["render_passes"];
+  const uint32_t passesCounted = std::max<uint32_t>(
+      {1u, passes["current"].is_number() ? passes["current"].get<uint32_t>() : 0u, passes["done"].get<uint32_t>()});
+  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() * passesCounted;
   status["progress"] = {{"photons_done", photonsDone},
                         {"photons_total", spec.getPhotons()},
                         {"camera_rays_done", get(counters, "rays.camera")},

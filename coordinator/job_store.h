@@ -141,9 +141,9 @@ class JobStore {
   // Back to the start of the photon pass: the job's work, photons, film,
   // render passes and counters dropped (its photon file cut to nothing),
   // state photons, a photon pass of its own (no longer anyone else's, nor
-  // complete); the
-  // counter kPhotonPassRestarts alone is kept, and incremented. The caller
-  // queues the emission again, in the same transaction.
+  // complete); the counter kPhotonPassRestarts alone is kept, and
+  // incremented. The caller queues the emission again, in the same
+  // transaction.
   static constexpr const char* kPhotonPassRestarts = "restarts.photon_pass";
   void restartJob(uint64_t job, int64_t nowMs);
 

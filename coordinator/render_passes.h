@@ -11,7 +11,7 @@
 //
 // jobs.db keeps the pass count, each pass's end and estimate, the stop
 // reason, and per 16x16 block the statistics of the passes so far
-// (render_progress and render_passes, JobStore schema 6), all written with
+// (render_progress and render_passes, JobStore schema 7), all written with
 // the pass's end in one transaction: a coordinator killed at any moment
 // resumes the pass in progress, with its seed.
 #pragma once
@@ -51,8 +51,8 @@ uint64_t passSeed(uint64_t seed, uint32_t index);
 // What jobs.db says of the job's passes (a job without a row: one pass started).
 RenderProgress loadRenderProgress(sql::Database& db, uint64_t job);
 
-// After pass `passesDone` (ended at `renderElapsedMs` of render): another
-// pass, or why not. `passEndsMs`: each finished pass's end, in ms of render.
+// After the passes that ended at `passEndsMs` (ms of render, one per
+// finished pass, the last just now): another pass, or why not.
 PassStop stopAfterPass(wire::JobSpec::Reader spec, std::optional<double> errorEstimate,
                        const std::vector<int64_t>& passEndsMs);
 

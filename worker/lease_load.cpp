@@ -88,14 +88,13 @@ uint32_t photonMapBuild(const JobSettings& parameters) {
   return 2 | (parameters.irradianceK() << 2);
 }
 
-PhotonMapKey photonMapKey(wire::Assign::Reader assign, const JobSettings& parameters, uint32_t cell) {
+uint64_t photonJobOf(wire::Assign::Reader assign) {
   // A coordinator always names it (protocol 9); 0 would mean the lease's own job.
-  const uint64_t photonJob = assign.getPhotonJob() ? assign.getPhotonJob() : assign.getJob();
-  return {photonJob, cell, photonMapBuild(parameters)};
+  return assign.getPhotonJob() ? assign.getPhotonJob() : assign.getJob();
 }
 
 PhotonMapKey photonMapKey(wire::Assign::Reader assign) {
-  return photonMapKey(assign, jobSettingsFromWire(assign.getSpec()), assign.getCell());
+  return {photonJobOf(assign), assign.getCell(), photonMapBuild(jobSettingsFromWire(assign.getSpec()))};
 }
 
 LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assign::Reader assign,
@@ -107,7 +106,7 @@ LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assig
   lease.scene = &cache.scene(storeDirectory);
   // The coordinator resolved every automatic value (resolveJobSettings).
   lease.parameters = jobSettingsFromWire(spec);
-  lease.photonJob = photonMapKey(assign, lease.parameters, cellId).photonJob;
+  lease.photonJob = photonJobOf(assign);
   lease.renderPhase = assign.getPhase() == wire::Phase::RENDER;
   lease.accel = lease.renderPhase ? lease.parameters.renderAccel : lease.parameters.accel;
   lease.cell = &cellWithAccelerator(cache, chooser, lease, cellId, assign.getCellWork(), lease.renderPhase);

@@ -19,9 +19,10 @@ namespace portico {
 // photons it keeps (all for final gathering, else those that bounced), and
 // whether it precomputes irradiance, with which k. Part of PhotonMapKey.
 uint32_t photonMapBuild(const JobSettings& parameters);
-// The photon map a render lease of `assign` reads for `cell` (its own cell
-// or one it forwards rays to).
-PhotonMapKey photonMapKey(wire::Assign::Reader assign, const JobSettings& parameters, uint32_t cell);
+// The job whose photon tables a lease of `assign` reads (Assign.photonJob).
+uint64_t photonJobOf(wire::Assign::Reader assign);
+// The photon map a render lease of `assign` reads for its own cell
+// (LoadedLease::mapKey: for any cell it traces).
 PhotonMapKey photonMapKey(wire::Assign::Reader assign);
 
 struct LoadedLease {

@@ -232,7 +232,7 @@ int runWait(const ConnectOptions& connect, uint64_t job, bool quiet) {
     const auto status = nlohmann::json::parse(client.statusJson(job));
     display.update(status);
     const std::string state = status.value("state", "");
-    if (state == "done" || state == "failed" || state == "cancelled") {
+    if (jobEnded(state)) {
       display.finish(status);
       // Done, but its image could not be written: the status says how to get it.
       return state == "done" && status.value("error", "").empty() ? 0 : 1;

@@ -10,6 +10,9 @@ namespace portico::cli {
 
 std::string describeStatus(const nlohmann::json& status);
 
+// A job's state as status reports it: done, failed or cancelled (no more work).
+inline bool jobEnded(const std::string& state) { return state == "done" || state == "failed" || state == "cancelled"; }
+
 class ProgressDisplay {
  public:
   explicit ProgressDisplay(bool quiet);

@@ -38,7 +38,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
     }
     display.update(status);
     state = status.value("state", "");
-    if (state == "done" || state == "failed" || state == "cancelled") break;
+    if (jobEnded(state)) break;
     if (const auto failure = services.failure()) {
       state = "failed";
       status["error"] = *failure;

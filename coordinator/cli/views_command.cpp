@@ -18,6 +18,7 @@
 #include "common/net/client.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/local_services.h"
+#include "coordinator/cli/progress.h"
 #include "coordinator/cli/view_list.h"
 
 namespace portico::cli {
@@ -25,8 +26,6 @@ namespace portico::cli {
 void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message);
 
 namespace {
-bool ended(const std::string& state) { return state == "done" || state == "failed" || state == "cancelled"; }
-
 // Every view's submit message, checked before anything starts.
 std::vector<std::unique_ptr<capnp::MallocMessageBuilder>> viewSubmits(const JobSettings& base,
                                                                       const std::vector<View>& views,
@@ -62,7 +61,7 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
             const std::function<bool()>& until) {
   while (!interrupted() && !until()) {
     for (ViewJob& j : jobs) {
-      if (ended(j.state)) continue;
+      if (jobEnded(j.state)) continue;
       nlohmann::json status;
       try {
         status = nlohmann::json::parse(client.statusJson(j.job));
@@ -71,7 +70,7 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
         throw;
       }
       j.state = status.value("state", "");
-      if (!ended(j.state)) continue;
+      if (!jobEnded(j.state)) continue;
       const auto& reused = status["photon_pass"]["reused_from_job"];
       std::cout << fmt::format("view {}: job {} {} in {:.2f} s{}{}", j.view->name, j.job, j.state,
                                status.value("elapsed_s", 0.0),
@@ -82,7 +81,7 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
     }
     if (const auto failure = services.failure()) {
       for (ViewJob& j : jobs)
-        if (!ended(j.state)) j.state = "failed";
+        if (!jobEnded(j.state)) j.state = "failed";
       std::cerr << *failure << "\n";
       return;
     }
@@ -118,14 +117,14 @@ int runViews(const JobSettings& base, const LocalRunOptions& local, const ViewsO
   }
   follow(client, services, jobs, [&] {
     for (const ViewJob& j : jobs)
-      if (!ended(j.state)) return false;
+      if (!jobEnded(j.state)) return false;
     return true;
   });
   if (interrupted()) {
     net::CoordinatorClient quick(services.endpoint(), services.keys(), std::chrono::seconds(1));
     for (ViewJob& j : jobs) {
       try {
-        if (!ended(j.state)) quick.cancel(j.job);
+        if (!jobEnded(j.state)) quick.cancel(j.job);
       } catch (const std::exception&) {
       }
     }
