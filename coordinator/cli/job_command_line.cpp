@@ -33,8 +33,9 @@ void addRender(CLI::App& app, CommandTable& table) {
       ->check(CLI::ExistingDirectory);
   auto* views = renderCommand->add_option(
       "--views", o->views.file,
-      "a JSON file of views (name, look_from, look_at, optional up, fov, width, height, spp) rendered after one "
-      "photon pass; -o then names a directory, each image is DIR/<name>.<format>");
+      "a JSON file of views (name, and camera (a store camera) or look_from, look_at, optional up, fov; optional "
+      "width, height, spp) rendered after one photon pass; -o then names a directory, each image is "
+      "DIR/<name>.<format>");
   views->check(CLI::ExistingFile);
   renderCommand->add_option("--format", o->views.format, "with --views: the images' format")
       ->capture_default_str()

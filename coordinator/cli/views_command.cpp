@@ -91,9 +91,9 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
 }  // namespace
 
 int runViews(const JobSettings& base, const LocalRunOptions& local, const ViewsOptions& options) {
-  if (base.camera)
-    throw std::invalid_argument("--views gives each view its camera: --look-from, --look-at, --up and --fov go in "
-                                "the views file");
+  if (base.camera || !base.cameraName.empty())
+    throw std::invalid_argument("--views gives each view its camera: --camera, --look-from, --look-at, --up and --fov "
+                                "go in the views file");
   const std::vector<View> views = readViewList(options.file);
   checkViewsAgainstStore(views, SceneStore::open(base.store), options.file);
   auto submits = viewSubmits(base, views, options);

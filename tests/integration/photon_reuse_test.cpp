@@ -269,6 +269,18 @@ TEST_F(PhotonReuse, AViewNamingAStoreCameraHasTheBitsOfThatCameraRenderedAlone) 
   EXPECT_EQ(differingFloats(dir_ / "views-named" / "stored.exr", dir_ / "alone-default.exr"), 0u);
 }
 
+// A camera for every view from the command line is refused: each view has its own.
+TEST_F(PhotonReuse, ViewsRefuseACameraGivenForThemAll) {
+  const fs::path views = writeFile("one-view.json", R"([{"name": "a", "camera": "default"}])");
+  for (const std::vector<std::string>& extra :
+       {std::vector<std::string>{"--camera", "default"}, {"--look-from", "3,1,1", "--look-at", "0,1,0"}}) {
+    const std::string run = "views-with-" + extra[0].substr(2);
+    EXPECT_NE(renderViews(run, 1, views.string(), extra), 0) << run;
+    const std::string log = readFile(dir_ / (run + ".log"));
+    EXPECT_NE(log.find("--views gives each view its camera"), std::string::npos) << log;
+  }
+}
+
 // Each refusal is one line naming the view and the problem, before any
 // service starts (nothing is written in the output directory).
 TEST_F(PhotonReuse, BadViewsFilesAreRefusedInOneLineNamingTheViewAndTheProblem) {
