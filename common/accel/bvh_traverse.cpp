@@ -33,8 +33,11 @@
 // NaN leaves the running entry and exit as they were (the child is visited).
 // Rays whose reciprocals overflow (a denormal component) or are denormal or
 // zero (a component beyond 2^126) test every packet instead.
+#include <emmintrin.h>
+
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "common/accel/bvh.h"
@@ -83,10 +86,21 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
   if (direction[0] == 0.0f && direction[1] == 0.0f && direction[2] == 0.0f) return false;
 
   // Per-ray constants: reciprocals, near sides, and the margin.
+  // The three reciprocals in one division (the same correctly rounded
+  // quotients as three scalar ones); each must be normal, or infinite from
+  // a zero component.
   BvhSlabs slabs;
+  const __m128 directions = _mm_setr_ps(direction[0], direction[1], direction[2], 1.0f);
+  const __m128 inverses = _mm_div_ps(_mm_set1_ps(1.0f), directions);
+  const __m128 magnitudes = _mm_andnot_ps(_mm_set1_ps(-0.0f), inverses);
+  const __m128 usable = _mm_or_ps(_mm_cmpeq_ps(directions, _mm_setzero_ps()),
+                                  _mm_and_ps(_mm_cmpge_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::min())),
+                                             _mm_cmple_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::max()))));
+  if (_mm_movemask_ps(usable) != 0xf) return testEveryPacket<AnyHit>(ray, best);
+  alignas(16) float inverse[4];
+  _mm_store_ps(inverse, inverses);
   for (int axis = 0; axis < 3; ++axis) {
-    slabs.inverse[axis] = 1.0f / direction[axis];
-    if (direction[axis] != 0.0f && !std::isnormal(slabs.inverse[axis])) return testEveryPacket<AnyHit>(ray, best);
+    slabs.inverse[axis] = inverse[axis];
     slabs.nearSide[axis] = std::signbit(direction[axis]) ? 1 : 0;
   }
   const float margin = traversalMargin(tree_.bounds, origin);

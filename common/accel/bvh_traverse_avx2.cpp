@@ -38,16 +38,6 @@ bool bvhAvx2InUse() { return avx2InUse.load(std::memory_order_relaxed); }
 
 void useBvhAvx2(bool use) { avx2InUse.store(use && kAvx2Supported, std::memory_order_relaxed); }
 
-bool bvhAvx2Suits(const BvhSlabs& slabs) {
-  for (int axis = 0; axis < 3; ++axis) {
-    if (std::isinf(slabs.inverse[axis])) continue;   // a zero direction component: the axis is NaN, not used
-    if (!std::isfinite(slabs.nearOrigin[axis] * slabs.inverse[axis]) ||
-        !std::isfinite(slabs.farOrigin[axis] * slabs.inverse[axis]))
-      return false;
-  }
-  return true;
-}
-
 }  // namespace portico
 
 #pragma GCC push_options

@@ -2,6 +2,8 @@
 // the per-ray slab constants, and the entry to the AVX2 one.
 #pragma once
 
+#include <cmath>
+
 #include "common/accel/bvh_node.h"
 #include "common/ray.h"
 
@@ -26,7 +28,15 @@ void useBvhAvx2(bool use);
 // Whether the AVX2 box test keeps its guarantee for this ray: origin' *
 // inverse is finite on every axis whose inverse is (it overflows only for
 // directions near the smallest normal floats, which then take the SSE test).
-bool bvhAvx2Suits(const BvhSlabs& slabs);
+inline bool bvhAvx2Suits(const BvhSlabs& slabs) {
+  for (int axis = 0; axis < 3; ++axis) {
+    if (std::isinf(slabs.inverse[axis])) continue;   // a zero direction component: the axis is NaN, not used
+    if (!std::isfinite(slabs.nearOrigin[axis] * slabs.inverse[axis]) ||
+        !std::isfinite(slabs.farOrigin[axis] * slabs.inverse[axis]))
+      return false;
+  }
+  return true;
+}
 
 // The traversal of 8-wide trees with all eight boxes in one AVX2 test
 // (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse() and bvhAvx2Suits.

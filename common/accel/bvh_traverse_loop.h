@@ -11,6 +11,7 @@
 
 #include <bit>
 #include <cmath>
+#include <cstdint>
 
 #include "common/accel/bvh_node.h"
 #include "common/accel/bvh_traverse_avx2.h"
@@ -109,6 +110,17 @@ inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t chi
   return false;
 }
 
+// Where a child's node or first packet starts.
+template <int Width>
+inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets,
+                                uint32_t child) {
+  // Both computed, one chosen: no branch to mispredict.
+  const uintptr_t leaf = reinterpret_cast<uintptr_t>(packets) +
+                         uintptr_t(bvh_child::firstPacket(child)) * sizeof(grid_traversal::TrianglePacket);
+  const uintptr_t node = reinterpret_cast<uintptr_t>(nodes) + uintptr_t(child) * sizeof(BvhNode<Width>);
+  return reinterpret_cast<const char*>(bvh_child::isLeaf(child) ? leaf : node);
+}
+
 // Nearest hit (or, with AnyHit, any hit) of the ray in the tree, from the
 // root; best holds what was found. The ray is finite, with tMin < tMax,
 // and slabs hold its constants.
@@ -130,26 +142,20 @@ template <int Width, bool AnyHit, class Boxes>
       float entries[Width];
       unsigned crossed = boxes.crossed(node, ray.tMin, best.t < ray.tMax ? best.t : ray.tMax, entries);
       if (crossed == 0) goto nextStacked;
-      // Every child entered is loaded soon (the nearest next, the others
-      // when popped): start their cache misses now, side by side.
-      for (unsigned bits = crossed; bits != 0; bits &= bits - 1) {
-        const uint32_t child = node.child[std::countr_zero(bits)];
-        const char* const address =
-            bvh_child::isLeaf(child) ? reinterpret_cast<const char*>(packets + bvh_child::firstPacket(child))
-                                     : reinterpret_cast<const char*>(nodes + child);
-        __builtin_prefetch(address);
-        __builtin_prefetch(address + 64);
-        __builtin_prefetch(address + 128);
-      }
       if ((crossed & (crossed - 1)) == 0) {
         current = node.child[std::countr_zero(crossed)];
         continue;
       }
-      // Two or more: sorted farthest first onto the stack; the nearest is next.
+      // Two or more: sorted farthest first onto the stack; the nearest is
+      // next. Each is loaded soon (the nearest next, the others when
+      // popped): start their cache misses now, side by side.
       BvhStackEntry* const first = stack + pending;
       for (; crossed != 0; crossed &= crossed - 1) {
         const int k = std::countr_zero(crossed);
         const BvhStackEntry entry{node.child[k], entries[k]};
+        __builtin_prefetch(childAddress(nodes, packets, entry.child));
+        __builtin_prefetch(childAddress(nodes, packets, entry.child) + 64);
+        __builtin_prefetch(childAddress(nodes, packets, entry.child) + 128);
         BvhStackEntry* slot = stack + pending++;
         while (slot != first && slot[-1].entry < entry.entry) {
           *slot = slot[-1];

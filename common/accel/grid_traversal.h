@@ -251,7 +251,7 @@ inline PacketLanes packetLanes(const TrianglePacket& packet, const PacketRay& pa
 
 // Bit k set where lane k of the mask is.
 inline unsigned laneBits(PacketLanes::Int4 mask) {
-  return unsigned(mask[0] & 1) | unsigned(mask[1] & 2) | unsigned(mask[2] & 4) | unsigned(mask[3] & 8);
+  return unsigned(_mm_movemask_ps(reinterpret_cast<__m128>(mask)));   // every lane is all ones or zero
 }
 
 // The lanes of `packet` that may hit (bit k: lane k). A lane is dropped
