@@ -3,7 +3,8 @@
 // program still runs on any x86-64. Every header is included before the
 // target pragma, so the inline functions they define stay baseline code;
 // only the loop (bvh_traverse_loop.h, internal linkage) and the box test
-// below are compiled for AVX2. The box test takes each slab's distance in
+// below are compiled for AVX2, with the leaves' triangle test on eight
+// lanes (testLeaf8). The box test takes each slab's distance in
 // one fused multiply-add, t = bound * inverse - origin' * inverse, with
 // origin' * inverse rounded once per ray: its rounding is at most one ulp of
 // origin' in distance, inside the margin's allowance for the origin
@@ -49,10 +50,118 @@ namespace portico {
 
 namespace {
 
+// The 8-lane form of testLeaf, for the AVX2 traversal: a leaf's packets two
+// at a time (packet p in lanes 0-3, p + 1 in lanes 4-7; an odd last packet
+// alone, its upper lanes off). Each lane computes grid_traversal::
+// packetLanes's operations on its triangle, in the same order, so gets the
+// same U, V, W, det and t bit for bit; a lane kept is then decided exactly as
+// testLeaf decides it.
+using Float8 = float __attribute__((vector_size(32)));
+using Int8 = int32_t __attribute__((vector_size(32)));
+
+inline Float8 widen(grid_traversal::PacketRay::Float4 x) { return __builtin_shufflevector(x, x, 0, 1, 2, 3, 0, 1, 2, 3); }
+
+struct PacketRay8 {
+  Float8 originX, originY, originZ, shearX, shearY, scaleZ, tMin, tMax;
+  int kx, ky, kz;
+  explicit PacketRay8(const grid_traversal::PacketRay& ray) : kx(ray.kx), ky(ray.ky), kz(ray.kz) {
+    originX = widen(ray.originX), originY = widen(ray.originY), originZ = widen(ray.originZ);
+    shearX = widen(ray.shearX), shearY = widen(ray.shearY), scaleZ = widen(ray.scaleZ);
+    tMin = widen(ray.tMin), tMax = widen(ray.tMax);
+  }
+};
+
+// Bit k set where lane k of the mask is (every lane all ones or zero).
+inline unsigned laneBits8(Int8 mask) {
+  const grid_traversal::PacketLanes::Int4 low = __builtin_shufflevector(mask, mask, 0, 1, 2, 3);
+  const grid_traversal::PacketLanes::Int4 high = __builtin_shufflevector(mask, mask, 4, 5, 6, 7);
+  return grid_traversal::laneBits(low) | grid_traversal::laneBits(high) << 4;
+}
+
+struct PacketLanes8 {
+  Float8 t, det, V, W;
+  unsigned candidates = 0, doubtful = 0;   // bit k: lane k (see grid_traversal::PacketLanes)
+};
+
+template <bool AnyHit>
+inline PacketLanes8 packetLanes8(const grid_traversal::TrianglePacket& low, const grid_traversal::TrianglePacket& high,
+                                 const PacketRay8& ray, float bestT) {
+  const auto load = [&](int vertex, int axis) {
+    grid_traversal::PacketRay::Float4 a, b;
+    std::memcpy(&a, low.v[vertex][axis], sizeof(a));
+    std::memcpy(&b, high.v[vertex][axis], sizeof(b));
+    return __builtin_shufflevector(a, b, 0, 1, 2, 3, 4, 5, 6, 7);
+  };
+  const Float8 az = load(0, ray.kz) - ray.originZ;
+  const Float8 bz = load(1, ray.kz) - ray.originZ;
+  const Float8 cz = load(2, ray.kz) - ray.originZ;
+  const Float8 Ax = (load(0, ray.kx) - ray.originX) - ray.shearX * az;
+  const Float8 Ay = (load(0, ray.ky) - ray.originY) - ray.shearY * az;
+  const Float8 Bx = (load(1, ray.kx) - ray.originX) - ray.shearX * bz;
+  const Float8 By = (load(1, ray.ky) - ray.originY) - ray.shearY * bz;
+  const Float8 Cx = (load(2, ray.kx) - ray.originX) - ray.shearX * cz;
+  const Float8 Cy = (load(2, ray.ky) - ray.originY) - ray.shearY * cz;
+  PacketLanes8 lanes;
+  const Float8 U = Cx * By - Cy * Bx;
+  lanes.V = Ax * Cy - Ay * Cx;
+  lanes.W = Bx * Ay - By * Ax;
+  const Float8 zero{};
+  const Int8 negative = (U < zero) | (lanes.V < zero) | (lanes.W < zero);
+  const Int8 positive = (U > zero) | (lanes.V > zero) | (lanes.W > zero);
+  const Int8 anyZero = (U == zero) | (lanes.V == zero) | (lanes.W == zero);
+  const Int8 signsAgree = ~(negative & positive) | anyZero;
+  if (laneBits8(signsAgree) == 0) return lanes;
+  lanes.det = U + lanes.V + lanes.W;
+  const Float8 T = U * (ray.scaleZ * az) + lanes.V * (ray.scaleZ * bz) + lanes.W * (ray.scaleZ * cz);
+  lanes.t = T / lanes.det;
+  Int8 inRange = (lanes.t > ray.tMin) & (lanes.t < ray.tMax);
+  if constexpr (!AnyHit) inRange &= lanes.t <= Float8{bestT, bestT, bestT, bestT, bestT, bestT, bestT, bestT};
+  lanes.candidates = laneBits8((signsAgree & inRange) | anyZero);
+  lanes.doubtful = laneBits8(anyZero);
+  return lanes;
+}
+
+template <bool AnyHit>
+inline bool testLeaf8(const grid_traversal::TrianglePacket* packets, uint32_t child, const PacketRay8& packetRay,
+                      const WatertightRay& frame, const Ray& ray, Hit& best) {
+  const grid_traversal::TrianglePacket* packet = packets + bvh_child::firstPacket(child);
+  const grid_traversal::TrianglePacket* const end = packet + bvh_child::packetCount(child);
+  for (; packet < end; packet += 2) {
+    const bool pair = packet + 1 != end;
+    const PacketLanes8 lanes = packetLanes8<AnyHit>(*packet, pair ? packet[1] : *packet, packetRay, best.t);
+    unsigned candidates = lanes.candidates & (pair ? 0xffu : 0x0fu);
+    if (candidates == 0) continue;
+    if constexpr (AnyHit) {
+      if (candidates & ~lanes.doubtful) return true;
+    }
+    for (; candidates != 0; candidates &= candidates - 1) {
+      const int lane = std::countr_zero(candidates);
+      const grid_traversal::TrianglePacket& triangles = packet[lane >> 2];
+      const int slot = lane & 3;
+      const uint32_t primitive = triangles.primitive[slot];
+      Hit hit{lanes.t[lane], primitive, 0, 0};
+      if (lanes.doubtful & (1u << lane)) {
+        const Vec3 v0{triangles.v[0][0][slot], triangles.v[0][1][slot], triangles.v[0][2][slot]};
+        const Vec3 v1{triangles.v[1][0][slot], triangles.v[1][1][slot], triangles.v[1][2][slot]};
+        const Vec3 v2{triangles.v[2][0][slot], triangles.v[2][1][slot], triangles.v[2][2][slot]};
+        if (!intersectTriangle(frame, ray, v0, v1, v2, hit.t, hit.u, hit.v)) continue;
+        if constexpr (AnyHit) return true;
+      } else {
+        if (!closerThan(hit.t, primitive, best)) continue;
+        hit.u = lanes.V[lane] / lanes.det[lane];
+        hit.v = lanes.W[lane] / lanes.det[lane];
+      }
+      if (closerThan(hit.t, primitive, best)) best = hit;
+    }
+  }
+  return false;
+}
+
 struct Avx2Boxes {
   __m256 nearScaled[3], farScaled[3], inverse[3];   // origin' * inverse, near and far
   int nearSide[3];
-  explicit Avx2Boxes(const BvhSlabs& slabs) {
+  PacketRay8 packetRay;
+  Avx2Boxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay4) : packetRay(packetRay4) {
     for (int axis = 0; axis < 3; ++axis) {
       nearScaled[axis] = _mm256_set1_ps(slabs.nearOrigin[axis] * slabs.inverse[axis]);
       farScaled[axis] = _mm256_set1_ps(slabs.farOrigin[axis] * slabs.inverse[axis]);
@@ -74,6 +183,12 @@ struct Avx2Boxes {
     }
     _mm256_storeu_ps(entries, enter);
     return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(enter, exit, _CMP_LE_OQ)));
+  }
+  // A leaf's packets two at a time.
+  template <bool AnyHit>
+  bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t child, const WatertightRay& frame,
+                const Ray& ray, Hit& best) const {
+    return testLeaf8<AnyHit>(packets, child, packetRay, frame, ray, best);
   }
 };
 

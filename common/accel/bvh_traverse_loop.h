@@ -21,45 +21,6 @@
 namespace portico {
 namespace {
 
-// SSE: four children per test; an 8-wide node takes two.
-struct SseBoxes {
-  __m128 nearOrigin[3], farOrigin[3], inverse[3];
-  int nearSide[3];
-  explicit SseBoxes(const BvhSlabs& slabs) {
-    for (int axis = 0; axis < 3; ++axis) {
-      nearOrigin[axis] = _mm_set1_ps(slabs.nearOrigin[axis]);
-      farOrigin[axis] = _mm_set1_ps(slabs.farOrigin[axis]);
-      inverse[axis] = _mm_set1_ps(slabs.inverse[axis]);
-      nearSide[axis] = slabs.nearSide[axis];
-    }
-  }
-  // Where the ray enters each of four boxes (the latest entry over the axes
-  // and tStart), and which it crosses before tLimit (bit k: box k). Box k's
-  // bounds are box[axis][side][offset + k].
-  template <int Width>
-  unsigned crossed4(const BvhNode<Width>& node, int offset, __m128 tStart, __m128 tLimit, float* entries) const {
-    __m128 enter = tStart, exit = tLimit;
-    for (int axis = 0; axis < 3; ++axis) {
-      const __m128 nearBound = _mm_load_ps(node.box[axis][nearSide[axis]] + offset);
-      const __m128 farBound = _mm_load_ps(node.box[axis][1 - nearSide[axis]] + offset);
-      const __m128 tNear = _mm_mul_ps(_mm_sub_ps(nearBound, nearOrigin[axis]), inverse[axis]);
-      const __m128 tFar = _mm_mul_ps(_mm_sub_ps(farBound, farOrigin[axis]), inverse[axis]);
-      // NaN (an origin on a face of a slab the ray runs in) keeps the second operand.
-      enter = _mm_max_ps(tNear, enter);
-      exit = _mm_min_ps(tFar, exit);
-    }
-    _mm_storeu_ps(entries, enter);
-    return unsigned(_mm_movemask_ps(_mm_cmple_ps(enter, exit)));
-  }
-  template <int Width>
-  unsigned crossed(const BvhNode<Width>& node, float tStart, float tLimit, float* entries) const {
-    const __m128 start = _mm_set1_ps(tStart), limit = _mm_set1_ps(tLimit);
-    unsigned bits = crossed4(node, 0, start, limit, entries);
-    if constexpr (Width == 8) bits |= crossed4(node, 4, start, limit, entries + 4) << 4;
-    return bits;
-  }
-};
-
 struct BvhStackEntry {
   uint32_t child;
   float entry;
@@ -110,6 +71,51 @@ inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t chi
   return false;
 }
 
+// SSE: four children per test; an 8-wide node takes two.
+struct SseBoxes {
+  __m128 nearOrigin[3], farOrigin[3], inverse[3];
+  int nearSide[3];
+  grid_traversal::PacketRay packetRay;
+  SseBoxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay) : packetRay(packetRay) {
+    for (int axis = 0; axis < 3; ++axis) {
+      nearOrigin[axis] = _mm_set1_ps(slabs.nearOrigin[axis]);
+      farOrigin[axis] = _mm_set1_ps(slabs.farOrigin[axis]);
+      inverse[axis] = _mm_set1_ps(slabs.inverse[axis]);
+      nearSide[axis] = slabs.nearSide[axis];
+    }
+  }
+  // Where the ray enters each of four boxes (the latest entry over the axes
+  // and tStart), and which it crosses before tLimit (bit k: box k). Box k's
+  // bounds are box[axis][side][offset + k].
+  template <int Width>
+  unsigned crossed4(const BvhNode<Width>& node, int offset, __m128 tStart, __m128 tLimit, float* entries) const {
+    __m128 enter = tStart, exit = tLimit;
+    for (int axis = 0; axis < 3; ++axis) {
+      const __m128 nearBound = _mm_load_ps(node.box[axis][nearSide[axis]] + offset);
+      const __m128 farBound = _mm_load_ps(node.box[axis][1 - nearSide[axis]] + offset);
+      const __m128 tNear = _mm_mul_ps(_mm_sub_ps(nearBound, nearOrigin[axis]), inverse[axis]);
+      const __m128 tFar = _mm_mul_ps(_mm_sub_ps(farBound, farOrigin[axis]), inverse[axis]);
+      // NaN (an origin on a face of a slab the ray runs in) keeps the second operand.
+      enter = _mm_max_ps(tNear, enter);
+      exit = _mm_min_ps(tFar, exit);
+    }
+    _mm_storeu_ps(entries, enter);
+    return unsigned(_mm_movemask_ps(_mm_cmple_ps(enter, exit)));
+  }
+  template <int Width>
+  unsigned crossed(const BvhNode<Width>& node, float tStart, float tLimit, float* entries) const {
+    const __m128 start = _mm_set1_ps(tStart), limit = _mm_set1_ps(tLimit);
+    unsigned bits = crossed4(node, 0, start, limit, entries);
+    if constexpr (Width == 8) bits |= crossed4(node, 4, start, limit, entries + 4) << 4;
+    return bits;
+  }
+  template <bool AnyHit>
+  bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t child, const WatertightRay& frame,
+                const Ray& ray, Hit& best) const {
+    return portico::testLeaf<AnyHit>(packets, child, packetRay, frame, ray, best);
+  }
+};
+
 // Where a child's node or first packet starts.
 template <int Width>
 inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets,
@@ -126,9 +132,8 @@ inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversa
 // and slabs hold its constants.
 template <int Width, bool AnyHit, class Boxes>
 [[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best) {
-  const Boxes boxes(slabs);
   const WatertightRay frame(ray.direction);
-  const grid_traversal::PacketRay packetRay(frame, ray);
+  const Boxes boxes(slabs, grid_traversal::PacketRay(frame, ray));
   const BvhNode<Width>* const nodes = tree.nodes.data();
   const grid_traversal::TrianglePacket* const packets = tree.packets.data();
   BvhStackEntry stack[(Width - 1) * kBvhMaxDepth + 1];
@@ -166,7 +171,7 @@ template <int Width, bool AnyHit, class Boxes>
       current = stack[--pending].child;
     }
 
-    if (testLeaf<AnyHit>(packets, current, packetRay, frame, ray, best) && AnyHit) return true;
+    if (boxes.template testLeaf<AnyHit>(packets, current, frame, ray, best) && AnyHit) return true;
 
   nextStacked:
     // The next stacked child that may hold a hit at best.t or nearer.
