@@ -5,8 +5,8 @@
 // spare lane) in one array, partitioned in place: a node's triangles are a
 // contiguous range of it. A node starts as one child holding its whole
 // range; the child of largest surface area is split by the best of 32
-// binned SAH planes per axis (16 below 1024 references; centroids
-// binned; ranges of 8192 references
+// binned SAH planes per axis (16 below 1024 references, 8 below 32;
+// centroids binned; ranges of 8192 references
 // or more bin every k-th, 4096 to 8191 of them), until the node has Width
 // children or none is worth splitting. Costs count triangles in packets of four, as the leaves test
 // them (Embree's block size), so a range of at most four triangles is one
@@ -31,10 +31,14 @@ namespace {
 
 
 // Bins per axis: 32 for ranges of kFineBinning references or more, where a
-// better plane pays for the longer sweep many times over, 16 below.
+// better plane pays for the longer sweep many times over, 16 below, and 8
+// below kCoarseBinning, where clearing and sweeping the bins outweighs
+// binning the few references (builds 4-7 % faster, rays as fast).
 constexpr int kFineBins = 32;
 constexpr int kBins = 16;
 constexpr uint32_t kFineBinning = 1024;
+constexpr int kCoarseBins = 8;
+constexpr uint32_t kCoarseBinning = 32;
 // Ranges of at least this many references are binned into two sets of bins.
 constexpr uint32_t kTwoBinSets = 256;
 // Ranges of twice this many references or more bin every k-th, this many
@@ -198,7 +202,8 @@ class Builder {
 
   // The best binned SAH split of the range (axis -1: every centroid in one bin).
   Split findSplit(const Range& range) const {
-    return range.count() >= kFineBinning ? findSplitWith<kFineBins>(range) : findSplitWith<kBins>(range);
+    if (range.count() >= kFineBinning) return findSplitWith<kFineBins>(range);
+    return range.count() >= kCoarseBinning ? findSplitWith<kBins>(range) : findSplitWith<kCoarseBins>(range);
   }
 
   template <int kBins>
@@ -290,10 +295,18 @@ class Builder {
     __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
     __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
     __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
+    // bins(centroid)[axis] < split.bin, without the other axes: for x >= 0
+    // truncation gives a bin below split.bin exactly when x < split.bin
+    // (and clamping to the last bin keeps x >= split.bin on the right);
+    // x < 0 is bin 0 either way.
+    alignas(16) float base[4], scale[4];
+    _mm_store_ps(base, binning.base);
+    _mm_store_ps(scale, binning.scale);
+    const float axisBase = base[split.axis], axisScale = scale[split.axis], limit = float(split.bin);
     const auto goesLeft = [&](__m128 centroid) {
-      alignas(16) int32_t index[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(centroid));
-      return index[split.axis] < split.bin;
+      alignas(16) float c[4];
+      _mm_store_ps(c, centroid);
+      return (c[split.axis] - axisBase) * axisScale < limit;
     };
     uint32_t i = range.begin, j = range.end;
     while (i < j) {
