@@ -55,7 +55,9 @@ constexpr int kBvhMaxDepth = kBvhForcedMedianDepth + 33;
 template <int Width>
 struct BvhData {
   std::vector<BvhNode<Width>, CacheLineAllocator<BvhNode<Width>>> nodes;
-  std::vector<grid_traversal::TrianglePacket> packets;
+  // Aligned to a cache line, so that every packet (160 bytes) spans three
+  // lines, never four.
+  std::vector<grid_traversal::TrianglePacket, CacheLineAllocator<grid_traversal::TrianglePacket>> packets;
   Bounds3 bounds;   // of the triangles held: the root's box
 
   uint64_t leaves = 0;
