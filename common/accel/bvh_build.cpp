@@ -47,6 +47,10 @@ constexpr uint32_t kTwoBinSets = 256;
 constexpr uint32_t kSampledReferences = 4096;
 constexpr uint32_t kPacketSize = 4;
 constexpr uint32_t kAlwaysLeaf = 4;      // at most one packet: a leaf
+// 8-wide trees, traced with AVX2, test a leaf's packets two at a time
+// (testLeaf8): two packets cost about one, so up to eight triangles are a leaf.
+template <int Width>
+constexpr uint32_t kAlwaysLeafOf = Width == 8 ? 2 * kAlwaysLeaf : kAlwaysLeaf;
 constexpr uint32_t kMaxLeaf = 8;         // at most two: a leaf unless a split is cheaper
 // SAH costs, in units of one packet test: one wide node's box test.
 constexpr float kTraversalCost = 1.0f;
@@ -368,7 +372,7 @@ class Builder {
 
   // Splits the range in two; false when it should stay a leaf.
   bool split(const Range& range, int depth, Range& left, Range& right) {
-    if (range.count() <= kAlwaysLeaf) return false;
+    if (range.count() <= kAlwaysLeafOf<Width>) return false;
     if (depth >= kBvhForcedMedianDepth) {
       splitAtMedian(range, left, right);
       return true;
