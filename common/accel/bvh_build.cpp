@@ -21,6 +21,8 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <utility>
+#include <vector>
 
 #include "common/accel/bvh_node.h"
 #include "common/accel/triangle_intersect.h"
@@ -162,7 +164,6 @@ class Builder {
     if (root.count() == 0) return;
     // About what the furnished halls need (leaves of ~6 triangles in ~2 packets).
     out_.nodes.reserve(size_t(root.count()) / (2 * Width) + 2);
-    out_.packets.reserve(root.count() / 3 + 4);
     root.leaf = false;   // the root is always a node, even over one leaf
     alignas(16) float lo[4], hi[4];
     _mm_store_ps(lo, root.lo);
@@ -170,7 +171,7 @@ class Builder {
     out_.bounds = Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
     out_.triangles = root.count();
     buildNode(root, 1);
-    if (out_.packets.capacity() > out_.packets.size() + out_.packets.size() / 4) out_.packets.shrink_to_fit();
+    writePackets();
   }
 
  private:
@@ -437,33 +438,46 @@ class Builder {
     return index;
   }
 
+  // Numbers the leaf's packets; writePackets fills them once the tree is
+  // built and their count known (one exact allocation). A leaf's range of
+  // references stays as it is: later partitions touch only other ranges.
   uint32_t writeLeaf(const Range& range, int depth) {
-    const uint32_t first = uint32_t(out_.packets.size());
+    const uint32_t first = packetCount_;
     const uint32_t count = packets(range.count());
     if (first + count - 1 > bvh_child::kMaxFirstPacket)
       throw std::length_error("bvh: more than 2^28 triangle packets");
-    for (uint32_t p = 0; p < count; ++p) {
-      grid_traversal::TrianglePacket packet;
-      for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
-        const uint32_t r = std::min(range.begin + p * kPacketSize + lane, range.end - 1);
-        const uint32_t primitive = references_[r].primitive();
-        Vec3 v[3];
-        mesh_.triangle(primitive, v[0], v[1], v[2]);
-        for (int vertex = 0; vertex < 3; ++vertex)
-          for (int axis = 0; axis < 3; ++axis) packet.v[vertex][axis][lane] = v[vertex][axis];
-        packet.primitive[lane] = primitive;
-      }
-      out_.packets.push_back(packet);
-    }
+    packetCount_ += count;
+    leafRanges_.push_back({range.begin, range.end});
     ++out_.leaves;
     out_.depthSum += depth;
     out_.maxDepth = std::max<uint32_t>(out_.maxDepth, uint32_t(depth));
     return bvh_child::leaf(first, count);
   }
 
+  // The leaves' packets, in the order writeLeaf numbered them.
+  void writePackets() {
+    out_.packets.reserve(packetCount_);
+    for (const auto& [begin, end] : leafRanges_) {
+      for (uint32_t start = begin; start < end; start += kPacketSize) {
+        grid_traversal::TrianglePacket packet;
+        for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
+          const uint32_t primitive = references_[std::min(start + lane, end - 1)].primitive();
+          Vec3 v[3];
+          mesh_.triangle(primitive, v[0], v[1], v[2]);
+          for (int vertex = 0; vertex < 3; ++vertex)
+            for (int axis = 0; axis < 3; ++axis) packet.v[vertex][axis][lane] = v[vertex][axis];
+          packet.primitive[lane] = primitive;
+        }
+        out_.packets.push_back(packet);
+      }
+    }
+  }
+
   const MeshView& mesh_;
   BvhData<Width>& out_;
   std::vector<PrimitiveReference> references_;
+  std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's references
+  uint32_t packetCount_ = 0;
 };
 
 }  // namespace
