@@ -5,7 +5,7 @@
 // nodes whose children's boxes are tested four at a time with SSE, or all
 // eight at once with AVX2 where the processor has it; leaves
 // of up to eight triangles, copied into the 4-wide layout of the triangle
-// test. Traversal: children nearest first, an explicit stack, any-hit for
+// test (the AVX2 traversal tests two such packets at once). Traversal: children nearest first, an explicit stack, any-hit for
 // occluded(). The fastest of portico's structures to trace, and fast to
 // build: choose it for cells that take many rays.
 //

@@ -6,15 +6,18 @@
 // contiguous range of it. A node starts as one child holding its whole
 // range; the child of largest surface area is split by the best of 32
 // binned SAH planes per axis (16 below 1024 references, 8 below 32;
-// centroids binned; ranges of 8192 references
-// or more bin every k-th, 4096 to 8191 of them), until the node has Width
-// children or none is worth splitting. Costs count triangles in packets of four, as the leaves test
-// them (Embree's block size), so a range of at most four triangles is one
-// packet test and always a leaf, and one of at most eight becomes a leaf
-// unless a split is predicted cheaper. A range whose centroids all fall in
-// one bin, or one deeper than kBvhForcedMedianDepth, is cut at its
-// median instead. O(n log n): each level bins and partitions each triangle
-// of the levels' ranges a bounded number of times.
+// centroids binned; ranges of 8192 references or more bin every k-th,
+// 4096 to 8191 of them), until the node has Width children or none is
+// worth splitting. Costs count triangles in packets of four, as the leaves
+// test them (Embree's block size), so a range of at most four triangles is
+// one packet test and always a leaf, and one of at most eight becomes a
+// leaf unless a split is predicted cheaper (in 8-wide trees, whose AVX2
+// traversal tests two packets at once, always a leaf). A range whose
+// centroids all fall in one bin, or one deeper than kBvhForcedMedianDepth,
+// is cut at its median instead. The leaves' packets are written once the
+// tree is built, into one array of the exact size. O(n log n): each level
+// bins and partitions each triangle of the levels' ranges a bounded number
+// of times.
 #include <emmintrin.h>
 
 #include <algorithm>
