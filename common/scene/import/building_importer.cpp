@@ -47,18 +47,19 @@ bool isBuildingJson(const std::string& path) {
 
 Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
 
-// Materials, one per distinct (albedo, emission); the first name wins.
+// Materials, one per distinct (albedo, emission, texture); the first name wins.
 class MaterialTable {
  public:
-  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out) {
-    const std::array<float, 6> key{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
-    auto [it, inserted] = ids_.emplace(key, static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false});
+  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out,
+               const std::string& albedoTexture = {}) {
+    const std::array<float, 6> colours{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
+    auto [it, inserted] = ids_.emplace(std::make_pair(colours, albedoTexture), static_cast<uint32_t>(out.size()));
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, albedoTexture});
     return it->second;
   }
 
  private:
-  std::map<std::array<float, 6>, uint32_t> ids_;
+  std::map<std::pair<std::array<float, 6>, std::string>, uint32_t> ids_;
 };
 
 void appendPart(const MeshFilePart& part, ImportedObject& object) {
@@ -105,7 +106,11 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     object.label = label;
     object.cell = cell;
     appendPart(part, object);
-    object.material = materials.add(source.name, albedo, emission, scene.materials);
+    // A texture needs the part's uvs; a part without them keeps the colour.
+    const bool textured = !source.diffuseTexture.empty() && !part.uvs.empty();
+    if (textured) object.uvs = part.uvs;
+    object.material =
+        materials.add(source.name, albedo, emission, scene.materials, textured ? source.diffuseTexture : std::string());
     if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
     scene.objects.push_back(std::move(object));
   }
@@ -284,13 +289,21 @@ void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
     cell.id = id;
     cell.name = scene.cells[id].name;
     cell.bounds = scene.cells[id].bounds;
+    bool textured = false;
     for (const ImportedObject& object : scene.objects) {
       if (object.cell != id) continue;
       const auto offset = static_cast<uint32_t>(cell.positions.size() / 3);
       cell.positions.insert(cell.positions.end(), object.positions.begin(), object.positions.end());
       for (uint32_t index : object.indices) cell.indices.push_back(offset + index);
       cell.materials.insert(cell.materials.end(), object.triangleCount(), object.material);
+      // uvs for every vertex of the cell (zeros for untextured objects), or none.
+      textured = textured || !object.uvs.empty();
+      if (object.uvs.empty())
+        cell.uvs.insert(cell.uvs.end(), 2 * (object.positions.size() / 3), 0.0f);
+      else
+        cell.uvs.insert(cell.uvs.end(), object.uvs.begin(), object.uvs.end());
     }
+    if (!textured) cell.uvs.clear();
     writer.writeCell(cell);
   }
 }
@@ -330,8 +343,10 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
                  options.gridResolution > 0
                      ? fmt::format("grid {}^3", options.gridResolution)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
-  for (const ImportedMaterial& material : scene.materials)
-    writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+  for (const ImportedMaterial& material : scene.materials) {
+    const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+    if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);
+  }
   if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
   else

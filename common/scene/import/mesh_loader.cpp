@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
@@ -30,9 +31,32 @@ std::string oneLine(std::string text) {
   throw std::runtime_error(fmt::format("mesh file '{}': {}", path, problem));
 }
 
+// The material's colour image: glTF's base colour texture, else the
+// classic diffuse one (OBJ map_Kd), resolved against the mesh file's folder
+// (backslashes of files written on Windows read as slashes). Empty when it
+// has none, or when the image is embedded in the file ("*N").
+std::string diffuseTexture(const aiMaterial& source, const std::string& meshPath, const std::string& materialName) {
+  aiString raw;
+  if (source.GetTexture(aiTextureType_BASE_COLOR, 0, &raw) != aiReturn_SUCCESS &&
+      source.GetTexture(aiTextureType_DIFFUSE, 0, &raw) != aiReturn_SUCCESS)
+    return {};
+  std::string name = raw.C_Str();
+  if (name.empty() || name[0] == '*') return {};
+  std::replace(name.begin(), name.end(), '\\', '/');
+  const std::filesystem::path given(name);
+  const std::filesystem::path resolved =
+      given.is_absolute() ? given : std::filesystem::path(meshPath).parent_path() / given;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(resolved, error))
+    fail(meshPath, fmt::format("material '{}': texture '{}' ({}) does not exist; put the image there, or remove the "
+                               "texture from the material to use its colour",
+                               materialName, name, resolved.lexically_normal().string()));
+  return resolved.lexically_normal().string();
+}
+
 // `fileStrength`: the material's KHR_materials_emissive_strength as the file
 // gives it, applied where Assimp does not report an intensity itself.
-MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float fileStrength) {
+MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float fileStrength, const std::string& path) {
   MeshFileMaterial material;
   aiString name;
   material.name = source.Get(AI_MATKEY_NAME, name) == aiReturn_SUCCESS && name.length > 0
@@ -50,6 +74,7 @@ MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float file
     source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength);
     material.emissive *= strength;
   }
+  material.diffuseTexture = diffuseTexture(source, path, material.name);
   return material;
 }
 
@@ -96,6 +121,17 @@ class PartCollector {
         fail(file_.path,
              fmt::format("part '{}': vertex {} is not finite once placed by its node transforms", part.name, v));
       part.positions.insert(part.positions.end(), {p.x, p.y, p.z});
+    }
+    // Texture coordinates only where the part's material has a texture:
+    // untextured cells store none.
+    if (mesh.HasTextureCoords(0) && !file_.materials[part.material].diffuseTexture.empty()) {
+      part.uvs.reserve(2 * size_t{mesh.mNumVertices});
+      for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+        const aiVector3D& uv = mesh.mTextureCoords[0][v];
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+          fail(file_.path, fmt::format("part '{}': vertex {}'s texture coordinate is not finite", part.name, v));
+        part.uvs.insert(part.uvs.end(), {uv.x, uv.y});
+      }
     }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
@@ -148,7 +184,7 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
     aiString name;
     scene->mMaterials[m]->Get(AI_MATKEY_NAME, name);
-    file.materials.push_back(readMaterial(*scene->mMaterials[m], m, strengths.of(name.C_Str(), m)));
+    file.materials.push_back(readMaterial(*scene->mMaterials[m], m, strengths.of(name.C_Str(), m), path));
   }
   if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
   PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");
