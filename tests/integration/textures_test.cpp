@@ -177,17 +177,25 @@ void writeLargeTexture(const fs::path& path, uint32_t size) {
   writePng(path.string(), size, size, rgb);
 }
 
-// 6144 x 6144 texels, 108 MiB as RGB bytes (more as the tile cache holds
-// them), against a worker of 96 MiB in all.
+// 8448 x 8448 texels, 204 MiB as RGB bytes (more as the tile cache holds
+// them), against a worker of 192 MiB in all, of which OpenImageIO's code
+// takes about 115. A worker of 96 MiB has no room for that code: it refuses
+// the leases, saying so, and the job fails.
 TEST_F(Textures, AWorkerStaysWithinItsMemoryWhileTheTexturesAreLargerThanIt) {
   const fs::path dir = dir_ / "large";
   fs::create_directories(dir);
-  constexpr uint32_t kSize = 6144;
-  const uint64_t budget = uint64_t(96) << 20;
+  constexpr uint32_t kSize = 8448;
+  const uint64_t budget = uint64_t(192) << 20;
   ASSERT_GT(uint64_t(kSize) * kSize * 3, budget);
   writeLargeTexture(dir / "large.png", kSize);
   ASSERT_EQ(importRoom(dir, "Kd 1 1 1\nmap_Kd large.png"), "");
-  LocalCluster cluster(dir / "cluster", 1, {{"--memory", "96MiB"}});
+  {
+    LocalCluster small(dir / "small", 1, {{"--memory", "96MiB"}});
+    const auto status = small.render(dir / "store", dir / "small.exr", 20000, 2);
+    EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2);
+    EXPECT_NE(status.dump().find("too small for textures"), std::string::npos) << status.dump(2);
+  }
+  LocalCluster cluster(dir / "cluster", 1, {{"--memory", "192MiB"}});
   const auto status = cluster.render(dir / "store", dir / "image.exr", 20000, 2);
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "cluster" / "worker-0.log");
   const uint64_t peak = peakResidentBytes(cluster.worker(0).pid());
