@@ -137,6 +137,59 @@ TEST(Textures, LookupsReadTexelCentresUprightRepeatingAndLinearised) {
   EXPECT_LE(maxComponent(at(0.9f, 0.1f)), 1.0f);
 }
 
+// A glTF quad on y = 0 whose corner (0, 0, 0) has glTF uv (0, 0), the
+// image's top-left corner, and (1, 0, -1) uv (1, 1); base colour factor
+// (0.5, 0.25, 1) times checker.png.
+void writeTexturedGltf(const fs::path& dir) {
+  const float positions[12] = {0, 0, 0, 1, 0, 0, 1, 0, -1, 0, 0, -1};
+  const float uvs[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+  const uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
+  {
+    std::ofstream bin(dir / "quad.bin", std::ios::binary);
+    bin.write(reinterpret_cast<const char*>(positions), sizeof positions);
+    bin.write(reinterpret_cast<const char*>(uvs), sizeof uvs);
+    bin.write(reinterpret_cast<const char*>(indices), sizeof indices);
+  }
+  writeText(dir / "quad.gltf", R"({
+  "asset": {"version": "2.0"},
+  "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+  "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 1, 1],
+                 "baseColorTexture": {"index": 0}}}],
+  "textures": [{"source": 0}], "images": [{"uri": "tex.png"}],
+  "buffers": [{"uri": "quad.bin", "byteLength": 92}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, -1], "max": [1, 0, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]
+})");
+}
+
+TEST(Textures, AGltfBaseColorTextureIsReadTimesItsFactorWithVUpwards) {
+  TempDirectory dir;
+  writePng(dir / "tex.png", 2, 2, kTexels);
+  writeTexturedGltf(dir.path());
+  importBuilding({dir / "quad.gltf"}, dir / "store");
+  const SceneStore store = SceneStore::open(dir / "store");
+  ASSERT_EQ(store.materials().size(), 1u);
+  const Material& painted = store.materials()[0];
+  ASSERT_TRUE(painted.textured());
+  EXPECT_NEAR(painted.albedo.x, 0.5f, 1e-6f);
+  EXPECT_NEAR(painted.albedo.y, 0.25f, 1e-6f);
+  const auto cell = CellGeometry::load(store.cellPath(0), 0, store.materials().size());
+  ASSERT_NE(cell->uvs(), nullptr);
+  // glTF's top-left (0, 0) is (0, 1) with v upwards: the red texel.
+  for (uint32_t v = 0; v < cell->mesh().vertexCount; ++v) {
+    const Vec3 p = cell->mesh().vertex(v);
+    EXPECT_NEAR(cell->uvs()[2 * v], p.x, 1e-6f);
+    EXPECT_NEAR(cell->uvs()[2 * v + 1], 1.0f + p.z, 1e-6f);
+  }
+  const Vec3 corner = AlbedoTextures::instance().albedoAt(store.directory(), painted, Uv{0.25f, 0.75f});
+  EXPECT_NEAR(corner.x, srgbToLinear(200 / 255.0f) * 0.5f, 1e-5f);
+  EXPECT_NEAR(corner.y, 0.0f, 1e-6f);
+}
+
 TEST(Textures, AMissingTextureIsAnErrorNamingTheMaterialAndThePath) {
   TempDirectory dir;
   writeTexturedObj(dir.path(), "missing/wood.png");
