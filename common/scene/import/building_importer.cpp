@@ -21,6 +21,7 @@
 #include "common/scene/import/quad_light.h"
 #include "common/scene/store/scene_store.h"
 #include "common/scene/import/voxel_cells.h"
+#include "common/util/temporary_directory.h"
 
 namespace portico {
 
@@ -178,7 +179,9 @@ void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& mat
   scene.objects.push_back(std::move(object));
 }
 
-ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options) {
+// `imageDirectory`: where images embedded in mesh files are written.
+ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options,
+                                    const std::string& imageDirectory) {
   const BuildingDescription building = readBuildingJson(path);
   auto fail = [&](const std::string& problem) {
     throw std::runtime_error(fmt::format("{}: {}", path, problem));
@@ -204,7 +207,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
   for (const BuildingObject& entry : building.objects) {
     LoadedMeshFile mesh;
     try {
-      mesh = loadMeshFile(entry.meshPath);
+      mesh = loadMeshFile(entry.meshPath, imageDirectory);
     } catch (const std::runtime_error& e) {
       fail(fmt::format("{}: {}", entry.label(), e.what()));
     }
@@ -256,11 +259,11 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
   return scene;
 }
 
-ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
+ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths, const std::string& imageDirectory) {
   ImportedScene scene;
   MaterialTable materials;
   for (const std::string& path : paths) {
-    const LoadedMeshFile mesh = loadMeshFile(path);
+    const LoadedMeshFile mesh = loadMeshFile(path, imageDirectory);
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     addPartsWithFileMaterials(mesh, fmt::format("mesh file '{}'", path), 0, std::nullopt, materials, scene);
   }
@@ -329,9 +332,12 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   if (store && options.gridResolution == 0)
     throw std::runtime_error(fmt::format("scene import: {} is already a scene store; give --grid RG to re-cut it "
                                          "into uniform cells", inputs.front()));
+  // Images embedded in mesh files wait here until the store copies them.
+  const TemporaryDirectory embeddedImages("portico-import-images");
+  const std::string imageDirectory = embeddedImages.path().string();
   const ImportedScene scene = store      ? sceneFromStore(inputs.front())
-                              : building ? sceneFromBuildingJson(inputs.front(), options)
-                                         : sceneFromMeshFiles(inputs);
+                              : building ? sceneFromBuildingJson(inputs.front(), options, imageDirectory)
+                                         : sceneFromMeshFiles(inputs, imageDirectory);
 
   nlohmann::json sources = nlohmann::json::array();
   for (const std::string& input : inputs) sources.push_back(fs::absolute(input).lexically_normal().string());

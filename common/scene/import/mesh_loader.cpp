@@ -10,6 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
 #include <filesystem>
 #include <stdexcept>
 
@@ -31,17 +34,37 @@ std::string oneLine(std::string text) {
   throw std::runtime_error(fmt::format("mesh file '{}': {}", path, problem));
 }
 
+// Writes an image embedded in the mesh file (GLB; a compressed PNG or JPEG
+// file's bytes) into `directory`, returning its path; empty when there is no
+// directory to write to or the image is stored as raw texels.
+std::string extractEmbeddedImage(const aiTexture& image, const std::string& meshPath, const std::string& directory,
+                                 unsigned index) {
+  if (directory.empty() || image.mHeight != 0 || image.pcData == nullptr) return {};
+  std::string hint(image.achFormatHint, strnlen(image.achFormatHint, sizeof image.achFormatHint));
+  if (hint.empty()) hint = "img";
+  const std::string path = fmt::format("{}/{:016x}-{}.{}", directory, std::hash<std::string>()(meshPath), index, hint);
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(image.pcData), std::streamsize(image.mWidth));
+  if (!out) fail(meshPath, fmt::format("cannot write its embedded image {} to {}", index, path));
+  return path;
+}
+
 // The material's colour image: glTF's base colour texture, else the
 // classic diffuse one (OBJ map_Kd), resolved against the mesh file's folder
-// (backslashes of files written on Windows read as slashes). Empty when it
-// has none, or when the image is embedded in the file ("*N").
-std::string diffuseTexture(const aiMaterial& source, const std::string& meshPath, const std::string& materialName) {
+// (backslashes of files written on Windows read as slashes), or an image
+// embedded in the file ("*N" in a GLB) written into `embeddedImageDirectory`.
+// Empty when it has none.
+std::string diffuseTexture(const aiScene& scene, const aiMaterial& source, const std::string& meshPath,
+                           const std::string& materialName, const std::string& embeddedImageDirectory) {
   aiString raw;
   if (source.GetTexture(aiTextureType_BASE_COLOR, 0, &raw) != aiReturn_SUCCESS &&
       source.GetTexture(aiTextureType_DIFFUSE, 0, &raw) != aiReturn_SUCCESS)
     return {};
   std::string name = raw.C_Str();
-  if (name.empty() || name[0] == '*') return {};
+  if (name.empty()) return {};
+  if (const auto [embedded, index] = scene.GetEmbeddedTextureAndIndex(name.c_str()); embedded)
+    return extractEmbeddedImage(*embedded, meshPath, embeddedImageDirectory, static_cast<unsigned>(index));
+  if (name[0] == '*') return {};
   std::replace(name.begin(), name.end(), '\\', '/');
   const std::filesystem::path given(name);
   const std::filesystem::path resolved =
@@ -56,7 +79,8 @@ std::string diffuseTexture(const aiMaterial& source, const std::string& meshPath
 
 // `fileStrength`: the material's KHR_materials_emissive_strength as the file
 // gives it, applied where Assimp does not report an intensity itself.
-MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float fileStrength, const std::string& path) {
+MeshFileMaterial readMaterial(const aiScene& scene, const aiMaterial& source, size_t index, float fileStrength,
+                              const std::string& path, const std::string& embeddedImageDirectory) {
   MeshFileMaterial material;
   aiString name;
   material.name = source.Get(AI_MATKEY_NAME, name) == aiReturn_SUCCESS && name.length > 0
@@ -74,7 +98,7 @@ MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float file
     source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength);
     material.emissive *= strength;
   }
-  material.diffuseTexture = diffuseTexture(source, path, material.name);
+  material.diffuseTexture = diffuseTexture(scene, source, path, material.name, embeddedImageDirectory);
   return material;
 }
 
@@ -164,7 +188,7 @@ size_t LoadedMeshFile::triangleCount() const {
   return count;
 }
 
-LoadedMeshFile loadMeshFile(const std::string& path) {
+LoadedMeshFile loadMeshFile(const std::string& path, const std::string& embeddedImageDirectory) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) fail(path, "does not exist");
   if (!std::filesystem::is_regular_file(path, error)) fail(path, "is not a regular file");
@@ -184,7 +208,8 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
     aiString name;
     scene->mMaterials[m]->Get(AI_MATKEY_NAME, name);
-    file.materials.push_back(readMaterial(*scene->mMaterials[m], m, strengths.of(name.C_Str(), m), path));
+    file.materials.push_back(
+        readMaterial(*scene, *scene->mMaterials[m], m, strengths.of(name.C_Str(), m), path, embeddedImageDirectory));
   }
   if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
   PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");

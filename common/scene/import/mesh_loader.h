@@ -57,8 +57,9 @@ struct LoadedMeshFile {
 // Throws std::runtime_error, one line naming the file: it does not exist, it
 // cannot be read or parsed, it has no triangles, a vertex is not finite, or a
 // material's texture file does not exist (naming the material and the path).
-// A texture embedded in the file (GLB) is not read: its material keeps its
-// colour.
-LoadedMeshFile loadMeshFile(const std::string& path);
+// Images embedded in the file (GLB) are written into embeddedImageDirectory
+// and named by MeshFileMaterial::diffuseTexture; with no directory, or for
+// an image stored as raw texels, the material keeps its colour.
+LoadedMeshFile loadMeshFile(const std::string& path, const std::string& embeddedImageDirectory = {});
 
 }  // namespace portico

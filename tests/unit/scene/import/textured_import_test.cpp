@@ -190,6 +190,61 @@ TEST(Textures, AGltfBaseColorTextureIsReadTimesItsFactorWithVUpwards) {
   EXPECT_NEAR(corner.y, 0.0f, 1e-6f);
 }
 
+// The same quad as a GLB with the PNG inside its binary chunk.
+void writeTexturedGlb(const fs::path& dir, const fs::path& png) {
+  const float positions[12] = {0, 0, 0, 1, 0, 0, 1, 0, -1, 0, 0, -1};
+  const float uvs[8] = {0, 0, 1, 0, 1, 1, 0, 1};
+  const uint16_t indices[6] = {0, 1, 2, 0, 2, 3};
+  std::string bin(reinterpret_cast<const char*>(positions), sizeof positions);
+  bin.append(reinterpret_cast<const char*>(uvs), sizeof uvs);
+  bin.append(reinterpret_cast<const char*>(indices), sizeof indices);
+  std::ifstream in(png, std::ios::binary);
+  const std::string image((std::istreambuf_iterator<char>(in)), {});
+  bin += image;
+  while (bin.size() % 4) bin.push_back('\0');
+  std::string json = R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+  "materials": [{"name": "painted", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}],
+  "textures": [{"source": 0}], "images": [{"bufferView": 3, "mimeType": "image/png"}],
+  "buffers": [{"byteLength": )" + std::to_string(bin.size()) + R"(}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                  {"buffer": 0, "byteOffset": 80, "byteLength": 12},
+                  {"buffer": 0, "byteOffset": 92, "byteLength": )" + std::to_string(image.size()) + R"(}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [0, 0, -1], "max": [1, 0, 0]},
+                {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}]})";
+  while (json.size() % 4) json.push_back(' ');
+  const auto word = [](std::string& out, uint32_t value) { out.append(reinterpret_cast<const char*>(&value), 4); };
+  std::string glb;
+  word(glb, 0x46546C67);   // "glTF"
+  word(glb, 2);
+  word(glb, uint32_t(12 + 8 + json.size() + 8 + bin.size()));
+  word(glb, uint32_t(json.size()));
+  word(glb, 0x4E4F534A);   // "JSON"
+  glb += json;
+  word(glb, uint32_t(bin.size()));
+  word(glb, 0x004E4942);   // "BIN"
+  glb += bin;
+  writeText(dir / "quad.glb", glb);
+}
+
+TEST(Textures, AnImageEmbeddedInAGlbIsCopiedIntoTheStore) {
+  TempDirectory dir;
+  writePng(dir / "embedded.png", 2, 2, kTexels);
+  writeTexturedGlb(dir.path(), dir / "embedded.png");
+  fs::remove(dir / "embedded.png");
+  importBuilding({dir / "quad.glb"}, dir / "store");
+  const SceneStore store = SceneStore::open(dir / "store");
+  ASSERT_EQ(store.materials().size(), 1u);
+  const Material& painted = store.materials()[0];
+  ASSERT_TRUE(painted.textured());
+  const Vec3 bottomRight = AlbedoTextures::instance().albedoAt(store.directory(), painted, Uv{0.75f, 0.25f});
+  EXPECT_NEAR(bottomRight.x, painted.albedo.x, 1e-5f);   // the white texel
+  const Vec3 topLeft = AlbedoTextures::instance().albedoAt(store.directory(), painted, Uv{0.25f, 0.75f});
+  EXPECT_NEAR(topLeft.x, srgbToLinear(200 / 255.0f) * painted.albedo.x, 1e-5f);
+  EXPECT_NEAR(topLeft.y, 0.0f, 1e-6f);
+}
+
 TEST(Textures, AMissingTextureIsAnErrorNamingTheMaterialAndThePath) {
   TempDirectory dir;
   writeTexturedObj(dir.path(), "missing/wood.png");
