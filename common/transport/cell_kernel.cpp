@@ -168,13 +168,10 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       return;
     }
     const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
-    Vec3 textured;
-    if (material.textured())
-      textured = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
-                               photon.origin + photon.direction * event.t);
-    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, material,
-                                                         material.textured() ? &textured : nullptr},
-                                                seed, parameters_.maxPhotonBounces);
+    const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
+                                      photon.origin + photon.direction * event.t);
+    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, material, &albedo}, seed,
+                                                parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
