@@ -14,14 +14,19 @@
 
 namespace portico {
 
-bool isServableStorePath(const std::string& path) {
-  if (path == "scene.db") return true;
-  const std::string prefix = "cells/", suffix = ".cell";
+namespace {
+// "<prefix><digits><suffix>", at most 10 digits.
+bool isNumberedFile(const std::string& path, const std::string& prefix, const std::string& suffix) {
   if (path.size() <= prefix.size() + suffix.size() || path.compare(0, prefix.size(), prefix) != 0 ||
       path.compare(path.size() - suffix.size(), suffix.size(), suffix) != 0)
     return false;
   const std::string digits = path.substr(prefix.size(), path.size() - prefix.size() - suffix.size());
   return digits.size() <= 10 && std::all_of(digits.begin(), digits.end(), [](char c) { return std::isdigit(uint8_t(c)); });
+}
+}  // namespace
+
+bool isServableStorePath(const std::string& path) {
+  return path == "scene.db" || isNumberedFile(path, "cells/", ".cell") || isNumberedFile(path, "textures/", ".tif");
 }
 
 namespace {
@@ -87,7 +92,8 @@ void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader
     return;
   }
   if (!isServableStorePath(path)) {
-    chunk.setError(fmt::format("{} is not a scene store file (scene.db or cells/<id>.cell)", path));
+    chunk.setError(
+        fmt::format("{} is not a scene store file (scene.db, cells/<id>.cell or textures/<id>.tif)", path));
     return;
   }
   std::string error;

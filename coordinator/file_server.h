@@ -1,5 +1,5 @@
 // Serves a scene store's files to workers that cannot see its file system
-// (worker --cache-dir): scene.db and cells/<id>.cell of the stores of the
+// (worker --cache-dir): scene.db, cells/<id>.cell and textures/<id>.tif of the stores of the
 // jobs the asking worker holds leases of, nothing else, in chunks that fit
 // a message. Each path is opened one component at a time from the store's
 // directory, following no symbolic link, and only a regular file is served:

@@ -28,4 +28,8 @@ struct CellFile {
   indexChunks @7 :List(List(UInt32));
   materialChunks @8 :List(List(UInt32));
   portals @9 :List(CellPortal);
+  # Texture coordinates, uv per vertex, chunked like the positions (whole
+  # vertices per chunk); empty when no triangle of the cell is textured.
+  # (0, 0) is the image's bottom-left corner, as in OBJ and OpenGL.
+  uvChunks @10 :List(List(Float32));
 }

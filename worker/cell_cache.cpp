@@ -2,8 +2,15 @@
 
 #include <chrono>
 
+#include <fmt/format.h>
 #include <malloc.h>
 #include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "common/transport/albedo_texture.h"
+#include "common/util/resident_memory.h"
 
 namespace portico {
 
@@ -11,7 +18,41 @@ const SceneStore& CellCache::scene(const std::string& directory) {
   auto it = scenes_.find(directory);
   if (it == scenes_.end())
     it = scenes_.emplace(directory, std::make_unique<SceneStore>(SceneStore::open(directory))).first;
+  prepareTextures(*it->second);
   return *it->second;
+}
+
+// The texture module's code (OpenImageIO and the libraries it pulls in:
+// about 118 MiB resident) and its tile cache (at most cacheBytes()) come out
+// of the budget, once, when the first store with a textured material
+// arrives: a worker that never meets a texture never loads OpenImageIO. A
+// budget too small for them refuses every lease of a textured store.
+void CellCache::prepareTextures(const SceneStore& scene) {
+  if (std::none_of(scene.materials().begin(), scene.materials().end(), [](const Material& m) { return m.textured(); }))
+    return;
+  if (!texturesCharged_) {
+    texturesCharged_ = true;
+    AlbedoTextures& textures = AlbedoTextures::instance();
+    const uint64_t before = residentBytes();
+    textures.load();
+    const uint64_t after = residentBytes();
+    const uint64_t code = after > before ? after - before : 0;
+    const uint64_t cost = code + textures.cacheBytes();
+    constexpr uint64_t kLeastForCells = uint64_t(4) << 20;
+    if (cost + kLeastForCells > budget_) {
+      texturesRefused_ = fmt::format(
+          "the worker's --memory is too small for textures: the texture module takes {} MiB and its tile cache {} "
+          "MiB, of a cell cache budget of {} MiB (give the worker {} MiB more)",
+          code >> 20, textures.cacheBytes() >> 20, budget_ >> 20, (cost + kLeastForCells - budget_ + (1 << 20)) >> 20);
+      budget_ = kLeastForCells;
+    } else {
+      budget_ -= cost;
+    }
+    spdlog::info("textures: module {} MiB, tile cache {} MiB; cell cache budget now {} MiB", code >> 20,
+                 textures.cacheBytes() >> 20, budget_ >> 20);
+  }
+  if (!texturesRefused_.empty())
+    throw std::runtime_error(fmt::format("store {} has textures, and {}", scene.directory(), texturesRefused_));
 }
 
 void CellCache::touch(Entry& entry) {

@@ -97,6 +97,7 @@ class CellCache {
     std::optional<MapKey> mapKey;
     std::list<Entry*>::iterator position;
   };
+  void prepareTextures(const SceneStore& scene);
   void touch(Entry& entry);
   void insert(Entry& entry);
   void evict(Entry* victim);
@@ -104,6 +105,8 @@ class CellCache {
 
   uint64_t budget_;
   uint64_t held_ = 0;
+  bool texturesCharged_ = false;   // the texture module's memory taken from budget_
+  std::string texturesRefused_;     // why textured stores cannot be traced (budget too small), or empty
   uint64_t epoch_ = 1;
   double loadedBytesPerFileByte_ = 3.0;   // learnt: geometry + accelerator + build scratch per file byte
   std::map<std::string, std::unique_ptr<SceneStore>> scenes_;

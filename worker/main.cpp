@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/accel/embree_accelerator.h"
+#include "common/transport/albedo_texture.h"
 #include "common/util/cli_bounds.h"
 #include "common/util/heap_reuse.h"
 #include "common/util/size_parse.h"
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
   gethostname(host, sizeof host - 1);
   options.name = std::string(host) + ":" + std::to_string(getpid());
   app.add_option("--connect", options.connect, "coordinator endpoint")->capture_default_str();
-  app.add_option("--memory", memory, "cache budget for cells, accelerators and photon maps (e.g. 512MiB, 4GiB)")
+  app.add_option("--memory", memory, "the whole worker's memory: its code, and a cache for cells, accelerators, photon maps and texture tiles (e.g. 512MiB, 4GiB)")
       ->capture_default_str()
       ->check(portico::cli::byteSize());
   app.add_option("--threads", options.threads, "tracing threads")
@@ -69,6 +70,10 @@ int main(int argc, char** argv) {
     // octagon photon pass (1 M photons, 1 worker) this cut page faults from
     // 400 K to 162 K and CPU by about 10 % (docs/pipeline-benchmark.md).
     portico::keepFreedMemory(std::clamp<uint64_t>(options.memoryBytes / 8, 1 << 20, uint64_t(256) << 20));
+    // Texture tiles, for stores with textured materials: a sixteenth of the
+    // budget, 4 to 256 MiB, taken from the cell cache when a texture is met.
+    portico::AlbedoTextures::instance().setCacheBytes(
+        std::clamp<uint64_t>(options.memoryBytes / 16, uint64_t(4) << 20, uint64_t(256) << 20));
     // A worker owns --threads cores: Embree's builds (--accel embree) run on
     // as many, not on every core of the machine, which two workers on two
     // cores would each take (octagon photon pass, 2 workers: 2.1 s of

@@ -52,8 +52,11 @@ std::optional<std::string> StoreMirror::missing(const std::string& store, uint32
   const std::string path = fmt::format("cells/{}.cell", cell);
   std::error_code error;
   const fs::path file = local / path;
-  if (fs::exists(file, error) && fs::file_size(file, error) == s.catalogue->cells()[cell].byteCount) return std::nullopt;
-  return path;
+  if (!fs::exists(file, error) || fs::file_size(file, error) != s.catalogue->cells()[cell].byteCount) return path;
+  // The store's textures (any cell may show them): a file arrives whole or not at all.
+  for (const Material& material : s.catalogue->materials())
+    if (material.textured() && !fs::exists(local / material.albedoTexture, error)) return material.albedoTexture;
+  return std::nullopt;
 }
 
 uint64_t StoreMirror::receivedBytes(const std::string& store, const std::string& path) const {
@@ -67,7 +70,7 @@ bool StoreMirror::accept(wire::FileChunk::Reader chunk) {
   const std::string store = chunk.getStore(), path = chunk.getPath();
   if (chunk.getError().size())
     throw std::runtime_error(fmt::format("coordinator cannot serve {} of {}: {}", path, store, chunk.getError().cStr()));
-  if (path != "scene.db" && path.rfind("cells/", 0) != 0)
+  if (path != "scene.db" && path.rfind("cells/", 0) != 0 && path.rfind("textures/", 0) != 0)
     throw std::runtime_error(fmt::format("coordinator sent an unexpected file {}", path));
   const fs::path local = localDirectory(store);
   const fs::path part = local / (path + ".part"), final = local / path;
@@ -86,7 +89,10 @@ bool StoreMirror::accept(wire::FileChunk::Reader chunk) {
   StoreState& s = state(store);
   if (path == "scene.db") {
     // A different catalogue means a regenerated store: its old cells go.
-    if (!sameContents(part, final)) fs::remove_all(local / "cells");
+    if (!sameContents(part, final)) {
+      fs::remove_all(local / "cells");
+      fs::remove_all(local / "textures");
+    }
     s.catalogue.reset();
     s.catalogueFresh = true;
   }

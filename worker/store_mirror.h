@@ -2,7 +2,7 @@
 // coordinator (portico-worker --cache-dir): no shared file system needed.
 //
 // Layout: DIR/<fnv64 of the store's name on the coordinator>/scene.db and
-// cells/<id>.cell, as in a store; files arrive as <path>.part and are
+// cells/<id>.cell (and textures/<id>.tif), as in a store; files arrive as <path>.part and are
 // renamed into place when whole, so a crash never leaves a torn file that
 // looks complete. scene.db is fetched again at a worker's first lease of a
 // store: if it changed (the store was regenerated), the cached cells go.

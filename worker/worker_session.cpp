@@ -19,21 +19,12 @@
 #include <unistd.h>
 
 #include "common/net/message.h"
+#include "common/util/resident_memory.h"
 #include "worker/crash_report.h"
 #include "worker/lease_load.h"
 #include "worker/lease_runner.h"
 
 namespace portico {
-
-namespace {
-uint64_t residentBytes() {
-  std::ifstream statm("/proc/self/statm");
-  uint64_t size = 0, resident = 0;
-  statm >> size >> resident;
-  return resident * uint64_t(::sysconf(_SC_PAGESIZE));
-}
-
-}  // namespace
 
 // --memory bounds the whole worker: the cache gets what is left after the
 // process's own footprint (code, libraries, Embree and TBB) and room for a

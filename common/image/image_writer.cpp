@@ -1,16 +1,15 @@
 #include "common/image/image_writer.h"
 
-#include <dlfcn.h>
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <mutex>
 #include <stdexcept>
 #include <vector>
 
 #include "common/image/exr_file.h"
+#include "common/image/image_formats_loader.h"
 #include "common/image/image_formats_module.h"
 #include "common/image/png_file.h"
 
@@ -27,25 +26,8 @@ bool isHighDynamicRange(const std::string& ext) {
   return ext == ".exr" || ext == ".hdr" || ext == ".tif" || ext == ".tiff";
 }
 
-// The module beside the running program (every program lands in bin/), loaded once.
 PorticoWriteImageFn imageFormatsModule() {
-  static std::once_flag once;
-  static PorticoWriteImageFn entry = nullptr;
-  static std::string failure;
-  std::call_once(once, [] {
-    std::error_code error;
-    const auto program = std::filesystem::read_symlink("/proc/self/exe", error);
-    const auto module = (program.parent_path() / kImageFormatsModule).string();
-    void* handle = dlopen(module.c_str(), RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-      failure = fmt::format("cannot load {} ({})", module, dlerror());
-      return;
-    }
-    entry = reinterpret_cast<PorticoWriteImageFn>(dlsym(handle, kImageFormatsEntry));
-    if (!entry) failure = fmt::format("{} has no {}", module, kImageFormatsEntry);
-  });
-  if (!entry) throw std::runtime_error(failure);
-  return entry;
+  return reinterpret_cast<PorticoWriteImageFn>(imageFormatsEntry(kImageFormatsEntry));
 }
 
 void writeWithModule(const std::string& path, const LinearImage& image, bool isFloat, const void* pixels) {

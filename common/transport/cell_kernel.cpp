@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/rng.h"
+#include "common/transport/albedo_texture.h"
 #include "common/transport/photon_scattering.h"
 #include "common/transport/sampling.h"
 
@@ -167,8 +168,10 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       return;
     }
     const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
-    const PhotonScatter scatter =
-        scatterPhoton(photon, {mesh, event.primitive, event.t, material}, seed, parameters_.maxPhotonBounces);
+    const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
+                                      photon.origin + photon.direction * event.t);
+    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, material, &albedo}, seed,
+                                                parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
@@ -224,8 +227,9 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   const Vec3 point = ray.origin + ray.direction * hit.t;
   // Emitters are one-sided: only their front shows their radiance.
   if (material.emissive() && front) addToFilm(ray.pixel, ray.weight * material.emission, out);
-  if (!(maxComponent(material.albedo) > 0)) return;
-  const Vec3 brdf = material.albedo * (1.0f / kPi);
+  const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, hit.primitive, point);
+  if (!(maxComponent(albedo) > 0)) return;
+  const Vec3 brdf = albedo * (1.0f / kPi);
 
   // Direct light: shadow rays to points on lights chosen by the light sampler.
   const uint32_t samples = parameters_.lightSamples;
@@ -267,7 +271,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
     // photon-map estimate, in whatever cell they land. With pdf cos/pi the
     // Lambertian weight (albedo/pi) cos / pdf is just the albedo.
     const uint32_t count = parameters_.gather;
-    const Vec3 weight = ray.weight * material.albedo / float(count);
+    const Vec3 weight = ray.weight * albedo / float(count);
     const Vec3 origin = offsetAlongNormal(point, normal);
     for (uint32_t i = 0; i < count; ++i) {
       RayState gather;
@@ -286,7 +290,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   } else if (photons_ && photons_->size() > 0) {
     // Indirect light: the density of photons that arrived after at least one bounce.
     addToFilm(ray.pixel,
-              ray.weight * photons_->radiance(point, normal, material.albedo, parameters_.photonK,
+              ray.weight * photons_->radiance(point, normal, albedo, parameters_.photonK,
                                               parameters_.photonRadius),
               out);
   }
@@ -308,15 +312,16 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
       bool front;
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
+      const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive, point);
       Vec3 perAlbedo;
       if (irradiance_ && irradiance_->lookup(point, normal, perAlbedo)) {
-        addToFilm(ray.pixel, ray.weight * material.albedo * perAlbedo, out);
+        addToFilm(ray.pixel, ray.weight * albedo * perAlbedo, out);
         return;
       }
       // Each gather lookup is one of many averaged per pixel, so it can use
       // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
       const uint32_t k = std::max(8u, parameters_.photonK / 4);
-      addToFilm(ray.pixel, ray.weight * photons_->radiance(point, normal, material.albedo, k, parameters_.photonRadius),
+      addToFilm(ray.pixel, ray.weight * photons_->radiance(point, normal, albedo, k, parameters_.photonRadius),
                 out);
       return;
     }

@@ -44,6 +44,8 @@ struct PhotonHit {
   uint32_t primitive;
   float t;
   const Material& material;
+  // The albedo at the hit when the material is textured; null: material.albedo.
+  const Vec3* albedo = nullptr;
 };
 
 // What the photon did at a surface.
@@ -64,19 +66,20 @@ struct PhotonScatter {
 inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint64_t seed, uint32_t maxBounces) {
   PhotonScatter scatter;
   const Material& material = hit.material;
-  if (material.emissive() || !(maxComponent(material.albedo) > 0)) return scatter;
+  const Vec3 albedo = hit.albedo ? *hit.albedo : material.albedo;
+  if (material.emissive() || !(maxComponent(albedo) > 0)) return scatter;
   const Vec3 point = photon.origin + photon.direction * hit.t;
   const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
   const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;
   scatter.deposited = true;
   scatter.deposit = {point, -normal, photon.weight, photon.pathId, photon.depth};
-  const float survival = std::min(1.0f, maxComponent(material.albedo));
+  const float survival = std::min(1.0f, maxComponent(albedo));
   const uint32_t bounce = photon.depth;
   if (randomUniform(seed, RandomStream::Photon, photon.pathId, bounce, dim::Roulette) >= survival ||
       bounce + 1u >= maxBounces)
     return scatter;
   scatter.bounced = true;
-  photon.weight = photon.weight * material.albedo / survival;
+  photon.weight = photon.weight * albedo / survival;
   photon.depth = static_cast<uint16_t>(bounce + 1);
   photon.origin = offsetAlongNormal(point, normal);
   photon.direction =

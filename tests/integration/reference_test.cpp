@@ -5,6 +5,7 @@
 // The Cornell box is also imported with --grid 3 (its OBJ meshes cut into 27
 // voxel cells, triangles sticking out of them): uniform cells must render
 // the same picture as the room's own cell, within the same bounds.
+// textured_floor checks albedo textures (OBJ map_Kd) against Mitsuba's bitmap.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -68,7 +69,8 @@ TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
 
 INSTANTIATE_TEST_SUITE_P(Mitsuba, ReferenceScene,
                          ::testing::Values(ReferenceCase{"cornell_closed", 0}, ReferenceCase{"two_rooms", 0},
-                                           ReferenceCase{"cornell_closed", 3}, ReferenceCase{"ifc_fzk_wohnen", 0}),
+                                           ReferenceCase{"cornell_closed", 3}, ReferenceCase{"ifc_fzk_wohnen", 0},
+                                           ReferenceCase{"textured_floor", 0}),
                          [](const auto& info) {
                            return info.param.name + (info.param.grid ? "_grid" + std::to_string(info.param.grid) : "");
                          });

@@ -21,6 +21,7 @@
 #include "common/scene/import/quad_light.h"
 #include "common/scene/store/scene_store.h"
 #include "common/scene/import/voxel_cells.h"
+#include "common/util/temporary_directory.h"
 
 namespace portico {
 
@@ -47,18 +48,19 @@ bool isBuildingJson(const std::string& path) {
 
 Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
 
-// Materials, one per distinct (albedo, emission); the first name wins.
+// Materials, one per distinct (albedo, emission, texture); the first name wins.
 class MaterialTable {
  public:
-  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out) {
-    const std::array<float, 6> key{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
-    auto [it, inserted] = ids_.emplace(key, static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false});
+  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out,
+               const std::string& albedoTexture = {}) {
+    const std::array<float, 6> colours{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
+    auto [it, inserted] = ids_.emplace(std::make_pair(colours, albedoTexture), static_cast<uint32_t>(out.size()));
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, albedoTexture});
     return it->second;
   }
 
  private:
-  std::map<std::array<float, 6>, uint32_t> ids_;
+  std::map<std::pair<std::array<float, 6>, std::string>, uint32_t> ids_;
 };
 
 void appendPart(const MeshFilePart& part, ImportedObject& object) {
@@ -105,7 +107,11 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     object.label = label;
     object.cell = cell;
     appendPart(part, object);
-    object.material = materials.add(source.name, albedo, emission, scene.materials);
+    // A texture needs the part's uvs; a part without them keeps the colour.
+    const bool textured = !source.diffuseTexture.empty() && !part.uvs.empty();
+    if (textured) object.uvs = part.uvs;
+    object.material =
+        materials.add(source.name, albedo, emission, scene.materials, textured ? source.diffuseTexture : std::string());
     if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
     scene.objects.push_back(std::move(object));
   }
@@ -173,7 +179,9 @@ void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& mat
   scene.objects.push_back(std::move(object));
 }
 
-ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options) {
+// `imageDirectory`: where images embedded in mesh files are written.
+ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions& options,
+                                    const std::string& imageDirectory) {
   const BuildingDescription building = readBuildingJson(path);
   auto fail = [&](const std::string& problem) {
     throw std::runtime_error(fmt::format("{}: {}", path, problem));
@@ -199,7 +207,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
   for (const BuildingObject& entry : building.objects) {
     LoadedMeshFile mesh;
     try {
-      mesh = loadMeshFile(entry.meshPath);
+      mesh = loadMeshFile(entry.meshPath, imageDirectory);
     } catch (const std::runtime_error& e) {
       fail(fmt::format("{}: {}", entry.label(), e.what()));
     }
@@ -251,11 +259,11 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
   return scene;
 }
 
-ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths) {
+ImportedScene sceneFromMeshFiles(const std::vector<std::string>& paths, const std::string& imageDirectory) {
   ImportedScene scene;
   MaterialTable materials;
   for (const std::string& path : paths) {
-    const LoadedMeshFile mesh = loadMeshFile(path);
+    const LoadedMeshFile mesh = loadMeshFile(path, imageDirectory);
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     addPartsWithFileMaterials(mesh, fmt::format("mesh file '{}'", path), 0, std::nullopt, materials, scene);
   }
@@ -284,13 +292,21 @@ void writeGivenCells(const ImportedScene& scene, SceneStoreWriter& writer) {
     cell.id = id;
     cell.name = scene.cells[id].name;
     cell.bounds = scene.cells[id].bounds;
+    bool textured = false;
     for (const ImportedObject& object : scene.objects) {
       if (object.cell != id) continue;
       const auto offset = static_cast<uint32_t>(cell.positions.size() / 3);
       cell.positions.insert(cell.positions.end(), object.positions.begin(), object.positions.end());
       for (uint32_t index : object.indices) cell.indices.push_back(offset + index);
       cell.materials.insert(cell.materials.end(), object.triangleCount(), object.material);
+      // uvs for every vertex of the cell (zeros for untextured objects), or none.
+      textured = textured || !object.uvs.empty();
+      if (object.uvs.empty())
+        cell.uvs.insert(cell.uvs.end(), 2 * (object.positions.size() / 3), 0.0f);
+      else
+        cell.uvs.insert(cell.uvs.end(), object.uvs.begin(), object.uvs.end());
     }
+    if (!textured) cell.uvs.clear();
     writer.writeCell(cell);
   }
 }
@@ -316,9 +332,12 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   if (store && options.gridResolution == 0)
     throw std::runtime_error(fmt::format("scene import: {} is already a scene store; give --grid RG to re-cut it "
                                          "into uniform cells", inputs.front()));
+  // Images embedded in mesh files wait here until the store copies them.
+  const TemporaryDirectory embeddedImages("portico-import-images");
+  const std::string imageDirectory = embeddedImages.path().string();
   const ImportedScene scene = store      ? sceneFromStore(inputs.front())
-                              : building ? sceneFromBuildingJson(inputs.front(), options)
-                                         : sceneFromMeshFiles(inputs);
+                              : building ? sceneFromBuildingJson(inputs.front(), options, imageDirectory)
+                                         : sceneFromMeshFiles(inputs, imageDirectory);
 
   nlohmann::json sources = nlohmann::json::array();
   for (const std::string& input : inputs) sources.push_back(fs::absolute(input).lexically_normal().string());
@@ -330,8 +349,10 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
                  options.gridResolution > 0
                      ? fmt::format("grid {}^3", options.gridResolution)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
-  for (const ImportedMaterial& material : scene.materials)
-    writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+  for (const ImportedMaterial& material : scene.materials) {
+    const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+    if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);
+  }
   if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
   else

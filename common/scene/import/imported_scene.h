@@ -19,6 +19,7 @@ struct ImportedMaterial {
   Vec3 albedo;
   Vec3 emission;
   bool hiddenFromCamera = false;   // kept when a scene store is re-cut
+  std::string albedoTexture;       // the image file (copied into the store), or empty
 };
 
 // One object of a building.json, or one part of a mesh file.
@@ -28,6 +29,7 @@ struct ImportedObject {
   uint32_t material = 0;            // index into ImportedScene::materials
   std::vector<float> positions;     // xyz per vertex
   std::vector<uint32_t> indices;    // 3 per triangle, front = cross(v1 - v0, v2 - v0)
+  std::vector<float> uvs;           // uv per vertex when its material is textured, else empty
   size_t triangleCount() const { return indices.size() / 3; }
   Vec3 vertex(uint32_t i) const {
     const float* p = &positions[3 * size_t{i}];

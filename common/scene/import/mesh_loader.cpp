@@ -9,6 +9,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <functional>
 #include <filesystem>
 #include <stdexcept>
 
@@ -30,9 +34,53 @@ std::string oneLine(std::string text) {
   throw std::runtime_error(fmt::format("mesh file '{}': {}", path, problem));
 }
 
+// Writes an image embedded in the mesh file (GLB; a compressed PNG or JPEG
+// file's bytes) into `directory`, returning its path; empty when there is no
+// directory to write to or the image is stored as raw texels.
+std::string extractEmbeddedImage(const aiTexture& image, const std::string& meshPath, const std::string& directory,
+                                 unsigned index) {
+  if (directory.empty() || image.mHeight != 0 || image.pcData == nullptr) return {};
+  std::string hint(image.achFormatHint, strnlen(image.achFormatHint, sizeof image.achFormatHint));
+  if (hint.empty()) hint = "img";
+  const std::string path = fmt::format("{}/{:016x}-{}.{}", directory, std::hash<std::string>()(meshPath), index, hint);
+  std::ofstream out(path, std::ios::binary);
+  out.write(reinterpret_cast<const char*>(image.pcData), std::streamsize(image.mWidth));
+  if (!out) fail(meshPath, fmt::format("cannot write its embedded image {} to {}", index, path));
+  return path;
+}
+
+// The material's colour image: glTF's base colour texture, else the
+// classic diffuse one (OBJ map_Kd), resolved against the mesh file's folder
+// (backslashes of files written on Windows read as slashes), or an image
+// embedded in the file ("*N" in a GLB) written into `embeddedImageDirectory`.
+// Empty when it has none.
+std::string diffuseTexture(const aiScene& scene, const aiMaterial& source, const std::string& meshPath,
+                           const std::string& materialName, const std::string& embeddedImageDirectory) {
+  aiString raw;
+  if (source.GetTexture(aiTextureType_BASE_COLOR, 0, &raw) != aiReturn_SUCCESS &&
+      source.GetTexture(aiTextureType_DIFFUSE, 0, &raw) != aiReturn_SUCCESS)
+    return {};
+  std::string name = raw.C_Str();
+  if (name.empty()) return {};
+  if (const auto [embedded, index] = scene.GetEmbeddedTextureAndIndex(name.c_str()); embedded)
+    return extractEmbeddedImage(*embedded, meshPath, embeddedImageDirectory, static_cast<unsigned>(index));
+  if (name[0] == '*') return {};
+  std::replace(name.begin(), name.end(), '\\', '/');
+  const std::filesystem::path given(name);
+  const std::filesystem::path resolved =
+      given.is_absolute() ? given : std::filesystem::path(meshPath).parent_path() / given;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(resolved, error))
+    fail(meshPath, fmt::format("material '{}': texture '{}' ({}) does not exist; put the image there, or remove the "
+                               "texture from the material to use its colour",
+                               materialName, name, resolved.lexically_normal().string()));
+  return resolved.lexically_normal().string();
+}
+
 // `fileStrength`: the material's KHR_materials_emissive_strength as the file
 // gives it, applied where Assimp does not report an intensity itself.
-MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float fileStrength) {
+MeshFileMaterial readMaterial(const aiScene& scene, const aiMaterial& source, size_t index, float fileStrength,
+                              const std::string& path, const std::string& embeddedImageDirectory) {
   MeshFileMaterial material;
   aiString name;
   material.name = source.Get(AI_MATKEY_NAME, name) == aiReturn_SUCCESS && name.length > 0
@@ -50,6 +98,7 @@ MeshFileMaterial readMaterial(const aiMaterial& source, size_t index, float file
     source.Get(AI_MATKEY_EMISSIVE_INTENSITY, strength);
     material.emissive *= strength;
   }
+  material.diffuseTexture = diffuseTexture(scene, source, path, material.name, embeddedImageDirectory);
   return material;
 }
 
@@ -97,6 +146,17 @@ class PartCollector {
              fmt::format("part '{}': vertex {} is not finite once placed by its node transforms", part.name, v));
       part.positions.insert(part.positions.end(), {p.x, p.y, p.z});
     }
+    // Texture coordinates only where the part's material has a texture:
+    // untextured cells store none.
+    if (mesh.HasTextureCoords(0) && !file_.materials[part.material].diffuseTexture.empty()) {
+      part.uvs.reserve(2 * size_t{mesh.mNumVertices});
+      for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
+        const aiVector3D& uv = mesh.mTextureCoords[0][v];
+        if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+          fail(file_.path, fmt::format("part '{}': vertex {}'s texture coordinate is not finite", part.name, v));
+        part.uvs.insert(part.uvs.end(), {uv.x, uv.y});
+      }
+    }
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices != 3) continue;   // points and lines
@@ -128,7 +188,7 @@ size_t LoadedMeshFile::triangleCount() const {
   return count;
 }
 
-LoadedMeshFile loadMeshFile(const std::string& path) {
+LoadedMeshFile loadMeshFile(const std::string& path, const std::string& embeddedImageDirectory) {
   std::error_code error;
   if (!std::filesystem::exists(path, error)) fail(path, "does not exist");
   if (!std::filesystem::is_regular_file(path, error)) fail(path, "is not a regular file");
@@ -148,7 +208,8 @@ LoadedMeshFile loadMeshFile(const std::string& path) {
   for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
     aiString name;
     scene->mMaterials[m]->Get(AI_MATKEY_NAME, name);
-    file.materials.push_back(readMaterial(*scene->mMaterials[m], m, strengths.of(name.C_Str(), m)));
+    file.materials.push_back(
+        readMaterial(*scene, *scene->mMaterials[m], m, strengths.of(name.C_Str(), m), path, embeddedImageDirectory));
   }
   if (file.materials.empty()) file.materials.push_back(MeshFileMaterial{"default"});
   PartCollector(*scene, file).visit(*scene->mRootNode, aiMatrix4x4(), "");

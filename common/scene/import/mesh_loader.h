@@ -28,6 +28,10 @@ struct MeshFileMaterial {
   std::string name;
   Vec3 diffuse{0.8f, 0.8f, 0.8f};   // base colour (glTF) or diffuse colour (OBJ/MTL, PLY, ...)
   Vec3 emissive{0.0f};              // emissive colour times strength, where the format has one
+  // The diffuse (OBJ/MTL map_Kd) or base colour (glTF baseColorTexture)
+  // image, resolved against the mesh file's folder; empty when none. The
+  // albedo is this image times `diffuse`.
+  std::string diffuseTexture;
 };
 
 // One placed mesh of the file: an Assimp mesh under one node, transformed.
@@ -36,6 +40,7 @@ struct MeshFilePart {
   uint32_t material = 0;   // index into LoadedMeshFile::materials
   std::vector<float> positions;     // xyz per vertex, world space
   std::vector<uint32_t> indices;    // 3 per triangle
+  std::vector<float> uvs;           // uv per vertex (the first set), or empty: the mesh has none
   size_t triangleCount() const { return indices.size() / 3; }
 };
 
@@ -50,7 +55,11 @@ struct LoadedMeshFile {
 };
 
 // Throws std::runtime_error, one line naming the file: it does not exist, it
-// cannot be read or parsed, it has no triangles, or a vertex is not finite.
-LoadedMeshFile loadMeshFile(const std::string& path);
+// cannot be read or parsed, it has no triangles, a vertex is not finite, or a
+// material's texture file does not exist (naming the material and the path).
+// Images embedded in the file (GLB) are written into embeddedImageDirectory
+// and named by MeshFileMaterial::diffuseTexture; with no directory, or for
+// an image stored as raw texels, the material keeps its colour.
+LoadedMeshFile loadMeshFile(const std::string& path, const std::string& embeddedImageDirectory = {});
 
 }  // namespace portico

@@ -17,7 +17,8 @@ ImportedScene sceneFromStore(const std::string& directory) {
   const SceneStore store = SceneStore::open(directory);
   ImportedScene scene;
   for (const Material& m : store.materials())
-    scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera});
+    scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera,
+                                               m.textured() ? directory + "/" + m.albedoTexture : std::string()});
   for (const CellInfo& info : store.cells()) {
     scene.cells.push_back(ImportedCell{info.name, info.bounds});
     scene.bounds.extend(info.bounds);
@@ -32,6 +33,8 @@ ImportedScene sceneFromStore(const std::string& directory) {
         object.positions.insert(object.positions.end(), {mesh.positions[3 * size_t(v)], mesh.positions[3 * size_t(v) + 1],
                                                          mesh.positions[3 * size_t(v) + 2]});
         object.indices.push_back(uint32_t(object.positions.size() / 3 - 1));
+        if (geometry->uvs() && store.materials()[geometry->material(t)].textured())
+          object.uvs.insert(object.uvs.end(), {geometry->uvs()[2 * size_t(v)], geometry->uvs()[2 * size_t(v) + 1]});
       }
     }
     for (auto& [material, object] : byMaterial) {

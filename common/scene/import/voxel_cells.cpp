@@ -225,6 +225,7 @@ void writeVoxelCells(const ImportedScene& scene, const VoxelGrid& grid, SceneSto
     cell.id = id;
     cell.name = VoxelGrid::cellName(grid.coordinates(id));
     cell.bounds = grid.cellBounds(id);
+    bool textured = false;
     for (uint64_t r = offsets[id]; r < offsets[id + 1]; ++r) {
       const size_t o = references[r] >> 32, t = references[r] & 0xffffffffu;
       const ImportedObject& object = scene.objects[o];
@@ -236,11 +237,16 @@ void writeVoxelCells(const ImportedScene& scene, const VoxelGrid& grid, SceneSto
           remap[global] = static_cast<uint32_t>(cell.positions.size() / 3);
           cell.positions.insert(cell.positions.end(), &object.positions[3 * size_t{local}],
                                 &object.positions[3 * size_t{local}] + 3);
+          // uvs for every vertex (zeros for untextured objects), dropped below if none is textured.
+          const float* uv = object.uvs.empty() ? nullptr : &object.uvs[2 * size_t{local}];
+          cell.uvs.insert(cell.uvs.end(), {uv ? uv[0] : 0.0f, uv ? uv[1] : 0.0f});
         }
         cell.indices.push_back(remap[global]);
       }
       cell.materials.push_back(object.material);
+      textured = textured || !object.uvs.empty();
     }
+    if (!textured) cell.uvs.clear();
     writer.writeCell(cell);
   }
 }

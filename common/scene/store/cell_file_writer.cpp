@@ -60,7 +60,8 @@ void setVector(capnp::List<float>::Builder list, const Vec3& v) {
 // A first segment large enough for the whole message, so that the file is a
 // single segment (one allocation when writing, simplest layout to read).
 uint32_t estimateWords(const CellContent& cell, const std::vector<const Portal*>& portals, size_t chunks) {
-  const uint64_t bulkBytes = (cell.positions.size() + cell.indices.size() + cell.materials.size()) * 4;
+  const uint64_t bulkBytes =
+      (cell.positions.size() + cell.indices.size() + cell.materials.size() + cell.uvs.size()) * 4;
   uint64_t words = bulkBytes / 8 + 256 + 4 * chunks;
   for (const Portal* portal : portals) words += 8 + 2 * portal->polygon.size();
   return static_cast<uint32_t>(std::min<uint64_t>(words, uint64_t{1} << 31));
@@ -89,7 +90,8 @@ uint64_t writeCellFile(const std::string& path, const CellContent& cell, const s
   const size_t positionChunks = chunkCount(vertexCount, groupsPerChunk);
   const size_t triangleChunks = chunkCount(triangleCount, groupsPerChunk);
 
-  capnp::MallocMessageBuilder message(estimateWords(cell, portals, positionChunks + 2 * triangleChunks));
+  const size_t uvChunks = cell.uvs.empty() ? 0 : positionChunks;
+  capnp::MallocMessageBuilder message(estimateWords(cell, portals, positionChunks + 2 * triangleChunks + uvChunks));
   auto file = message.initRoot<proto::CellFile>();
   file.setFormatVersion(proto::CELL_FORMAT_VERSION);
   file.setCellId(cell.id);
@@ -100,6 +102,7 @@ uint64_t writeCellFile(const std::string& path, const CellContent& cell, const s
   fillChunks<float>(file.initPositionChunks(positionChunks), cell.positions, 3, groupsPerChunk);
   fillChunks<uint32_t>(file.initIndexChunks(triangleChunks), cell.indices, 3, groupsPerChunk);
   fillChunks<uint32_t>(file.initMaterialChunks(triangleChunks), cell.materials, 1, groupsPerChunk);
+  if (!cell.uvs.empty()) fillChunks<float>(file.initUvChunks(uvChunks), cell.uvs, 2, groupsPerChunk);
 
   auto portalList = file.initPortals(static_cast<uint32_t>(portals.size()));
   for (uint32_t i = 0; i < portals.size(); ++i) {

@@ -15,6 +15,7 @@
 
 #include <bit>
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
@@ -127,7 +128,17 @@ CellGeometry::~CellGeometry() {
 }
 
 bool CellGeometry::readInPlace() const {
-  return joinedPositions_.empty() && joinedIndices_.empty() && joinedMaterials_.empty();
+  return joinedPositions_.empty() && joinedIndices_.empty() && joinedMaterials_.empty() && joinedUvs_.empty();
+}
+
+Uv CellGeometry::uvAt(uint32_t primitive, float b1, float b2) const {
+  if (!uvs_) return {0.0f, 0.0f};
+  const uint32_t* corners = mesh_.indices + 3 * size_t{primitive};
+  const float* a = uvs_ + 2 * size_t{corners[0]};
+  const float* b = uvs_ + 2 * size_t{corners[1]};
+  const float* c = uvs_ + 2 * size_t{corners[2]};
+  const float b0 = 1.0f - b1 - b2;
+  return {b0 * a[0] + b1 * b[0] + b2 * c[0], b0 * a[1] + b1 * b[1] + b2 * c[1]};
 }
 
 void CellGeometry::readMapped(uint32_t expectedCellId, size_t materialCount) {
@@ -176,6 +187,13 @@ void CellGeometry::readMapped(uint32_t expectedCellId, size_t materialCount) {
   mesh_.indices = gatherChunks<uint32_t>(indexChunks, triangleCount * 3, 3, joinedIndices_, "index");
   mesh_.triangleCount = triangleCount;
   materials_ = gatherChunks<uint32_t>(materialChunks, triangleCount, 1, joinedMaterials_, "material");
+
+  if (file.hasUvChunks() && file.getUvChunks().size() > 0) {
+    const auto uvChunks = readChunks<float>(file.getUvChunks());
+    uvs_ = gatherChunks<float>(uvChunks, vertexCount * 2, 2, joinedUvs_, "uv");
+    for (uint64_t i = 0; i < 2 * vertexCount; ++i)
+      if (!std::isfinite(uvs_[i])) throw malformed(fmt::format("vertex {}'s uv is not finite", i / 2));
+  }
 
   for (uint64_t v = 0; v < vertexCount; ++v) {
     const float* p = mesh_.positions + 3 * v;

@@ -11,6 +11,11 @@
 
 namespace portico {
 
+// A texture coordinate: (0, 0) the image's bottom-left corner, (1, 1) its top right.
+struct Uv {
+  float u = 0.0f, v = 0.0f;
+};
+
 struct CellPortalView {
   uint32_t portalId = 0;
   uint32_t neighborCell = 0;
@@ -30,6 +35,11 @@ class CellGeometry {
   const Bounds3& bounds() const { return bounds_; }
   const MeshView& mesh() const { return mesh_; }
   uint32_t material(uint32_t primitive) const { return materials_[primitive]; }
+  // Texture coordinates (uv per vertex), or null when the cell has none.
+  const float* uvs() const { return uvs_; }
+  // The uv at barycentric (b1, b2) of `primitive` (weights 1 - b1 - b2, b1,
+  // b2 for its corners 0, 1, 2); (0, 0) when the cell has no uvs.
+  Uv uvAt(uint32_t primitive, float b1, float b2) const;
   const std::vector<CellPortalView>& portals() const { return portals_; }
   uint64_t bytes() const { return mappedBytes_; }
   // Whether positions, indices and material ids are used where they lie in
@@ -47,6 +57,7 @@ class CellGeometry {
   Bounds3 bounds_;
   MeshView mesh_;
   const uint32_t* materials_ = nullptr;
+  const float* uvs_ = nullptr;
   std::vector<CellPortalView> portals_;
   // Storage: the mapping, plus copies only when a bulk array spans chunks.
   void* mapped_ = nullptr;
@@ -54,6 +65,7 @@ class CellGeometry {
   std::vector<float> joinedPositions_;
   std::vector<uint32_t> joinedIndices_;
   std::vector<uint32_t> joinedMaterials_;
+  std::vector<float> joinedUvs_;
 };
 
 }  // namespace portico

@@ -107,6 +107,21 @@ class CatalogueReader {
       material.hiddenFromCamera = row.columnInt(8) != 0;
       materials.push_back(std::move(material));
     }
+    if (version >= 5) {
+      sql::Statement& texture = db_.prepare("SELECT material, albedo_texture FROM material_textures");
+      while (texture.step()) {
+        const int64_t id = texture.columnInt(0);
+        if (id < 0 || static_cast<uint64_t>(id) >= materials.size())
+          fail(fmt::format("material_textures names material {}, but there are {} materials", id, materials.size()));
+        const std::string file = texture.columnText(1);
+        // Only a file of the store's own textures/ folder: a worker opens it.
+        const fs::path relative = fs::path(file).lexically_normal();
+        if (relative.is_absolute() || relative.empty() || *relative.begin() != scene_schema::kTextureDirectory ||
+            file.find("..") != std::string::npos)
+          fail(fmt::format("material {}'s texture '{}' is not a file under textures/", id, file));
+        materials[static_cast<size_t>(id)].albedoTexture = file;
+      }
+    }
     return materials;
   }
 

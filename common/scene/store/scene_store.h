@@ -55,6 +55,7 @@ struct CellContent {
   std::vector<float> positions;       // xyz per vertex
   std::vector<uint32_t> indices;      // 3 per triangle
   std::vector<uint32_t> materials;    // 1 per triangle
+  std::vector<float> uvs;             // uv per vertex, or empty: no textured triangle
 };
 
 // Write side. Cells stream to disk one at a time (writeCell), so a building
@@ -75,6 +76,11 @@ class SceneStoreWriter {
   // hiddenFromCamera: see Material (cut-away ceilings and their lamps).
   uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0),
                        bool hiddenFromCamera = false);
+  // Gives material `material` an albedo texture: a copy of `sourceImage` (any
+  // format OpenImageIO reads) as a tiled TIFF under textures/, so the store
+  // is self-contained and lookups read tiles. Throws std::runtime_error
+  // naming the material and the file when it cannot be read.
+  void setMaterialTexture(uint32_t material, const std::string& sourceImage);
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned

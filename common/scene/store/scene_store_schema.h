@@ -18,11 +18,14 @@ namespace portico::scene_schema {
 //      still read, every light a parallelogram.
 //   4: table cameras (named; id 0 the default) replaces table camera.
 //      Versions 1 to 3 are still read, their one camera named "default".
-constexpr int kVersion = 4;
+//   5: table material_textures (a material's albedo texture, a file under
+//      textures/). Versions 1 to 4 are still read, with no textures.
+constexpr int kVersion = 5;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
 constexpr std::string_view kCellDirectory = "cells";
+constexpr std::string_view kTextureDirectory = "textures";
 
 // Portal polygons are a BLOB of little-endian float32, xyz per vertex, in
 // order around the polygon: exact (no decimal round trip) and compact. All
@@ -53,6 +56,9 @@ CREATE TABLE materials(
   albedo_r REAL NOT NULL, albedo_g REAL NOT NULL, albedo_b REAL NOT NULL,
   emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL,
   hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)));
+CREATE TABLE material_textures(
+  material INTEGER PRIMARY KEY REFERENCES materials(id),
+  albedo_texture TEXT NOT NULL);
 CREATE TABLE lights(
   id INTEGER PRIMARY KEY,
   cell INTEGER NOT NULL REFERENCES cells(id),

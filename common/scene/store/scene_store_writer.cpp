@@ -14,6 +14,8 @@
 #include <system_error>
 #include <unordered_map>
 
+#include "common/image/image_formats_loader.h"
+#include "common/image/texture_module.h"
 #include "common/scene/store/cell_file_writer.h"
 #include "common/scene/store/portal_geometry.h"
 #include "common/scene/store/scene_store.h"
@@ -192,6 +194,22 @@ void SceneStoreWriter::addCamera(const Camera& camera) {
   impl_->otherCameras.push_back(camera);
 }
 
+void SceneStoreWriter::setMaterialTexture(uint32_t material, const std::string& sourceImage) {
+  impl_->requireUncommitted();
+  if (material >= impl_->materials.size())
+    impl_->fail(fmt::format("texture {}: no material {} (there are {})", sourceImage, material,
+                            impl_->materials.size()));
+  Material& target = impl_->materials[material];
+  const std::string file = fmt::format("{}/{}.tif", scene_schema::kTextureDirectory, material);
+  std::error_code ignored;
+  fs::create_directories(impl_->staging / scene_schema::kTextureDirectory, ignored);
+  const auto convert = reinterpret_cast<PorticoTextureConvertFn>(imageFormatsEntry(kTextureConvertEntry));
+  char error[512] = "";
+  if (convert(sourceImage.c_str(), (impl_->staging / file).c_str(), error, sizeof error) != 0)
+    impl_->fail(fmt::format("material '{}': texture {}: {}", target.name, sourceImage, error));
+  target.albedoTexture = file;
+}
+
 void SceneStoreWriter::setMeta(const std::string& key, const std::string& value) {
   impl_->requireUncommitted();
   impl_->meta[key] = value;
@@ -213,6 +231,11 @@ void SceneStoreWriter::writeCell(const CellContent& cell) {
   const size_t triangleCount = cell.indices.size() / 3;
   if (cell.materials.size() != triangleCount)
     impl_->fail(fmt::format("{}: {} material ids for {} triangles", what, cell.materials.size(), triangleCount));
+  if (!cell.uvs.empty() && cell.uvs.size() != 2 * vertexCount)
+    impl_->fail(fmt::format("{}: {} uv values for {} vertices (2 per vertex, or none)", what, cell.uvs.size(),
+                            vertexCount));
+  for (size_t i = 0; i < cell.uvs.size(); ++i)
+    if (!std::isfinite(cell.uvs[i])) impl_->fail(fmt::format("{}: vertex {}'s uv is not finite", what, i / 2));
   if (vertexCount > UINT32_MAX)
     impl_->fail(fmt::format("{}: {} vertices do not fit 32-bit indices; split the cell", what, vertexCount));
 
@@ -344,6 +367,11 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
     }
     insert.bind(9, int64_t{material.hiddenFromCamera ? 1 : 0});
     insert.run();
+    if (material.textured())
+      db.prepare("INSERT INTO material_textures VALUES (?, ?)")
+          .bind(1, int64_t{material.id})
+          .bind(2, material.albedoTexture)
+          .run();
   }
   for (const AreaLight& light : lights) {
     sql::Statement& insert = db.prepare("INSERT INTO lights VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");

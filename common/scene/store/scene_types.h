@@ -18,6 +18,11 @@ struct Material {
   // and reflects light); lets a view from above show a room whose ceiling
   // (facing down) still lights it, while a camera in the room sees it.
   bool hiddenFromCamera = false;
+  // An albedo texture, relative to the store directory (textures/...), or
+  // empty. The albedo at a point is the texture's colour there (linear RGB)
+  // times `albedo`, and the cell's uvs say where on the texture a point lies.
+  std::string albedoTexture;
+  bool textured() const { return !albedoTexture.empty(); }
   bool emissive() const { return maxComponent(emission) > 0.0f; }
 };
 

@@ -181,7 +181,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "4");
+  EXPECT_EQ(store.meta().at("format_version"), "5");
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -549,7 +549,8 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 4);
+    EXPECT_EQ(db.userVersion(), 5);
+    db.exec("DROP TABLE material_textures");
     keepOnlyTheDefaultCameraAsVersionThreeDid(db);
     db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
     db.exec("ALTER TABLE lights DROP COLUMN shape");
