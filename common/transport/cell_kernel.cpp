@@ -7,6 +7,7 @@
 #include "common/transport/photon_scattering.h"
 #include "common/transport/pixel_samples.h"
 #include "common/transport/sampling.h"
+#include "common/transport/surface_point.h"
 
 namespace portico {
 
@@ -161,7 +162,7 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
     }
     const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
     const PhotonScatter scatter =
-        scatterPhoton(photon, {mesh, event.primitive, event.t, material}, seed, parameters_.maxPhotonBounces);
+        scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material}, seed, parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
@@ -214,7 +215,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   const Material& material = scene_.materials()[tracer_.cell().material(hit.primitive)];
   bool front;
   const Vec3 normal = hitNormalFacing(mesh, hit.primitive, ray.direction, front);
-  const Vec3 point = ray.origin + ray.direction * hit.t;
+  const Vec3 point = interiorHitPoint(mesh, hit.primitive, hit.u, hit.v);
   // Emitters are one-sided: only their front shows their radiance.
   if (material.emissive() && front) addToFilm(ray.pixel, ray.weight * material.emission, out);
   if (!(maxComponent(material.albedo) > 0)) return;

@@ -16,6 +16,7 @@
 #include "common/transport/photon_map.h"
 #include "common/transport/ray_state.h"
 #include "common/transport/sampling.h"
+#include "common/transport/surface_point.h"
 
 namespace portico {
 
@@ -43,6 +44,7 @@ struct PhotonHit {
   const MeshView& mesh;
   uint32_t primitive;
   float t;
+  float u, v;   // barycentrics of vertices 1 and 2
   const Material& material;
 };
 
@@ -65,7 +67,7 @@ inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint6
   PhotonScatter scatter;
   const Material& material = hit.material;
   if (material.emissive() || !(maxComponent(material.albedo) > 0)) return scatter;
-  const Vec3 point = photon.origin + photon.direction * hit.t;
+  const Vec3 point = interiorHitPoint(hit.mesh, hit.primitive, hit.u, hit.v);
   const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
   const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;
   scatter.deposited = true;
