@@ -44,7 +44,7 @@ struct JobSettings {
   // (docs/accelerator-benchmarks.md).
   std::string renderAccel;
   // Defaults checked against the reference scenes (docs/validation.md):
-  // final gathering at every camera hit, N-rooks pixel samples.
+  // final gathering at every camera hit, multi-jittered pixel samples.
   uint64_t photons = 200000;
   uint32_t spp = 16;
   uint32_t gather = 4;               // final-gather rays per camera hit (0: estimate at the hit)

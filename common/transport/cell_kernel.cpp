@@ -6,7 +6,9 @@
 #include "common/rng.h"
 #include "common/transport/albedo_texture.h"
 #include "common/transport/photon_scattering.h"
+#include "common/transport/pixel_samples.h"
 #include "common/transport/sampling.h"
+#include "common/transport/surface_point.h"
 
 namespace portico {
 
@@ -63,28 +65,20 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
   if (!camera_) throw std::logic_error("camera rays need the image size");
   const uint32_t spp = parameters_.spp;
   const Vec3 weight(1.0f / float(spp));
-  std::vector<uint32_t> rows(spp);
+  std::vector<PixelSample> samples;
+  std::vector<uint32_t> scratch;
   for (uint32_t pixel = firstPixel; pixel < firstPixel + pixelCount; ++pixel) {
     const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
-    // Box filter with N-rooks (Latin hypercube) positions: sample s takes
-    // column s and a row from a per-pixel random permutation, so a pixel
-    // cut by an edge (a bright light's!) sees its coverage far more evenly
-    // than with independent positions.
-    for (uint32_t s = 0; s < spp; ++s) rows[s] = s;
-    for (uint32_t s = spp; s > 1; --s) {
-      const float u = randomUniform(parameters_.seed, RandomStream::Camera, pixel, s, dim::PixelShuffle);
-      std::swap(rows[s - 1], rows[std::min(s - 1, static_cast<uint32_t>(u * s))]);
-    }
+    // Box filter, correlated multi-jittered positions (pixel_samples.h).
+    pixelSamples(parameters_.seed, pixel, spp, samples, scratch);
     for (uint32_t sample = 0; sample < spp; ++sample) {
       checkStop();
       RayState ray;
       ray.kind = RayKind::Camera;
       ray.pathId = uint64_t(pixel) * spp + sample;
       ray.pixel = pixel;
-      const float jitterX = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::PixelX);
-      const float jitterY = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::PixelY);
-      const float px = x + (sample + jitterX) / float(spp);
-      const float py = y + (rows[sample] + jitterY) / float(spp);
+      const float px = float(x) + samples[sample].x;
+      const float py = float(y) + samples[sample].y;
       ray.origin = camera_->origin();
       ray.direction = camera_->direction(px, py);
       ray.weight = weight;
@@ -170,7 +164,7 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
     const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
     const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
                                       photon.origin + photon.direction * event.t);
-    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, material, &albedo}, seed,
+    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material, &albedo}, seed,
                                                 parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
@@ -224,7 +218,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   const Material& material = scene_.materials()[tracer_.cell().material(hit.primitive)];
   bool front;
   const Vec3 normal = hitNormalFacing(mesh, hit.primitive, ray.direction, front);
-  const Vec3 point = ray.origin + ray.direction * hit.t;
+  const Vec3 point = interiorHitPoint(mesh, hit.primitive, hit.u, hit.v);
   // Emitters are one-sided: only their front shows their radiance.
   if (material.emissive() && front) addToFilm(ray.pixel, ray.weight * material.emission, out);
   const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, hit.primitive, point);

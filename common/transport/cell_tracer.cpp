@@ -119,6 +119,8 @@ CellEvent CellTracer::trace(const Ray& ray) const {
     event.kind = CellEvent::Kind::Surface;
     event.t = hit.t;
     event.primitive = hit.primitive;
+    event.u = hit.u;
+    event.v = hit.v;
   }
   // Portals are few per cell: test them all. A ray leaves only through a
   // portal it moves out of, so a ray that just entered through a portal

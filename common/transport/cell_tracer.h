@@ -14,6 +14,7 @@ struct CellEvent {
   enum class Kind { Surface, Portal, Leave } kind = Kind::Leave;
   float t = kInfinity;
   uint32_t primitive = kNoPrimitive;    // Surface
+  float u = 0, v = 0;                   // Surface: barycentrics of vertices 1 and 2
   uint32_t neighborCell = 0;            // Portal
 };
 

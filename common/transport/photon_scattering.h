@@ -16,6 +16,7 @@
 #include "common/transport/photon_map.h"
 #include "common/transport/ray_state.h"
 #include "common/transport/sampling.h"
+#include "common/transport/surface_point.h"
 
 namespace portico {
 
@@ -43,6 +44,7 @@ struct PhotonHit {
   const MeshView& mesh;
   uint32_t primitive;
   float t;
+  float u, v;   // barycentrics of vertices 1 and 2
   const Material& material;
   // The albedo at the hit when the material is textured; null: material.albedo.
   const Vec3* albedo = nullptr;
@@ -68,7 +70,7 @@ inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint6
   const Material& material = hit.material;
   const Vec3 albedo = hit.albedo ? *hit.albedo : material.albedo;
   if (material.emissive() || !(maxComponent(albedo) > 0)) return scatter;
-  const Vec3 point = photon.origin + photon.direction * hit.t;
+  const Vec3 point = interiorHitPoint(hit.mesh, hit.primitive, hit.u, hit.v);
   const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
   const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;
   scatter.deposited = true;

@@ -12,6 +12,7 @@
 
 #include "common/image/image_reader.h"
 #include "common/util/child_process.h"
+#include "tests/support/temp_directory.h"
 
 namespace portico {
 namespace {
@@ -100,9 +101,7 @@ class DoorwaySeam : public ::testing::TestWithParam<int> {};
 
 TEST_P(DoorwaySeam, FloorThroughAPortalHasNoStep) {
   const int gather = GetParam();
-  const fs::path dir =
-      fs::temp_directory_path() / ("portico-seam-" + std::to_string(gather) + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
+  const fs::path dir = testing_support::tempPath("seam-" + std::to_string(gather));
   const LinearImage split = renderHall(dir / "two-cells", true, gather);
   const LinearImage whole = renderHall(dir / "one-cell", false, gather);
   ASSERT_EQ(split.width, 96u);

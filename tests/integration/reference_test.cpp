@@ -18,6 +18,7 @@
 #include "common/image/image_compare.h"
 #include "common/image/image_reader.h"
 #include "common/util/child_process.h"
+#include "tests/support/temp_directory.h"
 
 namespace portico {
 namespace {
@@ -43,10 +44,7 @@ class ReferenceScene : public ::testing::TestWithParam<ReferenceCase> {};
 TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
   const std::string name = GetParam().name;
   const int grid = GetParam().grid;
-  const fs::path dir = fs::temp_directory_path() /
-                       ("portico-reference-" + name + "-" + std::to_string(grid) + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  const fs::path dir = testing_support::tempPath("reference-" + name + "-" + std::to_string(grid));
   std::vector<std::string> import{kBin + "portico", "scene", "import", (kScenes / name / "scene.json").string(),
                                   (dir / "store").string()};
   if (grid > 0) import.insert(import.begin() + 3, {"--grid", std::to_string(grid)});

@@ -27,6 +27,7 @@
 #include "common/net/client.h"
 #include "common/net/curve_keys.h"
 #include "common/util/child_process.h"
+#include "tests/support/temp_directory.h"
 
 namespace portico::harness {
 
@@ -37,12 +38,8 @@ inline const std::string kBin =
     std::getenv("PORTICO_TEST_BIN") ? std::string(std::getenv("PORTICO_TEST_BIN")) + "/"
                                     : std::string(PORTICO_BINARY_DIR) + "/bin/";
 
-inline fs::path makeTempDirectory(const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("portico-test-" + name + "-" + std::to_string(getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+// Removed when the test program ends with every test passed.
+inline fs::path makeTempDirectory(const std::string& name) { return testing_support::tempPath("test-" + name); }
 
 inline int runCommand(const std::vector<std::string>& argv, const fs::path& log) {
   ChildProcess process(argv, log.string());

@@ -144,7 +144,7 @@ struct Tracer {
       const uint32_t primitive = query.hit.primID;
       const Material& material = scene.materials()[cell.material(primitive)];
       const PhotonScatter scatter =
-          scatterPhoton(photon, {cell.mesh(), primitive, query.ray.tfar, material}, seed, maxBounces);
+          scatterPhoton(photon, {cell.mesh(), primitive, query.ray.tfar, query.hit.u, query.hit.v, material}, seed, maxBounces);
       if (scatter.deposited) {
         stored.push_back(scatter.deposit);
         ++count.deposits;

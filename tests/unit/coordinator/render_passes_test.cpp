@@ -10,6 +10,7 @@
 
 #include "common/net/message.h"
 #include "coordinator/pass_error.h"
+#include "tests/support/temp_directory.h"
 
 namespace portico {
 namespace {
@@ -139,10 +140,7 @@ TEST(RenderPasses, StopAtTheTargetBeforeAPassPastTheTimeLimitOrAtTheMostPasses) 
 // Each pass's end, estimate and the block statistics are in jobs.db: a
 // store opened again (a restarted coordinator) goes on where it was.
 TEST(RenderPasses, PassesAndTheirBlockStatisticsSurviveReopeningJobsDb) {
-  const std::filesystem::path path =
-      std::filesystem::temp_directory_path() / ("portico-render-passes-" + std::to_string(getpid()) + ".db");
-  for (const char* suffix : {"", "-wal", "-shm", "-photons", "-batches"})
-    std::filesystem::remove_all(path.string() + suffix);
+  const std::filesystem::path path = testing_support::tempPath("render-passes") / "jobs.db";
   Spec spec(1e-9, std::nullopt, 3);
   spec.spec.setWidth(16);
   spec.spec.setHeight(16);

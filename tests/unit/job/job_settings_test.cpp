@@ -14,6 +14,7 @@
 #include "common/scene/store/scene_store.h"
 #include "coordinator/job_limits.h"
 #include "coordinator/job_planner.h"
+#include "tests/support/temp_directory.h"
 
 namespace portico {
 namespace {
@@ -24,9 +25,7 @@ namespace fs = std::filesystem;
 const SceneStore& twoRooms(uint32_t grid) {
   static std::map<uint32_t, SceneStore> stores;
   if (auto it = stores.find(grid); it != stores.end()) return it->second;
-  const fs::path store =
-      fs::temp_directory_path() / ("portico-job-settings-" + std::to_string(getpid()) + "-" + std::to_string(grid));
-  fs::remove_all(store);
+  const fs::path store = testing_support::tempPath("job-settings-" + std::to_string(grid), false);
   ImportOptions options;
   options.gridResolution = grid;
   importBuilding({std::string(PORTICO_REFERENCE_DIR) + "/two_rooms/scene.json"}, store.string(), options);

@@ -33,7 +33,7 @@ TEST(PhotonScattering, EmittersAndBlackSurfacesAbsorbWithoutADeposit) {
   for (const Material& m : {material(0.8f, 5.0f), material(0.0f)}) {
     RayState photon = photonAt(1);
     const RayState before = photon;
-    const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 0, 1.0f, m}, 1, 64);
+    const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 0, 1.0f, 0.25f, 0.25f, m}, 1, 64);
     EXPECT_FALSE(scatter.deposited);
     EXPECT_FALSE(scatter.bounced);
     EXPECT_EQ(photon.origin, before.origin);
@@ -45,9 +45,13 @@ TEST(PhotonScattering, DepositsIntoTheLitSideAndBouncesOffIt) {
   for (float height : {1.0f, -1.0f}) {   // from above, then from below (the back side)
     const float side = height > 0 ? 1.0f : -1.0f;
     RayState photon = photonAt(height);
-    const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 1, std::abs(height), material(1.0f)}, 1, 64);
+    const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 1, std::abs(height), 0.0f, 0.5f, material(1.0f)}, 1, 64);
     ASSERT_TRUE(scatter.deposited);
-    EXPECT_EQ(scatter.deposit.position, Vec3(0.5f, 0, 0.5f));
+    // (0.5, 0, 0.5) lies on the triangle's edge: the deposit is a hair inside.
+    EXPECT_NEAR(scatter.deposit.position.x, 0.5f, 1e-4f);
+    EXPECT_EQ(scatter.deposit.position.y, 0.0f);
+    EXPECT_NEAR(scatter.deposit.position.z, 0.5f, 1e-4f);
+    EXPECT_GT(scatter.deposit.position.z, scatter.deposit.position.x);
     EXPECT_EQ(scatter.deposit.direction, Vec3(0, -side, 0));
     EXPECT_EQ(scatter.deposit.power, Vec3(2, 3, 4));
     EXPECT_EQ(scatter.deposit.pathId, 7u);
@@ -67,7 +71,7 @@ TEST(PhotonScattering, DepositsIntoTheLitSideAndBouncesOffIt) {
 TEST(PhotonScattering, TheBounceCapEndsThePathAfterItsDeposit) {
   RayState photon = photonAt(1);
   photon.depth = 3;
-  const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 0, 1.0f, material(1.0f)}, 1, 4);
+  const PhotonScatter scatter = scatterPhoton(photon, {kFloor, 0, 1.0f, 0.25f, 0.25f, material(1.0f)}, 1, 4);
   EXPECT_TRUE(scatter.deposited);
   EXPECT_EQ(scatter.deposit.bounce, 3);
   EXPECT_FALSE(scatter.bounced);
@@ -78,7 +82,7 @@ TEST(PhotonScattering, RussianRouletteKeepsTheExpectedPower) {
   int survivors = 0;
   for (uint64_t path = 0; path < kPaths; ++path) {
     RayState photon = photonAt(1, path);
-    if (!scatterPhoton(photon, {kFloor, 0, 1.0f, material(0.25f)}, 3, 64).bounced) continue;
+    if (!scatterPhoton(photon, {kFloor, 0, 1.0f, 0.25f, 0.25f, material(0.25f)}, 3, 64).bounced) continue;
     ++survivors;
     EXPECT_EQ(photon.weight, Vec3(2, 3, 4));   // power * albedo / survival
   }
