@@ -32,8 +32,8 @@ constexpr float kCellPadding = 1e-3f;        // 1 mm around the scene for a cell
 constexpr float kCellTolerance = 1e-3f;      // triangles may stick out of their cell by this much of the scene size
 const char* const kSingleCellName = "building";
 const char* const kNoLightsWarning =
-    "the scene has no lights, so it renders black and `portico render` refuses it; add one with a \"lights\" "
-    "array in a building.json (quads and triangles, docs/building-json.md), an emissive material in a mesh file "
+    "the scene has no lights, so `portico render` refuses it unless daylight lights it (--sun or --sky through "
+    "portals to outdoor cells, docs/daylight.md); add one with a \"lights\" array in a building.json (quads and triangles, docs/building-json.md), an emissive material in a mesh file "
     "(MTL Ke, glTF emissiveFactor), or, for an IFC model, --lights panels";
 
 std::string formatVec(const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
@@ -47,18 +47,20 @@ bool isBuildingJson(const std::string& path) {
 
 Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
 
-// Materials, one per distinct (albedo, emission); the first name wins.
+// Materials, one per distinct (albedo, emission, glass); the first name wins.
 class MaterialTable {
  public:
-  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out) {
-    const std::array<float, 6> key{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
+  uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out,
+               const Vec3& transmittance = Vec3(0), float ior = 1.5f) {
+    const std::array<float, 10> key{albedo.x,        albedo.y,        albedo.z,        emission.x, emission.y,
+                                    emission.z,      transmittance.x, transmittance.y, transmittance.z, ior};
     auto [it, inserted] = ids_.emplace(key, static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false});
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, transmittance, ior});
     return it->second;
   }
 
  private:
-  std::map<std::array<float, 6>, uint32_t> ids_;
+  std::map<std::array<float, 10>, uint32_t> ids_;
 };
 
 void appendPart(const MeshFilePart& part, ImportedObject& object) {
@@ -99,13 +101,16 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     const std::string label = fmt::format("{}: part '{}'", labelPrefix, part.name);
     if (!isFinite(source.diffuse) || !isFinite(source.emissive))
       throw std::runtime_error(fmt::format("{}: material '{}' has a colour that is not finite", label, source.name));
-    const Vec3 albedo = min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
+    // A transparent material is thin glass, without diffuse reflection.
+    const Vec3 transmittance = min(max(source.transmittance, Vec3(0.0f)), Vec3(1.0f));
+    const bool glass = maxComponent(transmittance) > 0.0f;
+    const Vec3 albedo = glass ? Vec3(0.0f) : min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
     const Vec3 emission = emissionOverride ? *emissionOverride : max(source.emissive, Vec3(0.0f));
     ImportedObject object;
     object.label = label;
     object.cell = cell;
     appendPart(part, object);
-    object.material = materials.add(source.name, albedo, emission, scene.materials);
+    object.material = materials.add(source.name, albedo, emission, scene.materials, transmittance);
     if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
     scene.objects.push_back(std::move(object));
   }
@@ -205,7 +210,15 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
     }
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     const uint32_t cell = givenCells ? cellIds.at(entry.cell) : 0;
-    if (!entry.albedo) {
+    if (entry.glass) {
+      ImportedObject object;
+      object.label = entry.label();
+      object.cell = cell;
+      for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
+      object.material = materials.add(entry.name, Vec3(0.0f), Vec3(0.0f), scene.materials, entry.glass->transmittance,
+                                      entry.glass->ior);
+      scene.objects.push_back(std::move(object));
+    } else if (!entry.albedo) {
       try {
         addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
       } catch (const std::runtime_error& e) {
@@ -331,7 +344,10 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
                      ? fmt::format("grid {}^3", options.gridResolution)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
   for (const ImportedMaterial& material : scene.materials)
-    writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
+    if (const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission,
+                                               material.hiddenFromCamera);
+        maxComponent(material.transmittance) > 0.0f)
+      writer.setMaterialGlass(id, material.transmittance, material.ior);
   if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
   else

@@ -28,6 +28,9 @@ struct MeshFileMaterial {
   std::string name;
   Vec3 diffuse{0.8f, 0.8f, 0.8f};   // base colour (glTF) or diffuse colour (OBJ/MTL, PLY, ...)
   Vec3 emissive{0.0f};              // emissive colour times strength, where the format has one
+  // Light let through (thin glass when above 0): MTL (1 - d) or Tr times
+  // Tf, glTF KHR_materials_transmission's factor times the base colour.
+  Vec3 transmittance{0.0f};
 };
 
 // One placed mesh of the file: an Assimp mesh under one node, transformed.

@@ -17,7 +17,7 @@ ImportedScene sceneFromStore(const std::string& directory) {
   const SceneStore store = SceneStore::open(directory);
   ImportedScene scene;
   for (const Material& m : store.materials())
-    scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera});
+    scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera, m.transmittance, m.ior});
   for (const CellInfo& info : store.cells()) {
     scene.cells.push_back(ImportedCell{info.name, info.bounds});
     scene.bounds.extend(info.bounds);

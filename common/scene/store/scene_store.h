@@ -75,6 +75,8 @@ class SceneStoreWriter {
   // hiddenFromCamera: see Material (cut-away ceilings and their lamps).
   uint32_t addMaterial(const std::string& name, const Vec3& albedo, const Vec3& emission = Vec3(0),
                        bool hiddenFromCamera = false);
+  // Makes material `id` thin glass (Material::transmittance, ior).
+  void setMaterialGlass(uint32_t id, const Vec3& transmittance, float ior);
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned

@@ -18,7 +18,9 @@ namespace portico::scene_schema {
 //      still read, every light a parallelogram.
 //   4: table cameras (named; id 0 the default) replaces table camera.
 //      Versions 1 to 3 are still read, their one camera named "default".
-constexpr int kVersion = 4;
+//   5: materials.transmittance_r/g/b and ior (thin glass). Versions 1 to 4
+//      are still read, without glass.
+constexpr int kVersion = 5;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -52,7 +54,10 @@ CREATE TABLE materials(
   name TEXT NOT NULL,
   albedo_r REAL NOT NULL, albedo_g REAL NOT NULL, albedo_b REAL NOT NULL,
   emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL,
-  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)));
+  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)),
+  transmittance_r REAL NOT NULL DEFAULT 0, transmittance_g REAL NOT NULL DEFAULT 0,
+  transmittance_b REAL NOT NULL DEFAULT 0,
+  ior REAL NOT NULL DEFAULT 1.5);
 CREATE TABLE lights(
   id INTEGER PRIMARY KEY,
   cell INTEGER NOT NULL REFERENCES cells(id),

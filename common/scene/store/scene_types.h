@@ -18,7 +18,13 @@ struct Material {
   // and reflects light); lets a view from above show a room whose ceiling
   // (facing down) still lights it, while a camera in the room sees it.
   bool hiddenFromCamera = false;
+  // Thin glass (common/transport/thin_glass.h) when any channel is above 0:
+  // the tint of light passing through the pane, and the index of refraction
+  // of its Fresnel reflection. A glass material has no diffuse albedo.
+  Vec3 transmittance;
+  float ior = 1.5f;
   bool emissive() const { return maxComponent(emission) > 0.0f; }
+  bool glass() const { return maxComponent(transmittance) > 0.0f; }
 };
 
 enum class LightShape : uint8_t { Parallelogram, Triangle };
