@@ -14,6 +14,7 @@ constexpr float kWhiteEfficacy = 179.0f;          // lm/W: luminance = 179 * Y(R
 constexpr float kOvercastHorizontalLux = 10000.0f;
 constexpr float kSolarLuxOutsideAtmosphere = 128000.0f;
 constexpr float kDegrees = kPi / 180.0f;
+constexpr float kGroundAlbedo = 0.2f;
 
 Vec3 xyYToRgb(float x, float y, float luminance) {
   if (!(y > 0)) return Vec3(0);
@@ -66,7 +67,17 @@ SkyModel::SkyModel(const DaylightSettings& s)
                                                                : modelledSunIrradiance(s.sunElevationDegrees, s.turbidity);
   // The CIE overcast sky's horizontal illuminance is Lz * 7 pi / 9.
   overcastZenith_ = kOvercastHorizontalLux * 9.0f / (7.0f * kPi) / kWhiteEfficacy;
-  if (kind_ != DaylightSettings::Sky::Preetham) return;
+  if (kind_ == DaylightSettings::Sky::Preetham) setUpPreetham(s);
+  // The ground: lit by the sky above it (the radiance below the horizon is
+  // still zero here) and the sun.
+  if (kind_ == DaylightSettings::Sky::Preetham || kind_ == DaylightSettings::Sky::Overcast) {
+    Vec3 onGround = irradianceFacing(Vec3(0, 1, 0));
+    if (sun_) onGround += sunIrradiance_ * std::max(0.0f, sunDirection_.y);
+    groundRadiance_ = onGround * (kGroundAlbedo / kPi);
+  }
+}
+
+void SkyModel::setUpPreetham(const DaylightSettings& s) {
   const float t = s.turbidity;
   perez_[0] = {0.1787f * t - 1.4630f, -0.3554f * t + 0.4275f, -0.0227f * t + 5.3251f, 0.1206f * t - 2.5771f,
                -0.0670f * t + 0.3703f};
@@ -103,8 +114,8 @@ Vec3 SkyModel::radiance(const Vec3& towardsSky) const {
     case DaylightSettings::Sky::None: return Vec3(0);
     case DaylightSettings::Sky::Uniform: return uniform_;
     case DaylightSettings::Sky::Overcast:
-      return towardsSky.y > 0 ? Vec3(overcastZenith_ * (1.0f + 2.0f * towardsSky.y) / 3.0f) : Vec3(0);
-    case DaylightSettings::Sky::Preetham: return towardsSky.y > 0 ? preetham(towardsSky) : Vec3(0);
+      return towardsSky.y > 0 ? Vec3(overcastZenith_ * (1.0f + 2.0f * towardsSky.y) / 3.0f) : groundRadiance_;
+    case DaylightSettings::Sky::Preetham: return towardsSky.y > 0 ? preetham(towardsSky) : groundRadiance_;
   }
   return Vec3(0);
 }

@@ -13,7 +13,9 @@
 //   from CIE xyY to linear Rec. 709 RGB.
 // * Overcast: the CIE overcast sky, L(theta) = Lz (1 + 2 cos theta) / 3,
 //   white, with Lz giving 10 000 lx on a horizontal plane.
-// Preetham's and the overcast sky are black below the horizon (no ground).
+// Below the horizon, Preetham's and the overcast sky show a ground of albedo
+// 0.2, Lambertian and unshadowed: radiance 0.2 E / pi, with E the sky's and
+// the sun's illuminance on it.
 // The sun's irradiance, unless given, is 128 000 lx outside the atmosphere
 // through Rayleigh and aerosol (Angstrom, beta from T as in Preetham's
 // paper) extinction along the Kasten-Young air mass, per channel at 610,
@@ -50,6 +52,7 @@ class SkyModel {
 
  private:
   Vec3 preetham(const Vec3& towardsSky) const;
+  void setUpPreetham(const DaylightSettings& settings);
   DaylightSettings::Sky kind_;
   Vec3 uniform_;
   bool sun_;
@@ -60,6 +63,7 @@ class SkyModel {
   std::array<std::array<float, 5>, 3> perez_{};
   std::array<float, 3> zenith_{}, perezAtZenith_{};
   float overcastZenith_ = 0;
+  Vec3 groundRadiance_;
 };
 
 // The sun's irradiance at `elevationDegrees` for turbidity T (the model above).
