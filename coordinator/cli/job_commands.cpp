@@ -111,7 +111,10 @@ void addDaylightOptions(CLI::App& command, DaylightSettings& d) {
             probe.sun = true;
             probe.sunAzimuthDegrees = (*v)[0];
             probe.sunElevationDegrees = (*v)[1];
-            return daylightProblem(probe);
+            // CLI11 names the option itself.
+            std::string problem = daylightProblem(probe);
+            if (problem.rfind("--sun: ", 0) == 0) problem.erase(0, std::string_view("--sun: ").size());
+            return problem;
           },
           "AZIMUTH,ELEVATION"));
   command
