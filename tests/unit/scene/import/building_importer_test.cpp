@@ -978,6 +978,25 @@ TEST(BuildingImportGlass, MtlDissolveIsGlassTintedByTf) {
   EXPECT_FALSE(wall->glass());
 }
 
+// KHR_materials_transmission: transmitted light is tinted by the base colour.
+TEST(BuildingImportGlass, GltfTransmissionIsGlassTintedByTheBaseColour) {
+  TempDirectory temp;
+  std::string text = gltfTriangle(R"("translation": [0, 0, 0])");
+  const std::string plain = R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.25, 0.5, 0.75, 1]}}])";
+  ASSERT_NE(text.find(plain), std::string::npos);
+  text.replace(text.find(plain), plain.size(),
+               R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.9, 1, 1]},
+                   "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}}],
+                  "extensionsUsed": ["KHR_materials_transmission"])");
+  writeText(temp.path() / "pane.gltf", text);
+  importBuilding({temp / "pane.gltf"}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.materials().size(), 1u);
+  EXPECT_TRUE(store.materials()[0].glass());
+  EXPECT_NEAR(store.materials()[0].transmittance.x, 0.4f, 1e-6f);
+  EXPECT_NEAR(store.materials()[0].transmittance.z, 0.5f, 1e-6f);
+}
+
 TEST(BuildingImportGlass, BuildingJsonGlassKeyMakesThePaneOfTheDaylightScene) {
   TempDirectory temp;
   importBuilding({referenceJson("daylight_window")}, temp / "store");
