@@ -22,6 +22,8 @@ constexpr uint32_t Roulette = 5;
 constexpr uint32_t PixelX = 6;
 constexpr uint32_t PixelY = 7;
 constexpr uint32_t PixelShuffle = 8;   // keyed by pixel (not path) and step
+// Reflect or pass at a glass pane, keyed by the ray's state (glassKey).
+constexpr uint32_t GlassChoice = 9;
 // Light samples of a shading point use LightSampleBase + 3 * i + {0,1,2}.
 constexpr uint32_t LightSampleBase = 16;
 }  // namespace dim

@@ -10,7 +10,10 @@
 
 #include "common/accel/accelerator.h"
 #include "common/net/message.h"
+#include "common/net/job_spec_wire.h"
+#include "common/transport/daylight_openings.h"
 #include "common/transport/photon_shares.h"
+#include "common/transport/sky_model.h"
 #include "common/scene/store/floor_levels.h"
 #include "common/scene/store/portal_geometry.h"
 #include "common/transport/sampling.h"
@@ -149,7 +152,14 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
 }
 
 void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
-  if (scene.lights().empty()) throw std::invalid_argument(fmt::format("scene {} has no lights", scene.directory()));
+  if (const std::string problem = daylightProblem(settings.daylight); !problem.empty())
+    throw std::invalid_argument(problem);
+  if (settings.daylight.any() && daylightOpenings(scene).empty())
+    throw std::invalid_argument(fmt::format("scene {} has no opening to the outside for --sun or --sky: no portal "
+                                            "joins a cell to one named outside, sky, outside-*, sky-* or facade-*",
+                                            scene.directory()));
+  if (scene.lights().empty() && !settings.daylight.any())
+    throw std::invalid_argument(fmt::format("scene {} has no lights (and the job no --sun or --sky)", scene.directory()));
   requireAtMost("image width", settings.width, limits::kMaxImageSide);
   requireAtMost("image height", settings.height, limits::kMaxImageSide);
   const uint64_t pixels = uint64_t(settings.width) * settings.height;
@@ -193,8 +203,22 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
                          const std::atomic<bool>* stop) {
   // The cell and portal pictures need no light: the photon phase is empty.
   if (spec.getAov() != wire::Aov::RADIANCE) return;
-  const auto& lights = scene.lights();
-  const std::vector<uint64_t> share = photonSharesOfLights(lights, spec.getPhotons());
+  // The scene's lights, then the daylight's emitters (light ids on from
+  // the scene's light count: CellKernel::emitPhotons).
+  std::vector<Vec3> powers;
+  std::vector<uint32_t> cells;
+  for (const AreaLight& light : scene.lights()) {
+    powers.push_back(light.power());
+    cells.push_back(light.cell);
+  }
+  if (spec.hasDaylight()) {
+    const DaylightEmitters daylight(scene, jobSettingsFromWire(spec).daylight);
+    for (size_t e = 0; e < daylight.count(); ++e) {
+      powers.push_back(daylight.power(e));
+      cells.push_back(daylight.cell(e));
+    }
+  }
+  const std::vector<uint64_t> share = photonSharesOfPowers(powers, spec.getPhotons());
 
   // Past a billion photons the batches grow, so that a job is at most
   // ~kMostEmitBatches rows (queued in about a second): a photon's path
@@ -202,7 +226,7 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
   const uint64_t perBatch =
       std::max<uint64_t>(kPhotonsPerEmitBatch, (spec.getPhotons() + kMostEmitBatches - 1) / kMostEmitBatches);
   uint64_t nextPath = 0;
-  for (size_t i = 0; i < lights.size(); ++i) {
+  for (size_t i = 0; i < powers.size(); ++i) {
     for (uint64_t first = 0; first < share[i]; first += perBatch) {
       if (stop && stop->load(std::memory_order_relaxed))
         throw std::runtime_error("the coordinator is stopping: job not queued");
@@ -213,7 +237,7 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
       emit.setFirstPath(nextPath + first);
       emit.setCount(count);
       emit.setPhotonsOfLight(share[i]);
-      store.addBatch(job, lights[i].cell, 0, BatchKind::Emit, count, net::packToString(message));
+      store.addBatch(job, cells[i], 0, BatchKind::Emit, count, net::packToString(message));
     }
     nextPath += share[i];
   }

@@ -46,9 +46,18 @@ std::string storeFingerprint(const SceneStore& scene) {
 
 std::string photonPassKey(const JobSettings& resolved, const SceneStore& scene) {
   if (resolved.aov != JobSettings::Aov::Radiance) return "";
-  return fmt::format("store={} content={} photons={} seed={} accel={} radius={:a} bounces={} record={}",
-                     scene.directory(), storeFingerprint(scene), resolved.photons, resolved.seed, resolved.accel,
-                     resolved.photonRadius, resolved.maxPhotonBounces, sizeof(PhotonRecord));
+  std::string key = fmt::format("store={} content={} photons={} seed={} accel={} radius={:a} bounces={} record={}",
+                                scene.directory(), storeFingerprint(scene), resolved.photons, resolved.seed,
+                                resolved.accel, resolved.photonRadius, resolved.maxPhotonBounces, sizeof(PhotonRecord));
+  // Daylight's photons depend on all of its settings; a job without any
+  // keeps the key it always had.
+  if (const DaylightSettings& d = resolved.daylight; d.any())
+    key += fmt::format(" sky={} sky_radiance={:a},{:a},{:a} turbidity={:a} sun={} azimuth={:a} elevation={:a} "
+                       "sun_irradiance={:a},{:a},{:a}",
+                       int(d.sky), d.skyRadiance.x, d.skyRadiance.y, d.skyRadiance.z, d.turbidity, d.sun,
+                       d.sunAzimuthDegrees, d.sunElevationDegrees, d.sunIrradiance.x, d.sunIrradiance.y,
+                       d.sunIrradiance.z);
+  return key;
 }
 
 }  // namespace portico

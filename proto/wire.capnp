@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 11;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name)
+const protocolVersion :UInt32 = 12;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky)
 
 enum Phase {
   photons @0;
@@ -104,6 +104,29 @@ struct JobSpec {
   }
   maxPasses @22 :UInt32;   # 0 (in a Submit): 1 without a target or time limit, else kProgressiveMaxPasses
   cameraName @23 :Text;    # in a Submit: the store camera of this name ("": none); "" once resolved
+  daylight @24 :Daylight;  # absent: no daylight
+}
+
+# Sun and sky outside the building (common/job/job_settings.h DaylightSettings).
+struct Daylight {
+  sky @0 :SkyKind;
+  skyR @1 :Float32;        # uniform sky's radiance
+  skyG @2 :Float32;
+  skyB @3 :Float32;
+  turbidity @4 :Float32;
+  sun @5 :Bool;
+  sunAzimuth @6 :Float32;  # degrees from +Z towards +X
+  sunElevation @7 :Float32;  # degrees above the horizon
+  sunR @8 :Float32;        # sun's irradiance; all zero: the sun model's
+  sunG @9 :Float32;
+  sunB @10 :Float32;
+}
+
+enum SkyKind {
+  none @0;
+  uniform @1;
+  preetham @2;
+  overcast @3;
 }
 
 # A camera chosen at render time (common/job/job_settings.h JobCamera).

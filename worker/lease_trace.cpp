@@ -18,7 +18,7 @@ void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobSettings
     switch (batch.which()) {
       case wire::RayBatch::EMIT: {
         auto emit = batch.getEmit();
-        if (emit.getLight() >= scene.lights().size() || scene.lights()[emit.getLight()].cell != cellId)
+        if (!kernel.emitsHere(emit.getLight()))
           throw std::runtime_error(
               fmt::format("emission batch names light {}, which is not in cell {}", emit.getLight(), cellId));
         kernel.emitPhotons(emit.getLight(), emit.getFirstPath(), emit.getCount(), emit.getPhotonsOfLight(), out);

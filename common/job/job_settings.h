@@ -34,6 +34,22 @@ struct JobCamera {
   bool operator==(const JobCamera&) const = default;
 };
 
+// Daylight (docs/daylight.md): a sky and a sun outside the building, whose
+// light enters through the portals into outdoor cells. Radiance and
+// irradiance are per RGB channel in the units of lamps' radiance
+// (W m^-2 sr^-1); luminance = 179 lm/W times their Rec. 709 Y.
+struct DaylightSettings {
+  enum class Sky : uint8_t { None, Uniform, Preetham, Overcast } sky = Sky::None;
+  Vec3 skyRadiance;                  // Uniform: the radiance of every direction
+  float turbidity = 3.0f;            // Preetham's sky and the sun's colour and strength
+  bool sun = false;
+  // Azimuth from +Z towards +X, elevation above the horizontal (+Y up).
+  float sunAzimuthDegrees = 0, sunElevationDegrees = 0;
+  Vec3 sunIrradiance;                // on a plane facing the sun; zero: the sun model's
+  bool any() const { return sun || sky != Sky::None; }
+  bool operator==(const DaylightSettings&) const = default;
+};
+
 struct JobSettings {
   std::string store;                 // scene store directory (absolute once submitted)
   std::string output;                // image path (.png or .exr)
@@ -83,6 +99,7 @@ struct JobSettings {
   // camera of the job's own. Resolved at submit into `camera` and cleared:
   // workers see only the resolved camera.
   std::string cameraName;
+  DaylightSettings daylight;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;

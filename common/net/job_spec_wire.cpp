@@ -36,6 +36,16 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
   if (settings.targetError) spec.getTargetError().setValue(*settings.targetError);
   if (settings.timeLimitSeconds) spec.getTimeLimit().setSeconds(*settings.timeLimitSeconds);
   spec.setMaxPasses(settings.maxPasses);
+  if (const DaylightSettings& d = settings.daylight; d.any()) {
+    auto daylight = spec.initDaylight();
+    daylight.setSky(static_cast<wire::SkyKind>(d.sky));
+    daylight.setSkyR(d.skyRadiance.x), daylight.setSkyG(d.skyRadiance.y), daylight.setSkyB(d.skyRadiance.z);
+    daylight.setTurbidity(d.turbidity);
+    daylight.setSun(d.sun);
+    daylight.setSunAzimuth(d.sunAzimuthDegrees);
+    daylight.setSunElevation(d.sunElevationDegrees);
+    daylight.setSunR(d.sunIrradiance.x), daylight.setSunG(d.sunIrradiance.y), daylight.setSunB(d.sunIrradiance.z);
+  }
 }
 
 JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
@@ -71,6 +81,18 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   if (spec.getTargetError().isValue()) settings.targetError = spec.getTargetError().getValue();
   if (spec.getTimeLimit().isSeconds()) settings.timeLimitSeconds = spec.getTimeLimit().getSeconds();
   settings.maxPasses = spec.getMaxPasses();
+  if (spec.hasDaylight()) {
+    const auto daylight = spec.getDaylight();
+    DaylightSettings& d = settings.daylight;
+    const auto sky = daylight.getSky();
+    d.sky = sky <= wire::SkyKind::OVERCAST ? static_cast<DaylightSettings::Sky>(sky) : DaylightSettings::Sky::None;
+    d.skyRadiance = Vec3(daylight.getSkyR(), daylight.getSkyG(), daylight.getSkyB());
+    d.turbidity = daylight.getTurbidity();
+    d.sun = daylight.getSun();
+    d.sunAzimuthDegrees = daylight.getSunAzimuth();
+    d.sunElevationDegrees = daylight.getSunElevation();
+    d.sunIrradiance = Vec3(daylight.getSunR(), daylight.getSunG(), daylight.getSunB());
+  }
   return settings;
 }
 

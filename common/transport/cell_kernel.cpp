@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "common/rng.h"
 #include "common/transport/albedo_texture.h"
@@ -9,6 +10,7 @@
 #include "common/transport/pixel_samples.h"
 #include "common/transport/sampling.h"
 #include "common/transport/surface_point.h"
+#include "common/transport/thin_glass.h"
 
 namespace portico {
 
@@ -34,6 +36,24 @@ Camera cameraOf(const JobSettings& parameters, const SceneStore& scene) {
   }
   return camera;
 }
+
+// Glass panes a ray meets in one cell at most: past them it ends (a photon
+// is absorbed, a shadow ray blocked).
+constexpr int kMaxGlassEvents = 16;
+
+// A key of the ray's exact state for the random choice at a pane: rays of
+// one path (a pixel sample's gather rays) differ in it, and it is the same
+// wherever the ray is traced.
+uint32_t glassKey(const RayState& ray) {
+  uint64_t h = mix64(ray.pathId ^ 0x6a09e667f3bcc909ull);
+  for (float f : {ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z,
+                  ray.tMin}) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof bits);
+    h = mix64(h ^ bits);
+  }
+  return static_cast<uint32_t>(h);
+}
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
@@ -44,12 +64,50 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       ownFrame_(scene.cells()[tracer.cell().id()].bounds, parameters.photonRadius),
       photons_(indirect ? &indirect->photons : nullptr),
       irradiance_(indirect && indirect->irradiance ? &*indirect->irradiance : nullptr),
-      lightSampler_(scene.lights(), LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops)) {
+      lights_(scene.lights()) {
   if (parameters.width && parameters.height) camera_.emplace(cameraOf(parameters, scene), parameters.width, parameters.height);
+  std::vector<uint32_t> candidates = LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops);
+  if (parameters.daylight.any()) {
+    daylight_.emplace(scene, parameters.daylight);
+    const std::vector<bool> near = LightSampler::cellsNear(scene, tracer.cell().id(), parameters.lightHops);
+    for (const AreaLight& opening : daylight_->openings()) {
+      AreaLight light = opening;
+      light.id = static_cast<uint32_t>(lights_.size());
+      if (opening.cell < near.size() && near[opening.cell]) {
+        nearOpenings_.push_back(opening.id);
+        // Sampled in proportion to the sky's power through it.
+        if (daylight_->sky().hasSky()) {
+          light.radiance = daylight_->sky().irradianceFacing(-opening.normal()) / kPi;
+          if (maxComponent(light.radiance) > 0) candidates.push_back(light.id);
+        }
+      }
+      lights_.push_back(light);
+    }
+  }
+  lightSampler_.emplace(lights_, std::move(candidates));
+}
+
+bool CellKernel::emitsHere(uint32_t light) const {
+  const size_t sceneLights = scene_.lights().size();
+  const uint32_t cell = tracer_.cell().id();
+  if (light < sceneLights) return scene_.lights()[light].cell == cell;
+  return daylight_ && light - sceneLights < daylight_->count() && daylight_->cell(light - sceneLights) == cell;
 }
 
 void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight,
                              KernelOutputs& out) {
+  if (lightId >= scene_.lights().size()) {
+    const size_t emitter = lightId - scene_.lights().size();
+    if (!daylight_ || emitter >= daylight_->count())
+      throw std::invalid_argument("an emission batch names light " + std::to_string(lightId) + ", which the job lacks");
+    for (uint64_t path = firstPath; path < firstPath + count; ++path) {
+      checkStop();
+      const RayState photon = daylight_->emitPhoton(emitter, photonsOfLight, parameters_.seed, path);
+      ++out.counters.photonsEmitted;
+      tracePhoton(photon, out);
+    }
+    return;
+  }
   const AreaLight& light = scene_.lights().at(lightId);
   const Vec3 normal = light.normal();
   const Vec3 power = light.power() / float(photonsOfLight);
@@ -149,6 +207,7 @@ void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out)
 void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
   const MeshView& mesh = tracer_.cell().mesh();
   const uint64_t seed = parameters_.seed;
+  int glassEvents = 0;
   for (;;) {
     ++out.counters.raySegments;
     const CellEvent event = tracer_.trace(toRay(photon));
@@ -161,11 +220,20 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
       cross(photon, event, out);
       return;
     }
-    const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
+    const Material& material = materialAt(event.primitive);
+    if (material.glass()) {
+      // Panes store no photons: they reflect or pass them on.
+      if (++glassEvents > kMaxGlassEvents) {
+        ++out.counters.photonsAbsorbed;
+        return;
+      }
+      passOrReflect(photon, event, material);
+      continue;
+    }
     const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
                                       photon.origin + photon.direction * event.t);
-    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material, &albedo}, seed,
-                                                parameters_.maxPhotonBounces);
+    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material, &albedo},
+                                                seed, parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
@@ -177,13 +245,18 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
 void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
   // A camera ray looks past at most this many hidden surfaces in one cell.
   constexpr int kMaxHiddenSurfaces = 64;
-  int hiddenSkipped = 0;
+  int hiddenSkipped = 0, glassEvents = 0;
   RayState current = ray;
   for (;;) {
     ++out.counters.raySegments;
     const CellEvent event = tracer_.trace(toRay(current));
     switch (event.kind) {
-      case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
+      case CellEvent::Kind::Leave:
+        ++out.counters.raysEscaped;
+        // Out of the building: the sky shows.
+        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance)
+          addToFilm(current.pixel, current.weight * daylight_->sky().radiance(current.direction), out);
+        return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
         // A camera ray never bounces: its depth counts the portals it crossed.
@@ -200,6 +273,11 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           // Hits count only beyond tMin (every accelerator keeps the
           // interval open), so this looks strictly past the hidden surface.
           current.tMin = event.t;
+          continue;
+        }
+        if (const Material& material = materialAt(event.primitive);
+            material.glass() && parameters_.aov == JobSettings::Aov::Radiance && ++glassEvents <= kMaxGlassEvents) {
+          passOrReflect(current, event, material);
           continue;
         }
         if (parameters_.aov == JobSettings::Aov::Cells)
@@ -225,40 +303,8 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   if (!(maxComponent(albedo) > 0)) return;
   const Vec3 brdf = albedo * (1.0f / kPi);
 
-  // Direct light: shadow rays to points on lights chosen by the light sampler.
-  const uint32_t samples = parameters_.lightSamples;
-  for (uint32_t i = 0; i < samples; ++i) {
-    const uint32_t base = dim::LightSampleBase + 3 * i;
-    const LightChoice choice = lightSampler_.choose(
-        point, normal, randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base));
-    if (choice.probability <= 0) break;
-    const AreaLight& light = scene_.lights()[choice.light];
-    const float u = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 1);
-    const float v = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 2);
-    const Vec3 target = light.pointAt(u, v);
-    const Vec3 origin = offsetAlongNormal(point, normal);
-    const Vec3 toLight = target - origin;
-    const float distance2 = dot(toLight, toLight);
-    const float distance = std::sqrt(distance2);
-    const Vec3 direction = toLight / distance;
-    const float cosSurface = dot(normal, direction);
-    const float cosLight = -dot(light.normal(), direction);
-    if (cosSurface <= 0 || cosLight <= 0) continue;
-    // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
-    const float geometry = cosSurface * cosLight * light.area() / distance2;
-    RayState shadow;
-    shadow.kind = RayKind::Shadow;
-    shadow.depth = ray.depth;
-    shadow.pathId = ray.pathId;
-    shadow.pixel = ray.pixel;
-    shadow.origin = origin;
-    shadow.direction = direction;
-    // Stop just short of the light so its own triangles do not block it.
-    shadow.tMax = distance * (1.0f - 1e-4f);
-    shadow.weight = ray.weight * brdf * light.radiance * (geometry / (choice.probability * float(samples)));
-    ++out.counters.shadowRays;
-    traceShadowRay(shadow, out);
-  }
+  sampleLights(ray, point, normal, brdf, out);
+  if (daylight_ && daylight_->sky().hasSun()) sampleSun(ray, point, normal, brdf, out);
 
   if (parameters_.gather > 0) {
     // Final gathering: cosine-distributed rays whose landing points take a
@@ -290,9 +336,18 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   }
 }
 
-void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
-  ++out.counters.raySegments;
-  const CellEvent event = tracer_.trace(toRay(ray));
+void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
+  RayState ray = gathered;
+  CellEvent event;
+  // Through glass panes (or off them) to the surface the ray lands on.
+  for (int glassEvents = 0;; ++glassEvents) {
+    ++out.counters.raySegments;
+    event = tracer_.trace(toRay(ray));
+    if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) break;
+    const Material& material = materialAt(event.primitive);
+    if (!material.glass()) break;
+    passOrReflect(ray, event, material);
+  }
   switch (event.kind) {
     case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
     case CellEvent::Kind::Portal:
@@ -301,7 +356,7 @@ void CellKernel::traceGatherRay(const RayState& ray, KernelOutputs& out) {
       return;
     case CellEvent::Kind::Surface: {
       // Emission is not gathered: direct light is sampled with shadow rays.
-      const Material& material = scene_.materials()[tracer_.cell().material(event.primitive)];
+      const Material& material = materialAt(event.primitive);
       if (!photons_ || photons_->size() == 0 || !(maxComponent(material.albedo) > 0)) return;
       bool front;
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
@@ -347,9 +402,20 @@ void CellKernel::addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& 
   if (!out.film.add(pixel, radiance)) ++out.counters.filmOutOfRange;
 }
 
-void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {
-  ++out.counters.raySegments;
-  const CellEvent event = tracer_.trace(toRay(ray));
+void CellKernel::traceShadowRay(const RayState& shadow, KernelOutputs& out) {
+  RayState ray = shadow;
+  CellEvent event;
+  // Glass panes let through their transmittance of the light.
+  for (int glassEvents = 0;; ++glassEvents) {
+    ++out.counters.raySegments;
+    event = tracer_.trace(toRay(ray));
+    if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) break;
+    const Material& material = materialAt(event.primitive);
+    if (!material.glass()) break;
+    const Vec3 paneNormal = normalize(tracer_.cell().mesh().geometricNormal(event.primitive));
+    ray.weight = ray.weight * thinGlass(material, dot(paneNormal, ray.direction)).transmittance;
+    ray.tMin = event.t;
+  }
   switch (event.kind) {
     case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
     case CellEvent::Kind::Portal:
@@ -367,6 +433,94 @@ void CellKernel::traceShadowRay(const RayState& ray, KernelOutputs& out) {
       }
       return;
   }
+}
+
+void CellKernel::addShadowRay(const RayState& ray, const Vec3& origin, const Vec3& direction, float distance,
+                              const Vec3& contribution, KernelOutputs& out) {
+  RayState shadow;
+  shadow.kind = RayKind::Shadow;
+  shadow.depth = ray.depth;
+  shadow.pathId = ray.pathId;
+  shadow.pixel = ray.pixel;
+  shadow.origin = origin;
+  shadow.direction = direction;
+  // Stop just short of the light so its own triangles do not block it.
+  shadow.tMax = distance * (1.0f - 1e-4f);
+  shadow.weight = contribution;
+  ++out.counters.shadowRays;
+  traceShadowRay(shadow, out);
+}
+
+void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
+                              KernelOutputs& out) {
+  // Direct light: shadow rays to points on lights chosen by the light
+  // sampler; a daylight opening is a light of the sky's radiance beyond it.
+  const uint32_t samples = parameters_.lightSamples;
+  const size_t sceneLights = scene_.lights().size();
+  for (uint32_t i = 0; i < samples; ++i) {
+    const uint32_t base = dim::LightSampleBase + 3 * i;
+    const LightChoice choice = lightSampler_->choose(
+        point, normal, randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base));
+    if (choice.probability <= 0) break;
+    const AreaLight& light = lights_[choice.light];
+    const float u = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 1);
+    const float v = randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, base + 2);
+    const Vec3 target = light.pointAt(u, v);
+    const Vec3 origin = offsetAlongNormal(point, normal);
+    const Vec3 toLight = target - origin;
+    const float distance2 = dot(toLight, toLight);
+    const float distance = std::sqrt(distance2);
+    const Vec3 direction = toLight / distance;
+    const float cosSurface = dot(normal, direction);
+    const float cosLight = -dot(light.normal(), direction);
+    if (cosSurface <= 0 || cosLight <= 0) continue;
+    const Vec3 radiance = choice.light < sceneLights ? light.radiance : daylight_->sky().radiance(direction);
+    // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
+    const float geometry = cosSurface * cosLight * light.area() / distance2;
+    addShadowRay(ray, origin, direction, distance,
+                 ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), out);
+  }
+}
+
+void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
+                           KernelOutputs& out) {
+  // The sun is a direction: it reaches the point only through the opening
+  // the ray towards it leaves by, the nearest it passes through.
+  const Vec3 direction = daylight_->sky().sunDirection();
+  const float cosSurface = dot(normal, direction);
+  if (cosSurface <= 0) return;
+  const Vec3 origin = offsetAlongNormal(point, normal);
+  std::optional<float> nearest;
+  for (uint32_t k : nearOpenings_) {
+    const AreaLight& opening = daylight_->openings()[k];
+    if (dot(opening.normal(), direction) >= 0) continue;   // the sun is behind it
+    const std::optional<float> t = DaylightEmitters::distanceThrough(opening, origin, direction);
+    if (t && (!nearest || *t < *nearest)) nearest = t;
+  }
+  if (!nearest) return;
+  addShadowRay(ray, origin, direction, *nearest, ray.weight * brdf * daylight_->sky().sunIrradiance() * cosSurface,
+               out);
+}
+
+bool CellKernel::passOrReflect(RayState& ray, const CellEvent& hit, const Material& glass) const {
+  const Vec3 geometric = normalize(tracer_.cell().mesh().geometricNormal(hit.primitive));
+  const float cosIncident = dot(geometric, ray.direction);
+  const GlassResponse response = thinGlass(glass, cosIncident);
+  const RandomStream stream = ray.kind == RayKind::Photon ? RandomStream::Photon : RandomStream::Camera;
+  const float u = randomUniform(parameters_.seed, stream, ray.pathId, glassKey(ray), dim::GlassChoice);
+  if (u < response.reflectance) {
+    // Reflected with probability R': the weight R' / R' is unchanged.
+    const Vec3 facing = cosIncident < 0 ? geometric : -geometric;
+    ray.origin = offsetAlongNormal(ray.origin + ray.direction * hit.t, facing);
+    ray.direction = normalize(reflect(ray.direction, facing));
+    ray.tMin = 0;
+    ray.tMax = kInfinity;
+    return true;
+  }
+  // Passed with probability 1 - R': the weight keeps the tint.
+  ray.weight = ray.weight * glass.transmittance;
+  ray.tMin = hit.t;
+  return false;
 }
 
 }  // namespace portico

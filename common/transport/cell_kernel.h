@@ -15,6 +15,7 @@
 #include "common/scene/store/scene_store.h"
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_tracer.h"
+#include "common/transport/daylight_openings.h"
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
 #include "common/transport/indirect_light.h"
@@ -53,7 +54,11 @@ class CellKernel {
   CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
              const IndirectLight* indirect);
 
+  // Lights from scene.lights().size() on are the daylight's emitters
+  // (DaylightEmitters), in the order of their photon shares.
   void emitPhotons(uint32_t light, uint64_t firstPath, uint32_t count, uint64_t photonsOfLight, KernelOutputs& out);
+  // Whether `light` (as emitPhotons numbers them) emits in this cell.
+  bool emitsHere(uint32_t light) const;
   void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
   // Runs a ray, and the shadow rays it spawns here, to its end in this cell or a crossing.
   void trace(const RayState& ray, KernelOutputs& out);
@@ -75,6 +80,18 @@ class CellKernel {
   void addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& out);
   void shade(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
   void cross(RayState ray, const CellEvent& event, KernelOutputs& out);
+  void sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, KernelOutputs& out);
+  void sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, KernelOutputs& out);
+  void addShadowRay(const RayState& ray, const Vec3& origin, const Vec3& direction, float distance,
+                    const Vec3& contribution, KernelOutputs& out);
+  // A ray reaching a glass pane: reflected (true: `ray` is the mirrored
+  // ray) or passed through (`ray` continues beyond the pane), chosen at
+  // random in proportion to the pane's reflectance, with its weight times
+  // the tint when it passes.
+  bool passOrReflect(RayState& ray, const CellEvent& hit, const Material& glass) const;
+  const Material& materialAt(uint32_t primitive) const {
+    return scene_.materials()[tracer_.cell().material(primitive)];
+  }
 
   const SceneStore& scene_;
   const CellTracer& tracer_;
@@ -84,7 +101,14 @@ class CellKernel {
   const PhotonFrame ownFrame_;
   const PhotonMap* photons_;
   const IrradianceCache* irradiance_;
-  LightSampler lightSampler_;
+  // Daylight's emitters, when the job has daylight.
+  std::optional<DaylightEmitters> daylight_;
+  // The scene's lights, then one per daylight opening (the sky seen
+  // through it) for the light sampler; openings of cells within the
+  // light hops are its candidates, and the sun's.
+  std::vector<AreaLight> lights_;
+  std::vector<uint32_t> nearOpenings_;
+  std::optional<LightSampler> lightSampler_;
   std::optional<CameraModel> camera_;
   const std::atomic<bool>* stop_ = nullptr;
 };

@@ -12,31 +12,38 @@ std::vector<uint32_t> LightSampler::allLights(const std::vector<AreaLight>& ligh
   return ids;
 }
 
-std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t cell, int hops) {
-  if (hops < 0) return allLights(scene.lights());
+std::vector<bool> LightSampler::cellsNear(const SceneStore& scene, uint32_t cell, int hops) {
   const size_t cellCount = scene.cells().size();
+  if (hops < 0) return std::vector<bool>(cellCount, true);
   std::vector<std::vector<uint32_t>> neighbours(cellCount);
   for (const Portal& portal : scene.portals()) {
     if (portal.cellA >= cellCount || portal.cellB >= cellCount) continue;
     neighbours[portal.cellA].push_back(portal.cellB);
     neighbours[portal.cellB].push_back(portal.cellA);
   }
-  std::vector<int> distance(cellCount, -1);
+  std::vector<bool> near(cellCount, false);
+  if (cell >= cellCount) return near;
   std::vector<uint32_t> frontier{cell};
-  if (cell < cellCount) distance[cell] = 0;
+  near[cell] = true;
   for (int step = 0; step < hops; ++step) {
     std::vector<uint32_t> next;
     for (uint32_t c : frontier)
       for (uint32_t n : neighbours[c])
-        if (distance[n] < 0) {
-          distance[n] = step + 1;
+        if (!near[n]) {
+          near[n] = true;
           next.push_back(n);
         }
     frontier.swap(next);
   }
+  return near;
+}
+
+std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t cell, int hops) {
+  if (hops < 0) return allLights(scene.lights());
+  const std::vector<bool> near = cellsNear(scene, cell, hops);
   std::vector<uint32_t> ids;
   for (const AreaLight& light : scene.lights())
-    if (light.cell < cellCount && distance[light.cell] >= 0) ids.push_back(light.id);
+    if (light.cell < near.size() && near[light.cell]) ids.push_back(light.id);
   return ids;
 }
 

@@ -28,6 +28,9 @@ class LightSampler {
   // The lights of cells within `hops` portals of `cell` (breadth first over
   // the portal graph); hops < 0: every light.
   static std::vector<uint32_t> lightsNear(const SceneStore& scene, uint32_t cell, int hops);
+  // Per cell of the scene: whether it is within `hops` portals of `cell`
+  // (hops < 0: every cell).
+  static std::vector<bool> cellsNear(const SceneStore& scene, uint32_t cell, int hops);
   size_t candidateCount() const { return candidates_.size(); }
   // u in [0,1). Uses a thread-local scratch array; safe from several threads.
   LightChoice choose(const Vec3& point, const Vec3& normal, float u) const;

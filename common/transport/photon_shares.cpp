@@ -11,8 +11,14 @@
 namespace portico {
 
 std::vector<uint64_t> photonSharesOfLights(const std::vector<AreaLight>& lights, uint64_t total) {
-  std::vector<double> power(lights.size());
-  for (size_t i = 0; i < lights.size(); ++i) power[i] = luminance(lights[i].power());
+  std::vector<Vec3> powers(lights.size());
+  for (size_t i = 0; i < lights.size(); ++i) powers[i] = lights[i].power();
+  return photonSharesOfPowers(powers, total);
+}
+
+std::vector<uint64_t> photonSharesOfPowers(const std::vector<Vec3>& powers, uint64_t total) {
+  std::vector<double> power(powers.size());
+  for (size_t i = 0; i < powers.size(); ++i) power[i] = luminance(powers[i]);
   // Lights without power (all black) share equally.
   if (!(std::accumulate(power.begin(), power.end(), 0.0) > 0)) std::fill(power.begin(), power.end(), 1.0);
   return largestRemainderShares(total, power);

@@ -12,5 +12,8 @@
 namespace portico {
 
 std::vector<uint64_t> photonSharesOfLights(const std::vector<AreaLight>& lights, uint64_t total);
+// The same for emitters of these powers (the scene's lights, then daylight
+// emitters: common/transport/daylight_openings.h).
+std::vector<uint64_t> photonSharesOfPowers(const std::vector<Vec3>& powers, uint64_t total);
 
 }  // namespace portico

@@ -12,6 +12,7 @@
 
 #include "common/net/client.h"
 #include "common/net/job_spec_wire.h"
+#include "common/transport/sky_model.h"
 #include "common/util/cli_bounds.h"
 #include "common/util/output_path.h"
 #include "coordinator/job_limits.h"
@@ -21,22 +22,29 @@
 namespace portico::cli {
 
 namespace {
-// "X,Y,Z": three finite numbers; nullopt for anything else.
-std::optional<Vec3> parseVec3(const std::string& text) {
-  float v[3];
+// "A,B,...": exactly `count` finite numbers; nullopt for anything else.
+std::optional<std::vector<float>> parseNumbers(const std::string& text, int count) {
+  std::vector<float> v(count);
   const char* at = text.data();
   const char* end = text.data() + text.size();
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < count; ++i) {
     const auto [next, error] = std::from_chars(at, end, v[i]);
     if (error != std::errc() || !std::isfinite(v[i])) return std::nullopt;
     at = next;
-    if (i < 2) {
+    if (i + 1 < count) {
       if (at == end || *at != ',') return std::nullopt;
       ++at;
     }
   }
   if (at != end) return std::nullopt;
-  return Vec3(v[0], v[1], v[2]);
+  return v;
+}
+
+// "X,Y,Z": three finite numbers; nullopt for anything else.
+std::optional<Vec3> parseVec3(const std::string& text) {
+  const auto v = parseNumbers(text, 3);
+  if (!v) return std::nullopt;
+  return Vec3((*v)[0], (*v)[1], (*v)[2]);
 }
 
 CLI::Validator vec3Text() {
@@ -79,8 +87,72 @@ void addCameraOptions(CLI::App& command, JobSettings& o) {
 }
 }  // namespace
 
+// Sun and sky (docs/daylight.md). Each value is checked as it is read, so
+// that a wrong one is refused in one line naming its option.
+void addDaylightOptions(CLI::App& command, DaylightSettings& d) {
+  using Sky = DaylightSettings::Sky;
+  command
+      .add_option_function<std::string>(
+          "--sun",
+          [&d](const std::string& text) {
+            const auto v = parseNumbers(text, 2);
+            d.sun = true;
+            d.sunAzimuthDegrees = (*v)[0];
+            d.sunElevationDegrees = (*v)[1];
+            if (d.sky == Sky::None) d.sky = Sky::Preetham;
+          },
+          "daylight: the sun at AZIMUTH,ELEVATION degrees (azimuth from +Z towards +X, elevation above the "
+          "horizontal; +Y is up), with a Preetham sky unless --sky says otherwise")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            const auto v = parseNumbers(text, 2);
+            if (!v) return fmt::format("'{}' is not two numbers AZIMUTH,ELEVATION (degrees)", text);
+            DaylightSettings probe;
+            probe.sun = true;
+            probe.sunAzimuthDegrees = (*v)[0];
+            probe.sunElevationDegrees = (*v)[1];
+            // CLI11 names the option itself.
+            std::string problem = daylightProblem(probe);
+            if (problem.rfind("--sun: ", 0) == 0) problem.erase(0, std::string_view("--sun: ").size());
+            return problem;
+          },
+          "AZIMUTH,ELEVATION"));
+  command
+      .add_option_function<std::string>(
+          "--sky",
+          [&d](const std::string& text) {
+            if (text == "preetham") d.sky = Sky::Preetham;
+            else if (text == "overcast") d.sky = Sky::Overcast;
+            else {
+              d.sky = Sky::Uniform;
+              d.skyRadiance = *parseVec3(text.substr(std::string_view("uniform:").size()));
+            }
+          },
+          "daylight's sky: preetham (clear, needs --sun), overcast (CIE, 10 000 lx on the ground) or "
+          "uniform:R,G,B (this radiance from every direction)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (text == "preetham" || text == "overcast") return "";
+            constexpr std::string_view kUniform = "uniform:";
+            const auto radiance = text.rfind(kUniform, 0) == 0 ? parseVec3(text.substr(kUniform.size())) : std::nullopt;
+            if (!radiance || std::min({radiance->x, radiance->y, radiance->z}) < 0)
+              return fmt::format("'{}' is not preetham, overcast or uniform:R,G,B (radiance >= 0)", text);
+            return "";
+          },
+          "preetham|overcast|uniform:R,G,B"));
+  command
+      .add_option_function<std::string>(
+          "--sun-irradiance", [&d](const std::string& text) { d.sunIrradiance = *parseVec3(text); },
+          "the sun's irradiance R,G,B on a plane facing it (default: from its elevation and --turbidity)")
+      ->check(vec3Text());
+  command.add_option("--turbidity", d.turbidity, "haze of the Preetham sky and the sun model (2: very clear, 10: hazy)")
+      ->capture_default_str()
+      ->check(realNumber(1.7, 10));
+}
+
 void addRenderOptions(CLI::App& command, JobSettings& o) {
   addCameraOptions(command, o);
+  addDaylightOptions(command, o.daylight);
   command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
   command.add_option("--accel", o.accel,
@@ -195,6 +267,7 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 
 void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message) {
   if (const std::string problem = cameraChoiceProblem(o); !problem.empty()) throw std::invalid_argument(problem);
+  if (const std::string problem = daylightProblem(o.daylight); !problem.empty()) throw std::invalid_argument(problem);
   JobSettings settings = o;
   settings.store = std::filesystem::absolute(o.store).lexically_normal().string();
   // As the user who asks: the coordinator checks it again as itself.

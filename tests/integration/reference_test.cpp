@@ -6,12 +6,14 @@
 // voxel cells, triangles sticking out of them): uniform cells must render
 // the same picture as the room's own cell, within the same bounds.
 // textured_floor checks albedo textures (OBJ map_Kd) against Mitsuba's bitmap.
+// A scene lit by daylight gives its sun and sky in render_args.txt.
 #include <gtest/gtest.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -51,8 +53,11 @@ TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
   ChildProcess importer(import, (dir / "import.log").string());
   ASSERT_EQ(importer.wait(), 0) << readFile(dir / "import.log");
   const auto started = std::chrono::steady_clock::now();
-  ChildProcess render({kBin + "portico", "render", (dir / "store").string(), "-o", (dir / "image.exr").string()},
-                      (dir / "render.log").string());
+  std::vector<std::string> renderCommand{kBin + "portico", "render", (dir / "store").string(), "-o",
+                                         (dir / "image.exr").string()};
+  std::istringstream extra(readFile(kScenes / name / "render_args.txt"));
+  for (std::string word; extra >> word;) renderCommand.push_back(word);
+  ChildProcess render(renderCommand, (dir / "render.log").string());
   ASSERT_EQ(render.wait(), 0) << readFile(dir / "render.log");
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
 
@@ -68,7 +73,7 @@ TEST_P(ReferenceScene, DefaultRenderMatchesThePathTracedReference) {
 INSTANTIATE_TEST_SUITE_P(Mitsuba, ReferenceScene,
                          ::testing::Values(ReferenceCase{"cornell_closed", 0}, ReferenceCase{"two_rooms", 0},
                                            ReferenceCase{"cornell_closed", 3}, ReferenceCase{"ifc_fzk_wohnen", 0},
-                                           ReferenceCase{"textured_floor", 0}),
+                                           ReferenceCase{"textured_floor", 0}, ReferenceCase{"daylight_window", 0}),
                          [](const auto& info) {
                            return info.param.name + (info.param.grid ? "_grid" + std::to_string(info.param.grid) : "");
                          });

@@ -33,8 +33,8 @@ constexpr float kCellPadding = 1e-3f;        // 1 mm around the scene for a cell
 constexpr float kCellTolerance = 1e-3f;      // triangles may stick out of their cell by this much of the scene size
 const char* const kSingleCellName = "building";
 const char* const kNoLightsWarning =
-    "the scene has no lights, so it renders black and `portico render` refuses it; add one with a \"lights\" "
-    "array in a building.json (quads and triangles, docs/building-json.md), an emissive material in a mesh file "
+    "the scene has no lights, so `portico render` refuses it unless daylight lights it (--sun or --sky through "
+    "portals to outdoor cells, docs/daylight.md); add one with a \"lights\" array in a building.json (quads and triangles, docs/building-json.md), an emissive material in a mesh file "
     "(MTL Ke, glTF emissiveFactor), or, for an IFC model, --lights panels";
 
 std::string formatVec(const Vec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
@@ -48,19 +48,20 @@ bool isBuildingJson(const std::string& path) {
 
 Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
 
-// Materials, one per distinct (albedo, emission, texture); the first name wins.
+// Materials, one per distinct (albedo, emission, texture, glass); the first name wins.
 class MaterialTable {
  public:
   uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out,
-               const std::string& albedoTexture = {}) {
-    const std::array<float, 6> colours{albedo.x, albedo.y, albedo.z, emission.x, emission.y, emission.z};
+               const std::string& albedoTexture = {}, const Vec3& transmittance = Vec3(0), float ior = 1.5f) {
+    const std::array<float, 10> colours{albedo.x,        albedo.y,        albedo.z,        emission.x, emission.y,
+                                       emission.z,      transmittance.x, transmittance.y, transmittance.z, ior};
     auto [it, inserted] = ids_.emplace(std::make_pair(colours, albedoTexture), static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, albedoTexture});
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, albedoTexture, transmittance, ior});
     return it->second;
   }
 
  private:
-  std::map<std::pair<std::array<float, 6>, std::string>, uint32_t> ids_;
+  std::map<std::pair<std::array<float, 10>, std::string>, uint32_t> ids_;
 };
 
 void appendPart(const MeshFilePart& part, ImportedObject& object) {
@@ -101,7 +102,10 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     const std::string label = fmt::format("{}: part '{}'", labelPrefix, part.name);
     if (!isFinite(source.diffuse) || !isFinite(source.emissive))
       throw std::runtime_error(fmt::format("{}: material '{}' has a colour that is not finite", label, source.name));
-    const Vec3 albedo = min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
+    // A transparent material is thin glass, without diffuse reflection.
+    const Vec3 transmittance = min(max(source.transmittance, Vec3(0.0f)), Vec3(1.0f));
+    const bool glass = maxComponent(transmittance) > 0.0f;
+    const Vec3 albedo = glass ? Vec3(0.0f) : min(max(source.diffuse, Vec3(0.0f)), Vec3(1.0f));
     const Vec3 emission = emissionOverride ? *emissionOverride : max(source.emissive, Vec3(0.0f));
     ImportedObject object;
     object.label = label;
@@ -110,8 +114,8 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     // A texture needs the part's uvs; a part without them keeps the colour.
     const bool textured = !source.diffuseTexture.empty() && !part.uvs.empty();
     if (textured) object.uvs = part.uvs;
-    object.material =
-        materials.add(source.name, albedo, emission, scene.materials, textured ? source.diffuseTexture : std::string());
+    object.material = materials.add(source.name, albedo, emission, scene.materials,
+                                    textured ? source.diffuseTexture : std::string(), transmittance);
     if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
     scene.objects.push_back(std::move(object));
   }
@@ -213,7 +217,15 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
     }
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     const uint32_t cell = givenCells ? cellIds.at(entry.cell) : 0;
-    if (!entry.albedo) {
+    if (entry.glass) {
+      ImportedObject object;
+      object.label = entry.label();
+      object.cell = cell;
+      for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
+      object.material = materials.add(entry.name, Vec3(0.0f), Vec3(0.0f), scene.materials, std::string(), entry.glass->transmittance,
+                                      entry.glass->ior);
+      scene.objects.push_back(std::move(object));
+    } else if (!entry.albedo) {
       try {
         addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
       } catch (const std::runtime_error& e) {
@@ -352,6 +364,7 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   for (const ImportedMaterial& material : scene.materials) {
     const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
     if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);
+    if (maxComponent(material.transmittance) > 0.0f) writer.setMaterialGlass(id, material.transmittance, material.ior);
   }
   if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);

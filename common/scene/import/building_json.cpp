@@ -179,6 +179,27 @@ Vec3 radiance(const Reader& reader, const json& value, const std::string& what) 
   return v;
 }
 
+// An object's "glass": {"transmittance": [r, g, b], "ior": n}; not with an albedo or emission.
+BuildingObject::Glass readGlass(const Reader& reader, const json& entry, const std::string& what,
+                                const BuildingObject& object) {
+  if (object.albedo || object.emission)
+    reader.fail(what + ": \"glass\" is a material of its own; give no \"albedo\" or \"emission\" with it");
+  if (!entry.is_object()) reader.fail(what + ": \"glass\" must be an object with \"transmittance\" (and \"ior\")");
+  reader.requireKnownKeys(entry, what + " glass", {"transmittance", "ior"});
+  BuildingObject::Glass glass;
+  glass.transmittance = reader.vec3(reader.required(entry, "transmittance", what + " glass"), what + " glass.transmittance");
+  if (std::min({glass.transmittance.x, glass.transmittance.y, glass.transmittance.z}) < 0.0f ||
+      maxComponent(glass.transmittance) > 1.0f || !(maxComponent(glass.transmittance) > 0.0f))
+    reader.fail(fmt::format("{}: glass transmittance [{}, {}, {}] must lie within [0, 1], not all 0", what,
+                            glass.transmittance.x, glass.transmittance.y, glass.transmittance.z));
+  if (const json* ior = reader.member(entry, "ior")) {
+    glass.ior = reader.number(*ior, what + " glass.ior");
+    if (!(glass.ior >= 1.0f && glass.ior <= 4.0f))
+      reader.fail(fmt::format("{}: glass ior {} must be from 1 to 4", what, glass.ior));
+  }
+  return glass;
+}
+
 std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, const fs::path& baseDirectory,
                                         const std::optional<std::vector<BuildingCell>>& cells) {
   const json& list = reader.required(root, "objects", "the file");
@@ -202,7 +223,7 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
       object.name = reader.string(*name, what + ".name");
     if (object.name.empty()) object.name = meshPath.stem().string();
     what = object.label();
-    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission"});
+    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission", "glass"});
 
     if (const json* cell = reader.member(entry, "cell")) {
       object.cell = reader.string(*cell, what + ".cell");
@@ -221,6 +242,7 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
     }
     const json* emission = reader.member(entry, "emission");
     if (emission && !emission->is_null()) object.emission = radiance(reader, *emission, what + " emission");
+    if (const json* glass = reader.member(entry, "glass")) object.glass = readGlass(reader, *glass, what, object);
     objects.push_back(std::move(object));
   }
   return objects;

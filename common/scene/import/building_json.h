@@ -23,6 +23,12 @@ struct BuildingObject {
   // Absent: every part of the mesh file takes the file's own material.
   std::optional<Vec3> albedo;
   std::optional<Vec3> emission;   // absent when null or not given
+  // "glass": thin glass of this tint and index, instead of albedo.
+  struct Glass {
+    Vec3 transmittance;
+    float ior = 1.5f;
+  };
+  std::optional<Glass> glass;
   // "objects[3] ('light')": how messages name the object.
   std::string label() const;
 };

@@ -20,6 +20,8 @@ struct ImportedMaterial {
   Vec3 emission;
   bool hiddenFromCamera = false;   // kept when a scene store is re-cut
   std::string albedoTexture;       // the image file (copied into the store), or empty
+  Vec3 transmittance;              // thin glass when above 0 (Material::transmittance)
+  float ior = 1.5f;
 };
 
 // One object of a building.json, or one part of a mesh file.

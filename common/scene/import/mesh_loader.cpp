@@ -99,6 +99,17 @@ MeshFileMaterial readMaterial(const aiScene& scene, const aiMaterial& source, si
     material.emissive *= strength;
   }
   material.diffuseTexture = diffuseTexture(scene, source, path, material.name, embeddedImageDirectory);
+  // Transparency: glTF's transmission tints by the base colour; an MTL's
+  // dissolve (Assimp's opacity; Tr is read as 1 - d) by its Tf colour.
+  float transmission = 0, opacity = 1;
+  if (source.Get(AI_MATKEY_TRANSMISSION_FACTOR, transmission) == aiReturn_SUCCESS && transmission > 0) {
+    material.transmittance = material.diffuse * std::min(transmission, 1.0f);
+  } else if (source.Get(AI_MATKEY_OPACITY, opacity) == aiReturn_SUCCESS && opacity < 1.0f) {
+    aiColor3D filter(1, 1, 1);
+    source.Get(AI_MATKEY_COLOR_TRANSPARENT, filter);
+    if (!(filter.r > 0 || filter.g > 0 || filter.b > 0)) filter = aiColor3D(1, 1, 1);
+    material.transmittance = Vec3(filter.r, filter.g, filter.b) * (1.0f - std::max(opacity, 0.0f));
+  }
   return material;
 }
 

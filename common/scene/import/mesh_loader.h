@@ -32,6 +32,9 @@ struct MeshFileMaterial {
   // image, resolved against the mesh file's folder; empty when none. The
   // albedo is this image times `diffuse`.
   std::string diffuseTexture;
+  // Light let through (thin glass when above 0): MTL (1 - d) or Tr times
+  // Tf, glTF KHR_materials_transmission's factor times the base colour.
+  Vec3 transmittance{0.0f};
 };
 
 // One placed mesh of the file: an Assimp mesh under one node, transformed.

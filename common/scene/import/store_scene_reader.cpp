@@ -18,7 +18,8 @@ ImportedScene sceneFromStore(const std::string& directory) {
   ImportedScene scene;
   for (const Material& m : store.materials())
     scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera,
-                                               m.textured() ? directory + "/" + m.albedoTexture : std::string()});
+                                               m.textured() ? directory + "/" + m.albedoTexture : std::string(),
+                                               m.transmittance, m.ior});
   for (const CellInfo& info : store.cells()) {
     scene.cells.push_back(ImportedCell{info.name, info.bounds});
     scene.bounds.extend(info.bounds);

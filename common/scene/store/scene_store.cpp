@@ -93,18 +93,22 @@ class CatalogueReader {
     return portals;
   }
 
-  // Version 1 stores have no hidden_from_camera column: nothing is hidden.
+  // Version 1 stores have no hidden_from_camera column: nothing is hidden;
+  // stores before version 5 no textures, before version 6 no glass.
   std::vector<Material> materials(int version) {
     std::vector<Material> materials;
     sql::Statement& row = db_.prepare(fmt::format(
-        "SELECT id, name, albedo_r, albedo_g, albedo_b, emission_r, emission_g, emission_b, {} "
+        "SELECT id, name, albedo_r, albedo_g, albedo_b, emission_r, emission_g, emission_b, {}, {} "
         "FROM materials ORDER BY id",
-        version >= 2 ? "hidden_from_camera" : "0"));
+        version >= 2 ? "hidden_from_camera" : "0",
+        version >= 6 ? "transmittance_r, transmittance_g, transmittance_b, ior" : "0, 0, 0, 1.5"));
     while (row.step()) {
       requireDenseId("materials", row.columnInt(0), materials.size());
       Material material{static_cast<uint32_t>(row.columnInt(0)), row.columnText(1), columnVec3(row, 2),
                         columnVec3(row, 5)};
       material.hiddenFromCamera = row.columnInt(8) != 0;
+      material.transmittance = columnVec3(row, 9);
+      material.ior = static_cast<float>(row.columnDouble(12));
       materials.push_back(std::move(material));
     }
     if (version >= 5) {

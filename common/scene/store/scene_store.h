@@ -81,6 +81,8 @@ class SceneStoreWriter {
   // is self-contained and lookups read tiles. Throws std::runtime_error
   // naming the material and the file when it cannot be read.
   void setMaterialTexture(uint32_t material, const std::string& sourceImage);
+  // Makes material `id` thin glass (Material::transmittance, ior).
+  void setMaterialGlass(uint32_t id, const Vec3& transmittance, float ior);
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned

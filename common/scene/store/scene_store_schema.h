@@ -20,7 +20,9 @@ namespace portico::scene_schema {
 //      Versions 1 to 3 are still read, their one camera named "default".
 //   5: table material_textures (a material's albedo texture, a file under
 //      textures/). Versions 1 to 4 are still read, with no textures.
-constexpr int kVersion = 5;
+//   6: materials.transmittance_r/g/b and ior (thin glass). Versions 1 to 5
+//      are still read, without glass.
+constexpr int kVersion = 6;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -55,7 +57,10 @@ CREATE TABLE materials(
   name TEXT NOT NULL,
   albedo_r REAL NOT NULL, albedo_g REAL NOT NULL, albedo_b REAL NOT NULL,
   emission_r REAL NOT NULL, emission_g REAL NOT NULL, emission_b REAL NOT NULL,
-  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)));
+  hidden_from_camera INTEGER NOT NULL DEFAULT 0 CHECK (hidden_from_camera IN (0, 1)),
+  transmittance_r REAL NOT NULL DEFAULT 0, transmittance_g REAL NOT NULL DEFAULT 0,
+  transmittance_b REAL NOT NULL DEFAULT 0,
+  ior REAL NOT NULL DEFAULT 1.5);
 CREATE TABLE material_textures(
   material INTEGER PRIMARY KEY REFERENCES materials(id),
   albedo_texture TEXT NOT NULL);

@@ -149,6 +149,19 @@ uint32_t SceneStoreWriter::addMaterial(const std::string& name, const Vec3& albe
   return id;
 }
 
+void SceneStoreWriter::setMaterialGlass(uint32_t id, const Vec3& transmittance, float ior) {
+  impl_->requireUncommitted();
+  if (id >= impl_->materials.size()) impl_->fail(fmt::format("glass for material {}, which was not added", id));
+  const std::string what = fmt::format("material {} ('{}')", id, impl_->materials[id].name);
+  if (!isFinite(transmittance) || std::min({transmittance.x, transmittance.y, transmittance.z}) < 0.0f ||
+      maxComponent(transmittance) > 1.0f || !(maxComponent(transmittance) > 0.0f))
+    impl_->fail(fmt::format("{}: glass transmittance {} must be finite, within [0, 1] and not all 0", what,
+                            formatVec(transmittance)));
+  if (!(ior >= 1.0f && ior <= 4.0f)) impl_->fail(fmt::format("{}: glass ior {} must be from 1 to 4", what, ior));
+  impl_->materials[id].transmittance = transmittance;
+  impl_->materials[id].ior = ior;
+}
+
 uint32_t SceneStoreWriter::addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon) {
   impl_->requireUncommitted();
   const auto id = static_cast<uint32_t>(impl_->portals.size());
@@ -359,13 +372,15 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
         .run();
   }
   for (const Material& material : materials) {
-    sql::Statement& insert = db.prepare("INSERT INTO materials VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)");
+    sql::Statement& insert = db.prepare("INSERT INTO materials VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
     insert.bind(1, int64_t{material.id}).bind(2, material.name);
     for (int c = 0; c < 3; ++c) {
       insert.bind(3 + c, double{material.albedo[c]});
       insert.bind(6 + c, double{material.emission[c]});
     }
     insert.bind(9, int64_t{material.hiddenFromCamera ? 1 : 0});
+    for (int c = 0; c < 3; ++c) insert.bind(10 + c, double{material.transmittance[c]});
+    insert.bind(13, double{material.ior});
     insert.run();
     if (material.textured())
       db.prepare("INSERT INTO material_textures VALUES (?, ?)")

@@ -23,7 +23,13 @@ struct Material {
   // times `albedo`, and the cell's uvs say where on the texture a point lies.
   std::string albedoTexture;
   bool textured() const { return !albedoTexture.empty(); }
+  // Thin glass (common/transport/thin_glass.h) when any channel is above 0:
+  // the tint of light passing through the pane, and the index of refraction
+  // of its Fresnel reflection. A glass material has no diffuse albedo.
+  Vec3 transmittance;
+  float ior = 1.5f;
   bool emissive() const { return maxComponent(emission) > 0.0f; }
+  bool glass() const { return maxComponent(transmittance) > 0.0f; }
 };
 
 enum class LightShape : uint8_t { Parallelogram, Triangle };

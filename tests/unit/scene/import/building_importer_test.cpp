@@ -948,3 +948,82 @@ TEST(BuildingImportQuad, ParallelogramFromTwoTriangles) {
 
 }  // namespace
 }  // namespace portico
+
+// ---------------------------------------------------------------- glass
+
+namespace portico {
+namespace {
+
+const Material* materialNamed(const SceneStore& store, const std::string& name) {
+  for (const Material& material : store.materials())
+    if (material.name == name) return &material;
+  return nullptr;
+}
+
+TEST(BuildingImportGlass, MtlDissolveIsGlassTintedByTf) {
+  TempDirectory temp;
+  writeText(temp.path() / "w.mtl",
+            "newmtl pane\nKd 0.2 0.2 0.2\nd 0.25\nTf 0.8 0.9 1.0\n\nnewmtl wall\nKd 0.5 0.5 0.5\n");
+  writeText(temp.path() / "w.obj",
+            "mtllib w.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl pane\nf 1 2 3\nusemtl wall\nf 1 3 4\n");
+  importBuilding({temp / "w.obj"}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  const Material* pane = materialNamed(store, "pane");
+  const Material* wall = materialNamed(store, "wall");
+  ASSERT_TRUE(pane && wall);
+  ASSERT_TRUE(pane->glass());
+  EXPECT_NEAR(pane->transmittance.x, 0.75f * 0.8f, 1e-6f);
+  EXPECT_NEAR(pane->transmittance.z, 0.75f, 1e-6f);
+  EXPECT_EQ(pane->albedo, Vec3(0));   // glass has no diffuse part
+  EXPECT_FALSE(wall->glass());
+}
+
+// KHR_materials_transmission: transmitted light is tinted by the base colour.
+TEST(BuildingImportGlass, GltfTransmissionIsGlassTintedByTheBaseColour) {
+  TempDirectory temp;
+  std::string text = gltfTriangle(R"("translation": [0, 0, 0])");
+  const std::string plain = R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.25, 0.5, 0.75, 1]}}])";
+  ASSERT_NE(text.find(plain), std::string::npos);
+  text.replace(text.find(plain), plain.size(),
+               R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.8, 0.9, 1, 1]},
+                   "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.5}}}],
+                  "extensionsUsed": ["KHR_materials_transmission"])");
+  writeText(temp.path() / "pane.gltf", text);
+  importBuilding({temp / "pane.gltf"}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.materials().size(), 1u);
+  EXPECT_TRUE(store.materials()[0].glass());
+  EXPECT_NEAR(store.materials()[0].transmittance.x, 0.4f, 1e-6f);
+  EXPECT_NEAR(store.materials()[0].transmittance.z, 0.5f, 1e-6f);
+}
+
+TEST(BuildingImportGlass, BuildingJsonGlassKeyMakesThePaneOfTheDaylightScene) {
+  TempDirectory temp;
+  importBuilding({referenceJson("daylight_window")}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  const Material* pane = materialNamed(store, "pane");
+  ASSERT_NE(pane, nullptr);
+  EXPECT_EQ(pane->transmittance, Vec3(0.75f, 0.85f, 0.95f));
+  EXPECT_EQ(pane->ior, 1.5f);
+  size_t glass = 0;
+  for (const Material& material : store.materials()) glass += material.glass();
+  EXPECT_EQ(glass, 1u);
+}
+
+TEST(BuildingImportGlass, GlassWithAnAlbedoOrAboveOneIsRefusedNamingTheObject) {
+  TempDirectory temp;
+  writeText(temp.path() / "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const auto errorFor = [&](const std::string& object) {
+    writeText(temp.path() / "b.json", R"({"objects": [)" + object + R"(], "camera": {"origin": [0.2, 0.2, 1],
+              "target": [0.2, 0.2, 0], "up": [0, 1, 0], "fov_y_deg": 60, "width": 8, "height": 8}})");
+    return errorOf([&] { importBuilding({temp / "b.json"}, temp / "store"); });
+  };
+  std::string error = errorFor(R"({"obj": "t.obj", "name": "pane", "albedo": [0.5, 0.5, 0.5],
+                                   "glass": {"transmittance": [0.9, 0.9, 0.9]}})");
+  EXPECT_NE(error.find("('pane'): \"glass\" is a material of its own"), std::string::npos) << error;
+  error = errorFor(R"({"obj": "t.obj", "name": "pane", "glass": {"transmittance": [1.5, 0.9, 0.9]}})");
+  EXPECT_NE(error.find("glass transmittance [1.5, 0.9, 0.9] must lie within [0, 1]"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace portico

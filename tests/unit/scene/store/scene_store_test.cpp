@@ -47,6 +47,7 @@ struct TinyScene {
   std::vector<std::vector<Vec3>> portalPolygons;
   AreaLight light;
   Camera camera;
+  bool whiteIsGlass = false;   // material 0 thin glass
   std::vector<Camera> extraCameras;   // named cameras beside the default
 
   TinyScene() {
@@ -95,6 +96,7 @@ struct TinyScene {
     writer.setMeta("generator", "tiny-test");
     writer.addMaterial("white", Vec3(0.8f, 0.8f, 0.8f));
     writer.addMaterial("lamp", Vec3(0), Vec3(12, 11, 9.5f), /*hiddenFromCamera=*/true);
+    if (whiteIsGlass) writer.setMaterialGlass(0, Vec3(0.7f, 0.8f, 0.9f), 1.52f);
     for (size_t i = 0; i < portalCells.size(); ++i)
       writer.addPortal(portalCells[i].first, portalCells[i].second, portalPolygons[i]);
     writer.addLight(light);
@@ -182,6 +184,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
   EXPECT_EQ(store.meta().at("format_version"), "5");
+  EXPECT_FALSE(store.materials()[0].glass());
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -543,13 +546,49 @@ TEST(SceneStoreWriter, RejectsCamerasWithoutAUsableName) {
       << error;
 }
 
+// Glass (schema 6) round-trips; a version 5 store has none.
+TEST(SceneStore, RoundTripsGlassAndReadsAVersionFiveStoreWithout) {
+  TempDirectory temp;
+  TinyScene scene;
+  scene.whiteIsGlass = true;
+  scene.write(temp / "store");
+  {
+    const SceneStore store = SceneStore::open(temp / "store");
+    ASSERT_TRUE(store.materials()[0].glass());
+    expectSameVec3(store.materials()[0].transmittance, Vec3(0.7f, 0.8f, 0.9f));
+    EXPECT_EQ(store.materials()[0].ior, 1.52f);
+    EXPECT_FALSE(store.materials()[1].glass());
+  }
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    for (const char* column : {"transmittance_r", "transmittance_g", "transmittance_b", "ior"})
+      db.exec(std::string("ALTER TABLE materials DROP COLUMN ") + column);
+    db.setUserVersion(5);
+  }
+  const SceneStore store = SceneStore::open(temp / "store");
+  EXPECT_FALSE(store.materials()[0].glass());
+  EXPECT_EQ(store.materials()[0].ior, 1.5f);
+}
+
+TEST(SceneStore, RefusesGlassThatMakesLight) {
+  TempDirectory temp;
+  SceneStoreWriter writer(temp / "store");
+  writer.addMaterial("pane", Vec3(0));
+  try {
+    writer.setMaterialGlass(0, Vec3(1.2f, 0.5f, 0.5f), 1.5f);
+    FAIL() << "a transmittance above 1 was taken";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("material 0 ('pane'): glass transmittance"), std::string::npos) << e.what();
+  }
+}
+
 // Version 1 (before materials.hidden_from_camera) is still read: nothing hidden.
 TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TempDirectory temp;
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 5);
+    EXPECT_EQ(db.userVersion(), 6);
     db.exec("DROP TABLE material_textures");
     keepOnlyTheDefaultCameraAsVersionThreeDid(db);
     db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
