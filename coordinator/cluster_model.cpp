@@ -37,7 +37,9 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase) {
     // work and time together.
     costs.batches[lease.cell].push_back(lease.work);
     auto& [seconds, work] = traced[lease.cell];
-    seconds += std::max<int64_t>(0, lease.leaseMicros - lease.loadMicros) * 1e-6;
+    // Loads included: the record's own loads (first loads and the
+    // reloads its workers' caches made) recur at any worker count.
+    seconds += double(lease.leaseMicros) * 1e-6;
     work += lease.work;
     loadSeconds += lease.loadMicros * 1e-6;
     triangles += double(lease.trianglesLoaded);
@@ -187,14 +189,24 @@ class PhaseSimulation {
   void trace(size_t w, uint64_t lease, const std::vector<std::pair<uint32_t, int64_t>>& cells, double arrivesAt) {
     ModelWorker& worker = workers_[w];
     ResultEvent event{0, w, lease};
+    // The worker's cache keys a cell by its structure too: the render
+    // phase's (bvh) is not the photon pass's (grid).
+    const uint64_t cacheKey = uint64_t(phase_) + 1;
     for (const auto& [cell, work] : cells) {
-      if (!worker.cache.holds(kModelJob, cell)) {
-        const int64_t triangles = cell < record_.cells.size() ? int64_t(record_.cells[cell].triangleCount) : 0;
-        event.loadSeconds += double(triangles) * costs_.loadSecondsPerTriangle;
-        event.triangles += triangles;
-        ++prediction_.loads;
+      // A second copy: the cell is loaded here while another worker
+      // loaded it in this phase (its first load is in the record's times).
+      const bool loadedElsewhere = !loadedBy_[cell].empty() && !loadedBy_[cell].count(w);
+      if (!worker.cache.holds(cacheKey, cell)) {
+        loadedBy_[cell].insert(w);
+        if (loadedElsewhere) {
+          const int64_t triangles = cell < record_.cells.size() ? int64_t(record_.cells[cell].triangleCount) : 0;
+          event.loadSeconds += double(triangles) * costs_.loadSecondsPerTriangle;
+          event.triangles += triangles;
+          ++prediction_.loads;
+        }
       }
-      worker.cache.use(kModelJob, cell, cachedBytesOf(record_.cells, cell));
+      const uint64_t fileBytes = cell < record_.cells.size() ? record_.cells[cell].byteCount : 0;
+      worker.cache.use(cacheKey, cell, uint64_t(options_.cachedBytesPerFileByte * double(fileBytes)));
       const auto rate = costs_.secondsPerWork.find(cell);
       event.workerSeconds += double(work) * (rate != costs_.secondsPerWork.end() ? rate->second : meanSecondsPerWork());
     }
@@ -225,6 +237,7 @@ class PhaseSimulation {
   double now_;
   uint64_t* nextLease_ = nullptr;
   PhasePrediction prediction_;
+  std::map<uint32_t, std::set<size_t>> loadedBy_;   // the workers that loaded each cell in this phase
   double chooseSeconds_ = 0;
   int64_t chooseCalls_ = 0;
 };

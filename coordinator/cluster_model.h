@@ -3,9 +3,10 @@
 // It schedules with the coordinator's own code, on a simulated clock:
 // WorkerInfo (lease sizing, speed and load-cost estimates, leases in
 // flight), CellCacheModel, chooseCell and addMoreCells. What it models
-// rather than runs: the tracing (each cell's measured seconds per unit of
-// work), the loads (measured seconds per triangle; a worker's cache as an
-// LRU of its --memory) and the coordinator, one server that spends its
+// rather than runs: the leases (each cell's measured seconds per unit of
+// work, its recorded loads included), the second copies more workers make
+// (measured load seconds per triangle; a worker's cache as an LRU of its
+// --memory) and the coordinator, one server that spends its
 // measured CPU per lease plus what chooseCell costs it at N workers, timed
 // here. docs/large-buildings.md, "Cluster model".
 #pragma once
@@ -32,12 +33,15 @@ struct ClusterModelOptions {
   uint64_t workerMemoryBytes = uint64_t(1) << 30;
   // One way through the network, coordinator to worker or back.
   double latencySeconds = 100e-6;
+  // What a loaded cell takes in a worker's cache per byte of its file:
+  // decides when a modelled worker drops a cell, hence its second copies.
+  double cachedBytesPerFileByte = 3;
 };
 
 struct PhasePrediction {
   double seconds = 0;
   int64_t leases = 0;
-  int64_t loads = 0;
+  int64_t loads = 0;                   // second copies beyond the record's own loads
   double coordinatorBusySeconds = 0;   // its CPU in the phase
   double workerBusySeconds = 0;        // all workers' tracing and loads
 };
@@ -54,7 +58,8 @@ struct ClusterPrediction {
 
 // Each phase starts with all its work queued (the lease log's work per
 // cell, in leases of the sizes recorded); the render phase after the last
-// photon lease.
+// photon lease, with its own accelerators: cells held from the photon pass
+// are loaded again (the worker's cache keys them by structure).
 ClusterPrediction simulateCluster(const ClusterRecord& record, const ClusterModelOptions& options);
 
 }  // namespace portico

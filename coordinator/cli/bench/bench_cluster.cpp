@@ -94,12 +94,16 @@ std::vector<size_t> workerCounts(const std::string& list) {
   return counts;
 }
 
-ClusterPrediction predict(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options) {
+ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options) {
   ClusterModelOptions model;
   model.workers = workers;
   model.workerMemoryBytes = job.workerMemoryBytes ? job.workerMemoryBytes : parseByteSize(options.memory);
   model.latencySeconds = options.latencyMicros * 1e-6;
-  return simulateCluster(job.record, model);
+  return model;
+}
+
+ClusterPrediction predict(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options) {
+  return simulateCluster(job.record, modelOf(job, workers, options));
 }
 
 double percent(double predicted, double measured) { return measured > 0 ? 100.0 * (predicted - measured) / measured : 0; }
