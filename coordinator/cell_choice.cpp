@@ -59,4 +59,25 @@ const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const 
   return chosen;
 }
 
+int64_t addMoreCells(const std::vector<PendingCell>& candidates, const PendingCell& chosen,
+                     const std::vector<CellInfo>& cells, const WorkerInfo& worker, const WorkerRegistry& workers,
+                     int64_t leaseWork, const std::function<bool(const PendingCell&)>& failedBefore,
+                     const std::function<int64_t(const PendingCell&, int64_t)>& take) {
+  const int64_t smallLease = int64_t(worker.workPerSecond * kSmallLeaseSeconds);
+  if (chosen.phase != 0 || leaseWork >= smallLease) return leaseWork;
+  uint64_t extraBytes = 0;
+  size_t joined = 0;
+  for (const PendingCell& c : candidates) {
+    if (leaseWork >= smallLease || joined + 1 >= kMostCellsPerLease) break;
+    if (!mayJoinLease(c, chosen, worker, workers, failedBefore(c))) continue;
+    if (worker.memoryBytes > 0 && extraBytes + cachedBytesOf(cells, c.cell) > worker.memoryBytes / 4) continue;
+    const int64_t added = take(c, smallLease - leaseWork);
+    if (added < 0) continue;
+    leaseWork += added;
+    extraBytes += cachedBytesOf(cells, c.cell);
+    ++joined;
+  }
+  return leaseWork;
+}
+
 }  // namespace portico

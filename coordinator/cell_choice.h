@@ -2,6 +2,8 @@
 // memory coherence (docs/coordinator.md, "Which cell a lease is about").
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "common/scene/store/scene_types.h"
@@ -46,6 +48,37 @@ const PendingCell* chooseCell(const std::vector<PendingCell>& candidates, const 
 // of several cells names its cell, which then goes alone).
 bool mayJoinLease(const PendingCell& c, const PendingCell& chosen, const WorkerInfo& worker,
                   const WorkerRegistry& workers, bool failedBefore);
+
+// Cells ranked by pending work that a lease may be chosen from.
+constexpr size_t kLeaseCandidates = 1024;
+// What a worker's cache holds per byte of a cell's file: the geometry and
+// an accelerator about twice its size (a grid; worker/cell_cache.h).
+constexpr uint64_t kCachedBytesPerFileByte = 3;
+inline uint64_t cachedBytesOf(const std::vector<CellInfo>& cells, uint32_t cell) {
+  return cell < cells.size() ? kCachedBytesPerFileByte * cells[cell].byteCount : 0;
+}
+// Photon pass: a lease under this much of its worker's time takes on more
+// cells, at most kMostCellsPerLease in all. A cell's emission is ~10 ms of
+// a worker's time on the octagon: at 0.03 s a photon pass takes ~130
+// leases instead of ~290, and the coordinator half the CPU (about half its
+// photon-pass CPU is per lease: statements, commits, messages).
+constexpr double kSmallLeaseSeconds = 0.03;
+constexpr size_t kMostCellsPerLease = 16;
+
+// Photon pass: a lease of `leaseWork` about `chosen`, under
+// kSmallLeaseSeconds of the worker's work (a cell's emission, the end of
+// the pass), takes on more cells, those it holds and those no other worker
+// holds (mayJoinLease), up to that much work: one round trip and one
+// Result for all of them. Their cache footprint is capped, so a worker
+// whose cache forgot them (the model errs) does not pin more than a quarter
+// of its budget reloading them. `take(c, maxWork)` adds up to maxWork of
+// c's queue to the lease and returns the work it added (-1: none). Returns
+// the lease's work with them. The coordinator's queue is jobs.db, the
+// cluster model's its own (coordinator/cli/bench/cluster_model.h).
+int64_t addMoreCells(const std::vector<PendingCell>& candidates, const PendingCell& chosen,
+                     const std::vector<CellInfo>& cells, const WorkerInfo& worker, const WorkerRegistry& workers,
+                     int64_t leaseWork, const std::function<bool(const PendingCell&)>& failedBefore,
+                     const std::function<int64_t(const PendingCell&, int64_t)>& take);
 
 // Load time per triangle before a worker's own is measured: a grid build
 // and the cell's read (bench pipeline, octagon).

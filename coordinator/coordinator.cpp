@@ -18,6 +18,7 @@
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
 #include "common/util/output_path.h"
+#include "common/util/process_memory.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
@@ -34,18 +35,6 @@ int64_t nowMs() {
 }
 
 namespace {
-// Cells ranked by pending work that a lease may be chosen from.
-constexpr size_t kLeaseCandidates = 1024;
-// What a worker's cache holds per byte of a cell's file: the geometry and
-// an accelerator about twice its size (a grid; worker/cell_cache.h).
-constexpr uint64_t kCachedBytesPerFileByte = 3;
-// Photon pass: a lease under this much of its worker's time takes on more
-// cells, at most kMostCellsPerLease in all. A cell's emission is ~10 ms of
-// a worker's time on the octagon: at 0.03 s a photon pass takes ~130
-// leases instead of ~290, and the coordinator half the CPU (about half its
-// photon-pass CPU is per lease: statements, commits, messages).
-constexpr double kSmallLeaseSeconds = 0.03;
-constexpr size_t kMostCellsPerLease = 16;
 constexpr uint32_t kLeaseOwnCell = 0xffffffff;   // Failure.failedCell's default
 
 // Wall-clock for records that outlive the process (job creation, phases).
@@ -182,7 +171,10 @@ void Coordinator::runRound() {
       }
       worker->second.recordLease(lease, wallMs(), workerMicros);
       worker->second.recordLoads(trianglesLoaded, loadMicros);
-      worker->second.leases.erase(lease);
+      if (auto sent = worker->second.leases.find(lease); sent != worker->second.leases.end()) {
+        arrivedLeases_[lease] = sent->second;
+        worker->second.leases.erase(sent);
+      }
       resultsArrived = true;
     }
   }
@@ -219,6 +211,7 @@ void Coordinator::runRound() {
   if (!committed)
     for (size_t i = handled + 1; i < arrived.size(); ++i)
       handle(arrived[i].identity, *arrived[i].message, arrived[i].bytes, arrived[i].role);
+  arrivedLeases_.clear();   // a dropped Result is not logged
 }
 
 bool Coordinator::inRound(const std::function<void()>& work) {
@@ -489,9 +482,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   const auto& cells = job->scene->cells();
   const PendingCell* chosen = chooseCell(candidates, cells, worker, workers_);
   if (!chosen) return Assignment::NothingForThisWorker;
-  const auto cachedBytes = [&](uint32_t cell) {
-    return cell < cells.size() ? kCachedBytesPerFileByte * cells[cell].byteCount : 0;
-  };
+  const auto cachedBytes = [&](uint32_t cell) { return cachedBytesOf(cells, cell); };
   std::vector<QueuedBatch> batches;
   std::vector<std::pair<uint32_t, std::vector<QueuedBatch>>> moreCells;
   LeaseRecord opened;
@@ -500,27 +491,17 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     sql::Transaction tx(store_.database());
     opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
     for (const QueuedBatch& batch : batches) leaseWork += batch.work;
-    // Photon pass: a lease under kSmallLeaseSeconds of the worker's work
-    // (a cell's emission, the end of the pass) takes on more cells, those
-    // it holds and those no other worker holds, up to that much work: one
-    // round trip and one Result for all of them. Their cache footprint is
-    // capped, so a worker whose cache forgot them (the model errs) does not
-    // pin more than a quarter of its budget reloading them.
-    const int64_t smallLease = int64_t(worker.workPerSecond * kSmallLeaseSeconds);
-    uint64_t extraBytes = 0;
-    if (opened.id && chosen->phase == 0 && leaseWork < smallLease) {
-      for (const PendingCell& c : candidates) {
-        if (leaseWork >= smallLease || moreCells.size() + 1 >= kMostCellsPerLease) break;
-        if (!mayJoinLease(c, *chosen, worker, workers_, failedCells_.count({c.job, c.cell}) != 0)) continue;
-        if (worker.memoryBytes > 0 && extraBytes + cachedBytes(c.cell) > worker.memoryBytes / 4) continue;
-        std::vector<QueuedBatch> extra;
-        const int64_t added = store_.addToLease(opened.id, c, smallLease - leaseWork, extra);
-        if (extra.empty()) continue;
-        leaseWork += added;
-        extraBytes += cachedBytes(c.cell);
-        moreCells.emplace_back(c.cell, std::move(extra));
-      }
-    }
+    if (opened.id)
+      leaseWork = addMoreCells(
+          candidates, *chosen, cells, worker, workers_, leaseWork,
+          [&](const PendingCell& c) { return failedCells_.count({c.job, c.cell}) != 0; },
+          [&](const PendingCell& c, int64_t maxWork) {
+            std::vector<QueuedBatch> extra;
+            const int64_t added = store_.addToLease(opened.id, c, maxWork, extra);
+            if (extra.empty()) return int64_t(-1);
+            moreCells.emplace_back(c.cell, std::move(extra));
+            return added;
+          });
     tx.commit();
   } catch (const DamagedFileError& e) {
     // Queued rays lost under a committed row (an operating-system crash, or
@@ -558,7 +539,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
-  worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork});
+  worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork, uint32_t(moreCells.size())});
   if (inRound_) roundLeases_.emplace_back(worker.identity, lease);
   for (const auto& [cell, unused] : moreCells) worker.cells.use(chosen->job, cell, cachedBytes(cell));
   worker.cells.use(chosen->job, chosen->cell, cachedBytes(chosen->cell));
@@ -625,8 +606,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         auto spec = context->reader();
         store_.addFilm(lease->job, sums, uint64_t(spec.getWidth()) * spec.getHeight());
       }
-      for (auto counter : result.getCounters()) store_.addCounter(lease->job, counter.getName().cStr(), counter.getValue());
-      store_.addCounter(lease->job, "leases.completed", 1);
+      recordResultCounters(identity, *lease, result);
     }
     tx.commit();
   } catch (const FilmRangeError& e) {
@@ -646,6 +626,56 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
   }
   retries_.erase({lease->job, lease->cell});
   if (active) advanceIfPhaseDone(lease->job);
+}
+
+uint64_t Coordinator::peakResident() {
+  const int64_t now = nowMs();
+  if (now - peakResidentReadMs_ >= 100) {
+    peakResident_ = peakResidentBytes();
+    peakResidentReadMs_ = now;
+  }
+  return peakResident_;
+}
+
+// A Result's counters are summed into its job's, except the worker's peak
+// memory, kept per worker as the largest it reported; the coordinator's own
+// peak and the lease's line in the lease log go in the same transaction.
+void Coordinator::recordResultCounters(const std::string& identity, const LeaseRecord& lease,
+                                       wire::Result::Reader result) {
+  const auto worker = workers_.find(identity);
+  const std::string workerName = worker != workers_.end() ? worker->second.name : identity;
+  LeaseLogEntry entry;
+  for (auto counter : result.getCounters()) {
+    const std::string_view name = counter.getName().cStr();
+    if (name == kPeakResidentCounter) {
+      store_.raiseCounter(lease.job, fmt::format("{}{}", kWorkerPeakResidentPrefix, workerName), counter.getValue());
+      continue;
+    }
+    store_.addCounter(lease.job, name, counter.getValue());
+    if (name == kLeaseTimeCounter) entry.leaseMicros = counter.getValue();
+    else if (name == kLoadTimeCounter) entry.loadMicros = counter.getValue();
+    else if (name == kTrianglesLoadedCounter) entry.trianglesLoaded = counter.getValue();
+    else if (name == "cells.loaded") entry.cellsLoaded = counter.getValue();
+  }
+  store_.addCounter(lease.job, "leases.completed", 1);
+  if (worker != workers_.end() && worker->second.memoryBytes > 0)
+    store_.raiseCounter(lease.job, fmt::format("{}{}", kWorkerMemoryBudgetPrefix, workerName),
+                        int64_t(worker->second.memoryBytes));
+  store_.raiseCounter(lease.job, kCoordinatorPeakResidentCounter, int64_t(peakResident()));
+  store_.raiseCounter(lease.job, kCoordinatorCpuAtLastResultCounter, processCpuMicros());
+  entry.job = lease.job;
+  entry.lease = lease.id;
+  entry.phase = lease.phase;
+  entry.cell = lease.cell;
+  entry.worker = workerName;
+  entry.resultMs = wallMs();
+  if (auto sent = arrivedLeases_.find(lease.id); sent != arrivedLeases_.end()) {
+    entry.sentMs = sent->second.sentMs;
+    entry.work = sent->second.work;
+    entry.moreCells = sent->second.moreCells;
+    arrivedLeases_.erase(sent);
+  }
+  store_.logLease(entry);
 }
 
 void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader failure) {
@@ -865,8 +895,10 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
         submit.getFreshPhotons() ? std::nullopt : store_.reusablePhotonPass(photonKey);
     uint64_t job;
     {
+      const int64_t cpuAtSubmit = processCpuMicros();
       sql::Transaction tx(store_.database());
       job = store_.createJob(packed, wallMs());
+      store_.addCounter(job, kCoordinatorCpuAtSubmitCounter, cpuAtSubmit);
       store_.setPhotonPass(job, photonKey, lender.value_or(0));
       if (!lender) queuePhotonEmission(store_, job, builder.asReader(), *scene, &stopping_);
       tx.commit();

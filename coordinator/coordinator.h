@@ -64,6 +64,7 @@ class Coordinator {
   void onHello(const std::string& identity, wire::Hello::Reader hello);
   void onReady(const std::string& identity);
   void onResult(const std::string& identity, wire::Result::Reader result);
+  void recordResultCounters(const std::string& identity, const LeaseRecord& lease, wire::Result::Reader result);
   void onFailure(const std::string& identity, wire::Failure::Reader failure);
   void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
   // The job back to the start of its photon pass, one of its own (its
@@ -170,6 +171,14 @@ class Coordinator {
   std::vector<Outgoing> outbox_;
   std::vector<std::pair<std::string, uint64_t>> roundLeases_;
   std::vector<uint64_t> roundResults_;
+  // The leases whose Results arrived this round, as they were sent (the
+  // lease log's sent time, work and more cells), until onResult logs them.
+  std::map<uint64_t, WorkerInfo::LeaseInFlight> arrivedLeases_;
+  // The coordinator's own peak resident memory, read at most every 100 ms
+  // (a Result's transaction records it in the job's statistics).
+  uint64_t peakResident();
+  uint64_t peakResident_ = 0;
+  int64_t peakResidentReadMs_ = -1000;
 };
 
 int64_t nowMs();

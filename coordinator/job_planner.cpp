@@ -118,6 +118,10 @@ const Camera& namedCamera(const std::string& name, const SceneStore& scene) {
 }
 }  // namespace
 
+uint64_t defaultPhotonCount(size_t lightCount) {
+  return std::clamp<uint64_t>(kDefaultPhotonsPerLight * lightCount, kMinDefaultPhotons, kMaxDefaultPhotons);
+}
+
 JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   const JobSettings defaults;
   // A store camera by name becomes the job's camera, exactly as stored (its
@@ -144,6 +148,9 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
     // distance at all: voxel cells sample every light.
     settings.lightHops = hasVoxelCells(scene) ? -1 : 2;
   }
+  // A cell or portal picture has no photon pass: its 0 stays 0.
+  if (settings.photons == 0 && settings.aov == JobSettings::Aov::Radiance)
+    settings.photons = defaultPhotonCount(scene.lights().size());
   if (settings.photonK == 0) settings.photonK = defaults.photonK;
   if (settings.exposure == 0) settings.exposure = defaults.exposure;
   settings.camera = resolveCamera(settings.camera, scene);

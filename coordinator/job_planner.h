@@ -20,8 +20,20 @@ constexpr uint32_t kPhotonsPerEmitBatch = 20000;
 constexpr uint64_t kMostEmitBatches = 50000;   // a billion photons; beyond, batches grow
 constexpr uint32_t kSamplesPerCameraBatch = 16384;
 
+// The photon count of a job that names none (docs/large-buildings.md,
+// "Default photon count"): kDefaultPhotonsPerLight per light of the
+// building, at least kMinDefaultPhotons (the count the reference scenes'
+// image-quality defaults were checked at, so a small building renders as
+// it was checked) and at most kMaxDefaultPhotons (a default render of the
+// largest buildings stays minutes of photon pass on one machine).
+constexpr uint64_t kDefaultPhotonsPerLight = 5000;
+constexpr uint64_t kMinDefaultPhotons = 200000;
+constexpr uint64_t kMaxDefaultPhotons = 20000000;
+uint64_t defaultPhotonCount(size_t lightCount);
+
 // Every automatic value of a submitted job, resolved once from its scene:
-// the image size from the camera, the light hops from the kind of cells,
+// the image size from the camera, the photon count from the lights (a
+// radiance job's 0), the light hops from the kind of cells,
 // the render accelerator from the accelerator; a value a submit message
 // leaves 0 or "" takes JobSettings's default. The coordinator stores the
 // result and hands it to workers, which decide nothing. Resolving a

@@ -46,6 +46,46 @@ void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohm
   stats["accelerators"] = builds;
   stats["cell_accelerators"] = cells;
 }
+
+// Cell reloads, from the same per-cell counters (one per load, whatever the
+// structure): how many cells were loaded once, twice, ..., by all workers
+// over both phases together.
+void addCellLoads(const std::map<std::string, int64_t>& counters, nlohmann::json& cellStats) {
+  std::map<uint32_t, int64_t> loadsOfCell;
+  const std::string cellPrefix = "accel.cell.";
+  for (auto it = counters.lower_bound(cellPrefix); it != counters.end() && it->first.rfind(cellPrefix, 0) == 0; ++it)
+    loadsOfCell[uint32_t(std::strtoul(it->first.c_str() + cellPrefix.size(), nullptr, 10))] += it->second;
+  std::map<int64_t, int64_t> cellsByLoads;
+  int64_t loads = 0;
+  for (const auto& [cell, n] : loadsOfCell) {
+    ++cellsByLoads[n];
+    loads += n;
+  }
+  nlohmann::json histogram = nlohmann::json::object();
+  for (const auto& [n, cellCount] : cellsByLoads) histogram[std::to_string(n)] = cellCount;
+  cellStats["distinct_loaded"] = loadsOfCell.size();
+  cellStats["reloads"] = loads - int64_t(loadsOfCell.size());
+  cellStats["cells_by_loads"] = histogram;
+}
+
+// Peak resident memory: the coordinator's, and each worker's with its
+// --memory budget, as the Results reported them (VmHWM: the process's peak
+// since it started, so a worker that served earlier jobs shows theirs too).
+nlohmann::json memoryStatistics(const std::map<std::string, int64_t>& counters) {
+  nlohmann::json workers = nlohmann::json::object();
+  const auto perWorker = [&](std::string_view prefix, const char* key) {
+    const std::string p(prefix);
+    for (auto it = counters.lower_bound(p); it != counters.end() && it->first.rfind(p, 0) == 0; ++it)
+      workers[it->first.substr(p.size())][key] = it->second;
+  };
+  perWorker(kWorkerPeakResidentPrefix, "peak_rss_bytes");
+  perWorker(kWorkerMemoryBudgetPrefix, "budget_bytes");
+  int64_t workersPeak = 0;
+  for (const auto& [name, w] : workers.items()) workersPeak = std::max(workersPeak, w.value("peak_rss_bytes", int64_t(0)));
+  return {{"coordinator_peak_rss_bytes", get(counters, std::string(kCoordinatorPeakResidentCounter))},
+          {"workers_peak_rss_bytes", workersPeak},
+          {"workers", workers}};
+}
 // Passes done, each one's error estimate and end (ms of render), the
 // settings that stop them and why they stopped (null while they go on).
 nlohmann::json renderPassStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
@@ -118,12 +158,26 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                     {"bytes_read", get(counters, "cells.bytes_read")},
                     {"triangles_loaded", get(counters, std::string(kTrianglesLoadedCounter))},
                     {"photon_maps_built", get(counters, "photon_maps.built")}};
+  addCellLoads(counters, stats["cells"]);
+  stats["memory"] = memoryStatistics(counters);
+  // The job's own files (its photons and queued rays) and jobs.db, which
+  // every job shares.
+  const JobStore::JobFileBytes files = store.jobFileBytes(job.id);
+  stats["disk"] = {{"photon_file_bytes", files.photons},
+                   {"batch_file_bytes", files.batches},
+                   {"job_bytes", files.photons + files.batches},
+                   {"jobs_db_bytes", store.databaseBytes()}};
   stats["leases"] = get(counters, "leases.completed");
   // Photon-pass leases that carried more cells than their own, and how many.
   stats["lease_extra_cells"] = get(counters, "leases.extra_cells");
   // Photon passes run again because a photon file was found damaged.
   stats["photon_pass_restarts"] = get(counters, JobStore::kPhotonPassRestarts);
+  const int64_t cpuAtSubmit = get(counters, std::string(kCoordinatorCpuAtSubmitCounter));
+  const int64_t cpuAtLastResult = get(counters, std::string(kCoordinatorCpuAtLastResultCounter));
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
+                      // The coordinator's CPU from submit to the last Result
+                      // (other jobs' too, when several run at once).
+                      {"coordinator_cpu", cpuAtSubmit > 0 && cpuAtLastResult > cpuAtSubmit ? (cpuAtLastResult - cpuAtSubmit) / 1000 : 0},
                       {"render", get(counters, "time.render_ms")},
                       {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},
                       // Cell loads: reading, validating and building, all workers added up.

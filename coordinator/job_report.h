@@ -11,6 +11,18 @@
 
 namespace portico {
 
+// Counters of memory, kept as peaks (JobStore::raiseCounter): each worker's
+// (prefix + its name) and its --memory budget, and the coordinator's.
+inline constexpr std::string_view kWorkerPeakResidentPrefix = "memory.peak_rss.worker.";
+inline constexpr std::string_view kWorkerMemoryBudgetPrefix = "memory.budget.worker.";
+inline constexpr std::string_view kCoordinatorPeakResidentCounter = "memory.peak_rss.coordinator";
+// The coordinator's process CPU time (processCpuMicros) when the job was
+// submitted and when its last Result was applied: their difference is the
+// coordinator's CPU for the job, when it ran alone (the cluster model's
+// cost per lease).
+inline constexpr std::string_view kCoordinatorCpuAtSubmitCounter = "time.coordinator_cpu_at_submit_us";
+inline constexpr std::string_view kCoordinatorCpuAtLastResultCounter = "time.coordinator_cpu_at_last_result_us";
+
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);

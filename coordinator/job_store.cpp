@@ -10,6 +10,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <limits>
 #include <cstring>
 #include <functional>
 #include <stdexcept>
@@ -131,11 +132,12 @@ void JobStore::refuseFilesOfUnknownJobs(const std::string& path) {
 
 void JobStore::loadUnleasedWork() {
   unleased_.clear();
+  ranked_.clear();
   auto& s = db_.prepare(
       "SELECT job, phase, cell, SUM(work), COUNT(*) FROM batches WHERE lease IS NULL GROUP BY job, phase, cell");
   while (s.step())
-    unleased_[{uint64_t(s.columnInt(0)), int(s.columnInt(1)), uint32_t(s.columnInt(2))}] = {s.columnInt(3),
-                                                                                             s.columnInt(4)};
+    changeUnleased({uint64_t(s.columnInt(0)), int(s.columnInt(1)), uint32_t(s.columnInt(2))}, s.columnInt(3),
+                   s.columnInt(4));
   s.reset();
   unleasedValid_ = true;
 }
@@ -281,6 +283,26 @@ constexpr const char* kSchemaVersion7 = R"sql(
         PRIMARY KEY (job, pass)
       );
     )sql";
+// Version 8: the lease log, one row per completed lease (LeaseLogEntry),
+// for the cluster model; a few dozen bytes per lease.
+constexpr const char* kSchemaVersion8 = R"sql(
+      CREATE TABLE lease_log (
+        job INTEGER NOT NULL REFERENCES jobs(id),
+        lease INTEGER NOT NULL,
+        phase INTEGER NOT NULL,
+        cell INTEGER NOT NULL,
+        more_cells INTEGER NOT NULL,
+        work INTEGER NOT NULL,
+        worker TEXT NOT NULL,
+        sent_ms INTEGER NOT NULL,
+        result_ms INTEGER NOT NULL,
+        lease_us INTEGER NOT NULL,
+        load_us INTEGER NOT NULL,
+        cells_loaded INTEGER NOT NULL,
+        triangles_loaded INTEGER NOT NULL
+      );
+      CREATE INDEX lease_log_by_job ON lease_log(job);
+    )sql";
 }  // namespace
 
 void JobStore::migrate() {
@@ -307,6 +329,7 @@ void JobStore::migrate() {
   step(5, [&] { db_.exec(kSchemaVersion5); });
   step(6, [&] { db_.exec(kSchemaVersion6); });
   step(7, [&] { db_.exec(kSchemaVersion7); });
+  step(8, [&] { db_.exec(kSchemaVersion8); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -491,11 +514,7 @@ void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, 
     retireBatchSegment(job, segment);
     batchSegments_[job] = segment + 1;
   }
-  if (unleasedValid_) {
-    Unleased& entry = unleased_[{job, phase, cell}];
-    entry.work += work;
-    entry.batches += 1;
-  }
+  if (unleasedValid_) changeUnleased({job, phase, cell}, work, 1);
 }
 
 int64_t JobStore::queuedRays(uint64_t job, int phase) {
@@ -513,18 +532,31 @@ std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
   auto& s = db_.prepare("SELECT id, state FROM jobs WHERE state IN ('photons', 'render')");
   while (s.step()) activePhase[uint64_t(s.columnInt(0))] = phaseOf(jobStateFromString(s.columnText(1)));
   s.reset();
+  // Oldest job first; in it, most work first (ties: lower cell): the
+  // ranked index's order, read no further than `limit` (a tower's 18 K
+  // cells with work are not sorted for each lease).
   std::vector<PendingCell> result;
-  for (const auto& [key, entry] : unleased_) {
-    const auto& [job, phase, cell] = key;
-    const auto active = activePhase.find(job);
-    if (active != activePhase.end() && active->second == phase) result.push_back({job, cell, phase, entry.work});
+  for (const auto& [job, phase] : activePhase) {
+    for (auto it = ranked_.lower_bound({job, phase, std::numeric_limits<int64_t>::min(), 0});
+         it != ranked_.end() && result.size() < limit; ++it) {
+      const auto& [rankedJob, rankedPhase, negativeWork, cell] = *it;
+      if (rankedJob != job || rankedPhase != phase) break;
+      result.push_back({job, cell, phase, -negativeWork});
+    }
+    if (result.size() >= limit) break;
   }
-  // Oldest job first; in it, most work first (ties: lower cell).
-  std::sort(result.begin(), result.end(), [](const PendingCell& a, const PendingCell& b) {
-    return std::tie(a.job, b.work, a.cell) < std::tie(b.job, a.work, b.cell);
-  });
-  if (result.size() > limit) result.resize(limit);
   return result;
+}
+
+void JobStore::changeUnleased(const std::tuple<uint64_t, int, uint32_t>& key, int64_t work, int64_t batches) {
+  const auto& [job, phase, cell] = key;
+  auto it = unleased_.find(key);
+  if (it != unleased_.end()) ranked_.erase({job, phase, -it->second.work, cell});
+  else it = unleased_.emplace(key, Unleased{}).first;
+  it->second.work += work;
+  it->second.batches += batches;
+  if (it->second.batches <= 0) unleased_.erase(it);
+  else ranked_.insert({job, phase, -it->second.work, cell});
 }
 
 // The cell's unleased batches, oldest first, up to maxWork (at least one).
@@ -574,13 +606,7 @@ void JobStore::markLeased(uint64_t lease, const PendingCell& cell, const std::ve
     mark.bind(1, int64_t(lease)).bind(2, batch.id);
     mark.run();
   }
-  if (unleasedValid_) {
-    const auto key = std::make_tuple(cell.job, cell.phase, cell.cell);
-    Unleased& entry = unleased_[key];
-    entry.work -= work;
-    entry.batches -= int64_t(batches.size());
-    if (entry.batches <= 0) unleased_.erase(key);
-  }
+  if (unleasedValid_) changeUnleased({cell.job, cell.phase, cell.cell}, -work, -int64_t(batches.size()));
 }
 
 LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
@@ -719,7 +745,7 @@ void JobStore::dropJobWork(uint64_t job) {
 
 void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   dropJobWork(job);
-  for (const char* table : {"photons", "film", "render_progress", "render_passes"}) {
+  for (const char* table : {"photons", "film", "render_progress", "render_passes", "lease_log"}) {
     auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
     s.bind(1, int64_t(job));
     s.run();
@@ -742,6 +768,75 @@ void JobStore::addCounter(uint64_t job, std::string_view name, int64_t delta) {
       "ON CONFLICT(job, name) DO UPDATE SET value = value + excluded.value");
   s.bind(1, int64_t(job)).bind(2, name).bind(3, delta);
   s.run();
+}
+
+JobStore::JobFileBytes JobStore::jobFileBytes(uint64_t job) const {
+  namespace fs = std::filesystem;
+  JobFileBytes bytes;
+  std::error_code error;
+  const auto size = [&](const fs::path& path) {
+    const auto n = fs::file_size(path, error);
+    return error ? int64_t(0) : int64_t(n);
+  };
+  bytes.photons = size(photons_.pathOf({job, 0}));
+  for (const AppendFiles::Key& key : batches_.filesOnDisk())
+    if (key.first == job) bytes.batches += size(batches_.pathOf(key));
+  return bytes;
+}
+
+int64_t JobStore::databaseBytes() const {
+  std::error_code error;
+  int64_t total = 0;
+  for (const char* suffix : {"", "-wal"}) {
+    const auto n = std::filesystem::file_size(db_.path() + std::string(suffix), error);
+    if (!error) total += int64_t(n);
+  }
+  return total;
+}
+
+void JobStore::raiseCounter(uint64_t job, std::string_view name, int64_t value) {
+  auto& s = db_.prepare(
+      "INSERT INTO counters(job, name, value) VALUES (?, ?, ?) "
+      "ON CONFLICT(job, name) DO UPDATE SET value = MAX(value, excluded.value)");
+  s.bind(1, int64_t(job)).bind(2, name).bind(3, value);
+  s.run();
+}
+
+void JobStore::logLease(const LeaseLogEntry& e) {
+  auto& s = db_.prepare(
+      "INSERT INTO lease_log(job, lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, "
+      "load_us, cells_loaded, triangles_loaded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+  s.bind(1, int64_t(e.job)).bind(2, int64_t(e.lease)).bind(3, int64_t(e.phase)).bind(4, int64_t(e.cell));
+  s.bind(5, int64_t(e.moreCells)).bind(6, e.work).bind(7, e.worker).bind(8, e.sentMs).bind(9, e.resultMs);
+  s.bind(10, e.leaseMicros).bind(11, e.loadMicros).bind(12, e.cellsLoaded).bind(13, e.trianglesLoaded);
+  s.run();
+}
+
+std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
+  auto& s = db_.prepare(
+      "SELECT lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, load_us, cells_loaded, "
+      "triangles_loaded FROM lease_log WHERE job = ? ORDER BY result_ms, lease");
+  s.bind(1, int64_t(job));
+  std::vector<LeaseLogEntry> log;
+  while (s.step()) {
+    LeaseLogEntry e;
+    e.job = job;
+    e.lease = uint64_t(s.columnInt(0));
+    e.phase = int(s.columnInt(1));
+    e.cell = uint32_t(s.columnInt(2));
+    e.moreCells = uint32_t(s.columnInt(3));
+    e.work = s.columnInt(4);
+    e.worker = s.columnText(5);
+    e.sentMs = s.columnInt(6);
+    e.resultMs = s.columnInt(7);
+    e.leaseMicros = s.columnInt(8);
+    e.loadMicros = s.columnInt(9);
+    e.cellsLoaded = s.columnInt(10);
+    e.trianglesLoaded = s.columnInt(11);
+    log.push_back(std::move(e));
+  }
+  s.reset();
+  return log;
 }
 
 std::map<std::string, int64_t> JobStore::counters(uint64_t job) {

@@ -72,9 +72,25 @@ struct LeaseRecord {
   uint32_t attempt = 0;
 };
 
+// A completed lease as the coordinator saw it: its cell, work, worker, when
+// it was sent and its Result applied, and the worker's own time in it
+// (loads included) and in its cell loads.
+struct LeaseLogEntry {
+  uint64_t job = 0;
+  uint64_t lease = 0;
+  int phase = 0;
+  uint32_t cell = 0;
+  uint32_t moreCells = 0;
+  int64_t work = 0;
+  std::string worker;
+  int64_t sentMs = 0, resultMs = 0;
+  int64_t leaseMicros = 0, loadMicros = 0;
+  int64_t cellsLoaded = 0, trianglesLoaded = 0;
+};
+
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 7;
+  static constexpr int kSchemaVersion = 8;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -148,6 +164,12 @@ class JobStore {
   void restartJob(uint64_t job, int64_t nowMs);
 
   void addCounter(uint64_t job, std::string_view name, int64_t delta);
+  // A counter that keeps the largest value it was given (a peak, not a sum).
+  void raiseCounter(uint64_t job, std::string_view name, int64_t value);
+  // One row per completed lease (lease_log): what the cluster model
+  // (`portico bench cluster`) replays.
+  void logLease(const LeaseLogEntry& entry);
+  std::vector<LeaseLogEntry> leaseLog(uint64_t job);
   std::map<std::string, int64_t> counters(uint64_t job);
 
   // The payload goes to the job's photon file (append_files.h) at once, its
@@ -158,6 +180,13 @@ class JobStore {
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
   std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf({job, 0}); }
   std::filesystem::path batchFile(uint64_t job, uint32_t segment) const { return batches_.pathOf({job, segment}); }
+  // The job's bytes on disk beside jobs.db: its photon file and its ray
+  // batch segments (jobs.db itself is shared by every job).
+  struct JobFileBytes {
+    int64_t photons = 0, batches = 0;
+  };
+  JobFileBytes jobFileBytes(uint64_t job) const;
+  int64_t databaseBytes() const;   // jobs.db and its WAL
 
   // Deletes the batch files no row refers to any more: segments a job has
   // moved past, and the files of jobs that ended. Call it outside any
@@ -201,6 +230,10 @@ class JobStore {
     int64_t batches = 0;
   };
   std::map<std::tuple<uint64_t, int, uint32_t>, Unleased> unleased_;
+  // The same entries ranked as pendingCells() returns them: (job, phase,
+  // -work, cell). changeUnleased keeps both.
+  std::set<std::tuple<uint64_t, int, int64_t, uint32_t>> ranked_;
+  void changeUnleased(const std::tuple<uint64_t, int, uint32_t>& key, int64_t work, int64_t batches);
   bool unleasedValid_ = false;
 };
 

@@ -24,6 +24,7 @@ struct WorkerInfo {
   struct LeaseInFlight {
     int64_t sentMs = 0;
     int64_t work = 0;
+    uint32_t moreCells = 0;
   };
   std::map<uint64_t, LeaseInFlight> leases;
   // A worker holds up to two leases: the next one is on its way (or already

@@ -12,6 +12,7 @@
 
 #include "common/net/ray_wire.h"
 #include "common/transport/photon_record.h"
+#include "common/util/process_memory.h"
 
 namespace portico {
 
@@ -67,6 +68,7 @@ void encodeCounters(const KernelOutputs& out, const LeaseFigures& figures, wire:
   // copy of a cell by it (chooseCell).
   named.push_back({std::string_view(kLoadTimeCounter), std::llround(cache.loadMs * 1e3)});
   named.push_back({std::string_view(kTrianglesLoadedCounter), cache.trianglesLoaded});
+  named.push_back({std::string_view(kPeakResidentCounter), int64_t(peakResidentBytes())});
   // The coordinator sizes this worker's leases from it (WorkerInfo::recordLease).
   named.push_back({std::string_view(kLeaseTimeCounter),
                    std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -

@@ -61,7 +61,9 @@ struct JobSettings {
   std::string renderAccel;
   // Defaults checked against the reference scenes (docs/validation.md):
   // final gathering at every camera hit, multi-jittered pixel samples.
-  uint64_t photons = 200000;
+  // 0: chosen from the building at submit (defaultPhotonCount,
+  // coordinator/job_planner.h): 5 000 per light, 200 000 to 20 M.
+  uint64_t photons = 0;
   uint32_t spp = 16;
   uint32_t gather = 4;               // final-gather rays per camera hit (0: estimate at the hit)
   uint64_t seed = 1;

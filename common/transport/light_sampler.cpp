@@ -1,6 +1,7 @@
 #include "common/transport/light_sampler.h"
 
 #include <algorithm>
+#include <unordered_set>
 
 #include "common/transport/sampling.h"
 
@@ -12,38 +13,42 @@ std::vector<uint32_t> LightSampler::allLights(const std::vector<AreaLight>& ligh
   return ids;
 }
 
-std::vector<bool> LightSampler::cellsNear(const SceneStore& scene, uint32_t cell, int hops) {
-  const size_t cellCount = scene.cells().size();
-  if (hops < 0) return std::vector<bool>(cellCount, true);
-  std::vector<std::vector<uint32_t>> neighbours(cellCount);
-  for (const Portal& portal : scene.portals()) {
-    if (portal.cellA >= cellCount || portal.cellB >= cellCount) continue;
-    neighbours[portal.cellA].push_back(portal.cellB);
-    neighbours[portal.cellB].push_back(portal.cellA);
-  }
-  std::vector<bool> near(cellCount, false);
-  if (cell >= cellCount) return near;
+namespace {
+
+// The cells within `hops` portals of `cell` (itself included), breadth first
+// over the store's neighbour index: a tower's 35 K portals are not looked at
+// per lease.
+std::unordered_set<uint32_t> cellsWithin(const SceneStore& scene, uint32_t cell, int hops) {
+  std::unordered_set<uint32_t> reached{cell};
   std::vector<uint32_t> frontier{cell};
-  near[cell] = true;
   for (int step = 0; step < hops; ++step) {
     std::vector<uint32_t> next;
     for (uint32_t c : frontier)
-      for (uint32_t n : neighbours[c])
-        if (!near[n]) {
-          near[n] = true;
-          next.push_back(n);
-        }
+      for (uint32_t n : scene.neighboursOf(c))
+        if (reached.insert(n).second) next.push_back(n);
     frontier.swap(next);
   }
+  return reached;
+}
+
+}  // namespace
+
+std::vector<bool> LightSampler::cellsNear(const SceneStore& scene, uint32_t cell, int hops) {
+  const size_t cellCount = scene.cells().size();
+  if (hops < 0) return std::vector<bool>(cellCount, true);
+  std::vector<bool> near(cellCount, false);
+  if (cell >= cellCount) return near;
+  for (uint32_t c : cellsWithin(scene, cell, hops)) near[c] = true;
   return near;
 }
 
 std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t cell, int hops) {
   if (hops < 0) return allLights(scene.lights());
-  const std::vector<bool> near = cellsNear(scene, cell, hops);
+  if (cell >= scene.cells().size()) return {};
   std::vector<uint32_t> ids;
-  for (const AreaLight& light : scene.lights())
-    if (light.cell < near.size() && near[light.cell]) ids.push_back(light.id);
+  for (uint32_t c : cellsWithin(scene, cell, hops))
+    ids.insert(ids.end(), scene.lightsOf(c).begin(), scene.lightsOf(c).end());
+  std::sort(ids.begin(), ids.end());   // in light order, as the sampler's draws expect
   return ids;
 }
 

@@ -18,6 +18,10 @@ inline constexpr std::string_view kLeaseTimeCounter = "time.lease_us";
 inline constexpr std::string_view kLoadTimeCounter = "time.load_us";
 inline constexpr std::string_view kTrianglesLoadedCounter = "cells.triangles_loaded";
 
+// The worker's peak resident memory so far (VmHWM, bytes): the coordinator
+// keeps the largest per worker and job, not a sum.
+inline constexpr std::string_view kPeakResidentCounter = "memory.peak_rss_bytes";
+
 // Contributions a lease could not add to its film (film.h): any fails the job.
 inline constexpr std::string_view kFilmOutOfRangeCounter = "film.out_of_range";
 

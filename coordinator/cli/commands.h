@@ -26,9 +26,11 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
 struct SceneInfoOptions {
   bool json = false;
   bool compress = true;   // zlib every file for bytes_compressed: minutes on a store of GBs
+  bool readCells = true;  // read every cell file (validateSceneStore); false: their sizes only
 };
 int runSceneInfo(const std::string& store, const SceneInfoOptions& options);
-// The summary printed after generate and import: as above, without compressing.
+// The summary printed after generate and import: as above, without
+// compressing or reading back the cell files just written (their sizes only).
 int runSceneInfo(const std::string& store, bool json);
 // `scene plan`: top-down floor plans as a PNG (scene_plan.h).
 struct ScenePlanOptions {

@@ -163,8 +163,9 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
                      "--accel)");
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
-  command.add_option("--photons", o.photons, "photons emitted in all")
-      ->capture_default_str()
+  command.add_option("--photons", o.photons,
+                     "photons emitted in all (default: 5000 per light of the building, at least 200000, at most "
+                     "20000000; docs/large-buildings.md)")
       ->check(wholeNumber(1, limits::kMaxPhotons));
   command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str()->check(wholeNumber(1, limits::kMaxSpp));
   command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")

@@ -72,8 +72,23 @@ std::string describeStatus(const nlohmann::json& s) {
       text += fmt::format("photon pass: job {}'s, reused\n", s["photon_pass"]["reused_from_job"].get<uint64_t>());
     text += fmt::format("rays: traced {} crossings {} ({:.3f} per camera ray)\n", s["rays"].value("traced", 0),
                         s["rays"].value("crossings", 0), s["rays"].value("crossings_per_camera_ray", 0.0));
-    text += fmt::format("cells: loaded {} cache hits {} bytes read {}\n", s["cells"].value("loaded", 0),
-                        s["cells"].value("cache_hits", 0), s["cells"].value("bytes_read", 0));
+    text += fmt::format("cells: loaded {} ({} distinct, {} reloads) cache hits {} bytes read {}\n",
+                        s["cells"].value("loaded", 0), s["cells"].value("distinct_loaded", 0),
+                        s["cells"].value("reloads", 0), s["cells"].value("cache_hits", 0),
+                        s["cells"].value("bytes_read", 0));
+    if (s.contains("memory")) {
+      const auto& memory = s["memory"];
+      text += fmt::format("memory: coordinator peak {:.1f} MiB", memory.value("coordinator_peak_rss_bytes", 0) / 1048576.0);
+      for (const auto& [name, w] : memory["workers"].items())
+        text += fmt::format(", {} peak {:.1f} MiB of {:.1f}", name, w.value("peak_rss_bytes", 0) / 1048576.0,
+                            w.value("budget_bytes", 0) / 1048576.0);
+      text += "\n";
+    }
+    if (s.contains("disk"))
+      text += fmt::format("disk: job's files {:.1f} MiB (photons {:.1f}, queued rays {:.1f}), jobs.db {:.1f} MiB\n",
+                          s["disk"].value("job_bytes", 0) / 1048576.0, s["disk"].value("photon_file_bytes", 0) / 1048576.0,
+                          s["disk"].value("batch_file_bytes", 0) / 1048576.0,
+                          s["disk"].value("jobs_db_bytes", 0) / 1048576.0);
     text += passesDescription(s);
     if (!s["pending_cells"].empty()) {
       text += "pending work by cell:";

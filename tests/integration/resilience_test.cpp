@@ -461,14 +461,32 @@ TEST_F(Resilience, WorkersStayWithinTheirMemoryBudgetOnABuildingTenTimesLarger) 
   const uint64_t job = cluster.submit(tower, dir / "image.exr", 100000, 1);
   const auto status = cluster.wait(job);
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
-  for (size_t w = 0; w < 2; ++w) {
-    const uint64_t peak = peakResidentBytes(cluster.worker(w).pid());
-    std::cout << "worker " << w << ": peak RSS " << (peak >> 20) << " MiB, budget " << (budget >> 20) << " MiB, store "
+  const auto stats = nlohmann::json::parse(readFile(dir / "image.exr.json"));
+  expectConservation(stats);
+  // The job's own statistics report each worker's peak (VmHWM, with its
+  // Results) and budget: they agree with /proc and keep the budget.
+  const auto& workers = stats["memory"]["workers"];
+  ASSERT_EQ(workers.size(), 2u) << stats["memory"].dump(2);
+  for (const auto& [name, w] : workers.items()) {
+    const uint64_t reported = w.value("peak_rss_bytes", uint64_t(0));
+    std::cout << name << ": peak RSS " << (reported >> 20) << " MiB, budget " << (budget >> 20) << " MiB, store "
               << (storeBytes >> 20) << " MiB\n";
+    EXPECT_EQ(w.value("budget_bytes", uint64_t(0)), budget);
+    EXPECT_GT(reported, uint64_t(8) << 20);
+    EXPECT_LE(double(reported), 1.25 * double(budget));
+  }
+  for (size_t w = 0; w < 2; ++w) {
+    // What the job reported is at most the process's peak to date.
+    const uint64_t peak = peakResidentBytes(cluster.worker(w).pid());
     EXPECT_GT(peak, 0u);
     EXPECT_LE(double(peak), 1.25 * double(budget));
   }
-  expectConservation(nlohmann::json::parse(readFile(dir / "image.exr.json")));
+  EXPECT_GT(stats["memory"].value("coordinator_peak_rss_bytes", 0), 0);
+  // Every cell with work was loaded; each load of a cell read its file.
+  EXPECT_GT(stats["cells"].value("bytes_read", int64_t(0)), int64_t(storeBytes / 4));
+  EXPECT_EQ(stats["cells"].value("loaded", 0),
+            stats["cells"].value("distinct_loaded", 0) + stats["cells"].value("reloads", 0));
+  EXPECT_GT(stats["disk"].value("photon_file_bytes", 0), 0);
 }
 
 }  // namespace

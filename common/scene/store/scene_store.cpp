@@ -217,12 +217,26 @@ SceneStore SceneStore::open(const std::string& directory) {
     store.materials_ = reader.materials(version);
     store.lights_ = reader.lights(store.cells_.size(), version);
     store.cameras_ = reader.cameras(store.cells_.size(), version);
+    store.indexByCell();
   } catch (const CatalogueError&) {
     throw;
   } catch (const std::runtime_error& e) {
     fail(fmt::format("cannot read scene.db: {}", e.what()));
   }
   return store;
+}
+
+void SceneStore::indexByCell() {
+  const size_t cellCount = cells_.size();
+  neighbours_.assign(cellCount, {});
+  lightsByCell_.assign(cellCount, {});
+  for (const Portal& portal : portals_) {
+    if (portal.cellA >= cellCount || portal.cellB >= cellCount) continue;
+    neighbours_[portal.cellA].push_back(portal.cellB);
+    neighbours_[portal.cellB].push_back(portal.cellA);
+  }
+  for (const AreaLight& light : lights_)
+    if (light.cell < cellCount) lightsByCell_[light.cell].push_back(light.id);
 }
 
 std::string SceneStore::cellPath(uint32_t cell) const {

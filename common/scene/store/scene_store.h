@@ -33,6 +33,11 @@ class SceneStore {
   const std::map<std::string, std::string>& meta() const { return meta_; }
   std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
   std::string cataloguePath() const;              // absolute path of scene.db
+  // The cells a portal joins to `cell` (one entry per portal) and the
+  // lights in it, indexed once at open: a lease's light sampler looks a few
+  // portals around its cell, not at the whole building.
+  const std::vector<uint32_t>& neighboursOf(uint32_t cell) const { return neighbours_.at(cell); }
+  const std::vector<uint32_t>& lightsOf(uint32_t cell) const { return lightsByCell_.at(cell); }
   // The cell whose bounds contain p (the smallest, when several do); nullopt if none.
   std::optional<uint32_t> locateCell(const Vec3& p) const;
   uint64_t totalTriangles() const;
@@ -45,6 +50,8 @@ class SceneStore {
   std::vector<AreaLight> lights_;
   std::vector<Camera> cameras_;
   std::map<std::string, std::string> meta_;
+  std::vector<std::vector<uint32_t>> neighbours_, lightsByCell_;
+  void indexByCell();
 };
 
 // The geometry of one cell as written to its cell file.

@@ -6,6 +6,7 @@
 
 #include "coordinator/cli/bench/bench_accel.h"
 #include "coordinator/cli/bench/bench_calibrate.h"
+#include "coordinator/cli/bench/bench_cluster.h"
 #include "coordinator/cli/bench/bench_paper.h"
 #include "coordinator/cli/bench/bench_pipeline.h"
 #include "coordinator/cli/bench/bench_quality.h"
@@ -139,6 +140,20 @@ void addCalibrate(CLI::App& bench, CommandTable& table) {
   table.add(calibrateCommand, [o] { return runBenchCalibrate(*o); });
 }
 
+void addCluster(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchClusterOptions>();
+  auto* command = bench.add_subcommand(
+      "cluster", "the cluster model: finished jobs' lease logs replayed for N workers (docs/large-buildings.md)");
+  command->add_option("RECORDS", o->records, "JOBS_DB[:JOB] of finished runs (default job: the newest done one)")
+      ->required();
+  command->add_option("--workers", o->workers, "worker counts to predict from the first record")->capture_default_str();
+  command->add_option("--memory", o->memory, "each modelled worker's --memory when the record has none")
+      ->capture_default_str();
+  command->add_option("--latency-us", o->latencyMicros, "one-way network latency")->capture_default_str();
+  command->add_option("--csv", o->csv, "write one row per prediction");
+  table.add(command, [o] { return runBenchCluster(*o); });
+}
+
 }  // namespace
 
 void addBenchCommands(CLI::App& app, CommandTable& table) {
@@ -149,6 +164,7 @@ void addBenchCommands(CLI::App& app, CommandTable& table) {
   addPipeline(*bench, table);
   addPaper(*bench, table);
   addCalibrate(*bench, table);
+  addCluster(*bench, table);
 }
 
 }  // namespace portico::cli

@@ -279,6 +279,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
     store.database().exec("INSERT INTO photons(job, cell, count, payload) VALUES (1, 7, 1, x'0102')");
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
     store.database().exec("DROP TABLE render_progress; DROP TABLE render_passes");   // schema 7
+    store.database().exec("DROP TABLE lease_log");   // schema 8
     dropVersionSixColumns(store);
     store.database().setUserVersion(1);
   }
@@ -392,6 +393,30 @@ TEST_F(JobStoreTest, CountersAdd) {
   store.addCounter(job, "photons.emitted", 5);
   store.addCounter(job, "photons.emitted", 7);
   EXPECT_EQ(store.counters(job).at("photons.emitted"), 12);
+}
+
+TEST_F(JobStoreTest, RaisedCountersKeepTheirPeakAndTheLeaseLogKeepsEachLease) {
+  JobStore store(path_.string());
+  const uint64_t job = store.createJob("spec", 1);
+  store.raiseCounter(job, "memory.peak", 300);
+  store.raiseCounter(job, "memory.peak", 200);
+  store.raiseCounter(job, "memory.peak", 500);
+  EXPECT_EQ(store.counters(job).at("memory.peak"), 500);
+  LeaseLogEntry first{job, 7, 0, 3, 2, 1500, "w0", 10, 40, 25000, 4000, 1, 20000};
+  LeaseLogEntry second{job, 8, 1, 5, 0, 900, "w1", 20, 30, 9000, 0, 0, 0};
+  store.logLease(second);
+  store.logLease(first);
+  const auto log = store.leaseLog(job);
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_EQ(log[0].lease, 8u);   // in the order their Results were applied
+  EXPECT_EQ(log[1].cell, 3u);
+  EXPECT_EQ(log[1].moreCells, 2u);
+  EXPECT_EQ(log[1].work, 1500);
+  EXPECT_EQ(log[1].worker, "w0");
+  EXPECT_EQ(log[1].leaseMicros, 25000);
+  EXPECT_EQ(log[1].loadMicros, 4000);
+  EXPECT_EQ(log[1].trianglesLoaded, 20000);
+  EXPECT_TRUE(store.leaseLog(job + 1).empty());
 }
 
 }  // namespace
@@ -684,6 +709,7 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
     }
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_record_bytes");
     store.database().exec("DROP TABLE render_progress; DROP TABLE render_passes");   // schema 7
+    store.database().exec("DROP TABLE lease_log");   // schema 8
     dropVersionSixColumns(store);
     store.database().setUserVersion(3);
   }

@@ -56,6 +56,20 @@ TEST(JobSettings, EveryAutomaticValueIsResolvedOnceFromTheScene) {
   EXPECT_EQ(kept.height, 16u);
 }
 
+TEST(JobSettings, TheDefaultPhotonCountFollowsTheLightsBetweenAFloorAndACap) {
+  EXPECT_EQ(defaultPhotonCount(1), kMinDefaultPhotons);
+  EXPECT_EQ(defaultPhotonCount(100), 100 * kDefaultPhotonsPerLight);
+  EXPECT_EQ(defaultPhotonCount(61000), kMaxDefaultPhotons);
+  const SceneStore& rooms = twoRooms(0);
+  EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).photons, defaultPhotonCount(rooms.lights().size()));
+  JobSettings chosen;
+  chosen.photons = 12345;
+  EXPECT_EQ(resolveJobSettings(chosen, rooms).photons, 12345u);
+  JobSettings cells;
+  cells.aov = JobSettings::Aov::Cells;   // no photon pass: no photons
+  EXPECT_EQ(resolveJobSettings(cells, rooms).photons, 0u);
+}
+
 TEST(JobSettings, ASubmitThatLeavesValuesOutGetsTheDefaults) {
   capnp::MallocMessageBuilder message;
   auto spec = message.initRoot<wire::JobSpec>();

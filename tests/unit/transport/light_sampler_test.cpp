@@ -59,6 +59,7 @@ TEST(LightSampler, LightsThatCannotContributeAreNeverChosen) {
 #include <filesystem>
 #include <unistd.h>
 
+#include "common/scene/generator/demo_generator.h"
 #include "common/scene/import/building_importer.h"
 
 namespace portico {
@@ -78,6 +79,30 @@ TEST(LightSampler, LightsNearFollowThePortalGraph) {
   EXPECT_TRUE(LightSampler::lightsNear(scene, roomB, 1).empty());
   EXPECT_EQ(LightSampler::lightsNear(scene, roomB, 2).size(), 1u);
   EXPECT_EQ(LightSampler::lightsNear(scene, roomB, -1).size(), 1u);
+  std::filesystem::remove_all(store);
+}
+
+// On the demo (a corridor, six rooms, five lights), for every cell and
+// hops 0-3: the lights of the cells within that many portals, in light
+// order, as a breadth-first search over the whole portal list finds them.
+TEST(LightSampler, LightsNearAreTheLightsOfTheCellsWithinHopsInLightOrder) {
+  const auto store = std::filesystem::temp_directory_path() / ("portico-lights-demo-" + std::to_string(getpid()));
+  std::filesystem::remove_all(store);
+  generateDemoBuilding(store.string(), 3);
+  const SceneStore scene = SceneStore::open(store.string());
+  for (uint32_t cell = 0; cell < scene.cells().size(); ++cell)
+    for (int hops = 0; hops <= 3; ++hops) {
+      std::vector<int> distance(scene.cells().size(), -1);
+      distance[cell] = 0;
+      for (int step = 0; step < hops; ++step)
+        for (const Portal& p : scene.portals())
+          for (auto [from, to] : {std::pair{p.cellA, p.cellB}, std::pair{p.cellB, p.cellA}})
+            if (distance[from] == step && distance[to] < 0) distance[to] = step + 1;
+      std::vector<uint32_t> expected;
+      for (const AreaLight& light : scene.lights())
+        if (distance[light.cell] >= 0) expected.push_back(light.id);
+      EXPECT_EQ(LightSampler::lightsNear(scene, cell, hops), expected) << "cell " << cell << ", hops " << hops;
+    }
   std::filesystem::remove_all(store);
 }
 

@@ -183,7 +183,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "5");
+  EXPECT_EQ(store.meta().at("format_version"), "6");
   EXPECT_FALSE(store.materials()[0].glass());
 
   for (const CellContent& cell : scene.cells) {

@@ -57,6 +57,21 @@ TEST(SceneValidation, TheDemoBuildingIsValid) {
   EXPECT_TRUE(problems.empty()) << joined(problems);
 }
 
+// The quick check (sizes only) finds a cell file cut short or gone, without
+// reading any; one whose bytes changed at the same size needs the full read.
+TEST(SceneValidation, TheSizeCheckFindsACellFileCutShortOrGone) {
+  TempDirectory temp;
+  generateDemoBuilding(temp / "demo", 3);
+  const SceneStore store = SceneStore::open(temp / "demo");
+  EXPECT_TRUE(validateSceneStore(store, CellFileCheck::Size).empty());
+  fs::resize_file(store.cellPath(1), store.cells()[1].byteCount - 16);
+  fs::remove(store.cellPath(2));
+  const std::vector<std::string> problems = validateSceneStore(store, CellFileCheck::Size);
+  EXPECT_TRUE(hasProblem(problems, {store.cellPath(1), "the catalogue says"})) << joined(problems);
+  EXPECT_TRUE(hasProblem(problems, {store.cellPath(2), "cannot be read"})) << joined(problems);
+  EXPECT_EQ(problems.size(), 2u) << joined(problems);
+}
+
 TEST(SceneValidation, ImportedCellsAndVoxelCellsAreValid) {
   if (!fs::exists(kTwoRooms)) GTEST_SKIP() << kTwoRooms << " is absent";
   TempDirectory temp;

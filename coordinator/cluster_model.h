@@ -1,0 +1,65 @@
+// The cluster model: a discrete-event simulation of a finished job on N
+// workers on N machines, from the job's own lease log (JobStore::leaseLog).
+// It schedules with the coordinator's own code, on a simulated clock:
+// WorkerInfo (lease sizing, speed and load-cost estimates, leases in
+// flight), CellCacheModel, chooseCell and addMoreCells. What it models
+// rather than runs: the leases (each cell's measured seconds per unit of
+// work, its recorded loads included), the second copies more workers make
+// (measured load seconds per triangle; a worker's cache as an LRU of its
+// --memory) and the coordinator, one server that spends its
+// measured CPU per lease plus what chooseCell costs it at N workers, timed
+// here. docs/large-buildings.md, "Cluster model".
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/scene/store/scene_types.h"
+#include "coordinator/job_store.h"
+
+namespace portico {
+
+// What the model knows of a job: its cells, its lease log, and the
+// coordinator's measured CPU per lease.
+struct ClusterRecord {
+  std::vector<CellInfo> cells;
+  std::vector<LeaseLogEntry> leases;
+  double coordinatorSecondsPerLease = 0;
+};
+
+struct ClusterModelOptions {
+  size_t workers = 1;
+  uint64_t workerMemoryBytes = uint64_t(1) << 30;
+  // One way through the network, coordinator to worker or back.
+  double latencySeconds = 100e-6;
+  // What a loaded cell takes in a worker's cache per byte of its file:
+  // decides when a modelled worker drops a cell, hence its second copies.
+  double cachedBytesPerFileByte = 3;
+};
+
+struct PhasePrediction {
+  double seconds = 0;
+  int64_t leases = 0;
+  int64_t loads = 0;                   // second copies beyond the record's own loads
+  double coordinatorBusySeconds = 0;   // its CPU in the phase
+  double workerBusySeconds = 0;        // all workers' tracing and loads
+};
+
+struct ClusterPrediction {
+  PhasePrediction phases[2];           // photons, render
+  double seconds() const { return phases[0].seconds + phases[1].seconds; }
+  // The coordinator's share of the wall time it was busy: near 1, it is
+  // the bottleneck (workers wait for leases).
+  double coordinatorUtilization() const;
+  double workerUtilization(size_t workers) const;
+  double chooseCellMicros = 0;         // the real chooseCell's mean time per lease here
+};
+
+// Each phase starts with all its work queued (the lease log's work per
+// cell, in leases of the sizes recorded); the render phase after the last
+// photon lease, with its own accelerators: cells held from the photon pass
+// are loaded again (the worker's cache keys them by structure).
+ClusterPrediction simulateCluster(const ClusterRecord& record, const ClusterModelOptions& options);
+
+}  // namespace portico
