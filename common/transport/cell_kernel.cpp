@@ -336,18 +336,29 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   }
 }
 
-void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
-  RayState ray = gathered;
+CellEvent CellKernel::traceThroughGlass(RayState& ray, KernelOutputs& out) const {
   CellEvent event;
-  // Through glass panes (or off them) to the surface the ray lands on.
   for (int glassEvents = 0;; ++glassEvents) {
     ++out.counters.raySegments;
     event = tracer_.trace(toRay(ray));
-    if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) break;
+    if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) return event;
     const Material& material = materialAt(event.primitive);
-    if (!material.glass()) break;
-    passOrReflect(ray, event, material);
+    if (!material.glass()) return event;
+    if (ray.kind == RayKind::Shadow) {
+      // A shadow ray keeps its line: the pane lets through its transmittance.
+      const Vec3 paneNormal = normalize(tracer_.cell().mesh().geometricNormal(event.primitive));
+      ray.weight = ray.weight * thinGlass(material, dot(paneNormal, ray.direction)).transmittance;
+      ray.tMin = event.t;
+    } else {
+      passOrReflect(ray, event, material);
+    }
   }
+}
+
+void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
+  RayState ray = gathered;
+  // Through glass panes (or off them) to the surface the ray lands on.
+  const CellEvent event = traceThroughGlass(ray, out);
   switch (event.kind) {
     case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
     case CellEvent::Kind::Portal:
@@ -404,18 +415,8 @@ void CellKernel::addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& 
 
 void CellKernel::traceShadowRay(const RayState& shadow, KernelOutputs& out) {
   RayState ray = shadow;
-  CellEvent event;
   // Glass panes let through their transmittance of the light.
-  for (int glassEvents = 0;; ++glassEvents) {
-    ++out.counters.raySegments;
-    event = tracer_.trace(toRay(ray));
-    if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) break;
-    const Material& material = materialAt(event.primitive);
-    if (!material.glass()) break;
-    const Vec3 paneNormal = normalize(tracer_.cell().mesh().geometricNormal(event.primitive));
-    ray.weight = ray.weight * thinGlass(material, dot(paneNormal, ray.direction)).transmittance;
-    ray.tMin = event.t;
-  }
+  const CellEvent event = traceThroughGlass(ray, out);
   switch (event.kind) {
     case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
     case CellEvent::Kind::Portal:

@@ -74,6 +74,11 @@ class CellKernel {
   }
   void tracePhoton(RayState photon, KernelOutputs& out);
   void traceCameraRay(const RayState& ray, KernelOutputs& out);
+  // Traces `ray` through the glass panes in its way (at most
+  // kMaxGlassEvents): a shadow ray keeps its line, weighed by each pane's
+  // transmittance; any other ray passes or reflects at random
+  // (passOrReflect). Returns the first event that is not a pane.
+  CellEvent traceThroughGlass(RayState& ray, KernelOutputs& out) const;
   void traceShadowRay(const RayState& ray, KernelOutputs& out);
   void traceGatherRay(const RayState& ray, KernelOutputs& out);
   void deposit(const StoredPhoton& photon, KernelOutputs& out);
