@@ -29,6 +29,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
   ProgressDisplay display(false);
   std::string state;
   nlohmann::json status;
+  const auto waitStarted = std::chrono::steady_clock::now();
   while (!interrupted()) {
     try {
       status = nlohmann::json::parse(client.statusJson(job));
@@ -44,9 +45,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
       status["error"] = *failure;
       break;
     }
-    // Polled often: a small render ends within a second, and waiting a
-    // longer period after it adds to every run.
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::this_thread::sleep_for(statusPollInterval(std::chrono::steady_clock::now() - waitStarted));
   }
   if (interrupted()) {
     // A terminal's Ctrl-C reached the services too, and the coordinator may

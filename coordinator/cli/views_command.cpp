@@ -59,6 +59,7 @@ struct ViewJob {
 // `until`: stop as soon as it holds for the statuses read.
 void follow(net::CoordinatorClient& client, LocalServices& services, std::vector<ViewJob>& jobs,
             const std::function<bool()>& until) {
+  const auto waitStarted = std::chrono::steady_clock::now();
   while (!interrupted() && !until()) {
     for (ViewJob& j : jobs) {
       if (jobEnded(j.state)) continue;
@@ -85,7 +86,7 @@ void follow(net::CoordinatorClient& client, LocalServices& services, std::vector
       std::cerr << *failure << "\n";
       return;
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    std::this_thread::sleep_for(statusPollInterval(std::chrono::steady_clock::now() - waitStarted));
   }
 }
 }  // namespace
