@@ -140,7 +140,8 @@ TEST_F(PhotonReuse, ViewsTakeTheirOwnSizeAndSppAndTheFormatAsked) {
 TEST_F(PhotonReuse, SubmitReusesTheSamePhotonSettingsButNotOtherPhotonsNorFreshPhotons) {
   LocalCluster cluster(dir_ / "submit-cluster", 2);
   const uint64_t first = submit(cluster, "s-first", kRoomA);
-  ASSERT_EQ(cluster.wait(first).value("state", ""), "done");
+  const nlohmann::json firstStatus = cluster.wait(first);
+  ASSERT_EQ(firstStatus.value("state", ""), "done");
   const uint64_t reusing = submit(cluster, "s-reusing", kRoomB);
   const uint64_t fresh = submit(cluster, "s-fresh", with(kRoomB, {"--fresh-photons"}));
   const uint64_t otherPhotons = submit(cluster, "s-other-photons", with(kRoomB, {"--photons", "30000"}));
@@ -151,7 +152,9 @@ TEST_F(PhotonReuse, SubmitReusesTheSamePhotonSettingsButNotOtherPhotonsNorFreshP
   ASSERT_EQ(status.value("state", ""), "done") << status.dump();
   EXPECT_EQ(reusedFrom(status), first);
   EXPECT_EQ(status["photon_pass"]["photons_emitted_by_this_job"].get<int64_t>(), 0);
-  EXPECT_EQ(status["time_ms"]["photons"].get<int64_t>(), 0);
+  // Its photon phase only passes through (a millisecond or so between submit
+  // and the render phase), far shorter than the pass it reuses.
+  EXPECT_LT(status["time_ms"]["photons"].get<int64_t>(), firstStatus["time_ms"]["photons"].get<int64_t>());
   for (uint64_t job : {fresh, otherPhotons, otherRadius}) {
     const nlohmann::json own = cluster.wait(job);
     ASSERT_EQ(own.value("state", ""), "done") << own.dump();
