@@ -138,20 +138,9 @@ inline bool testLeaf8(const grid_traversal::TrianglePacket* packets, uint32_t ch
       const int lane = std::countr_zero(candidates);
       const grid_traversal::TrianglePacket& triangles = packet[lane >> 2];
       const int slot = lane & 3;
-      const uint32_t primitive = triangles.primitive[slot];
-      Hit hit{lanes.t[lane], primitive, 0, 0};
-      if (lanes.doubtful & (1u << lane)) {
-        const Vec3 v0{triangles.v[0][0][slot], triangles.v[0][1][slot], triangles.v[0][2][slot]};
-        const Vec3 v1{triangles.v[1][0][slot], triangles.v[1][1][slot], triangles.v[1][2][slot]};
-        const Vec3 v2{triangles.v[2][0][slot], triangles.v[2][1][slot], triangles.v[2][2][slot]};
-        if (!intersectTriangle(frame, ray, v0, v1, v2, hit.t, hit.u, hit.v)) continue;
-        if constexpr (AnyHit) return true;
-      } else {
-        if (!closerThan(hit.t, primitive, best)) continue;
-        hit.u = lanes.V[lane] / lanes.det[lane];
-        hit.v = lanes.W[lane] / lanes.det[lane];
-      }
-      if (closerThan(hit.t, primitive, best)) best = hit;
+      if (takeLaneHit<AnyHit>(triangles, slot, (lanes.doubtful >> lane) & 1u, lanes.t[lane], lanes.V[lane],
+                              lanes.W[lane], lanes.det[lane], frame, ray, best))
+        return true;
     }
   }
   return false;

@@ -36,6 +36,30 @@ struct BvhStackEntry {
 // is monotone and the bounds are floats); and degenerate triangles are not
 // in the tree. Lanes with a zero edge function go to intersectTriangle,
 // which re-decides them in double.
+// One candidate lane of a leaf's packet (triangle `slot`), decided as said
+// above: a doubtful lane by intersectTriangle, any other with the lane's own
+// t and divisions; the nearer hit goes to `best`. True when an any-hit query
+// may stop.
+template <bool AnyHit>
+inline bool takeLaneHit(const grid_traversal::TrianglePacket& triangles, int slot, bool doubtful, float t, float V,
+                        float W, float det, const WatertightRay& frame, const Ray& ray, Hit& best) {
+  const uint32_t primitive = triangles.primitive[slot];
+  Hit hit{t, primitive, 0, 0};
+  if (doubtful) {
+    const Vec3 v0{triangles.v[0][0][slot], triangles.v[0][1][slot], triangles.v[0][2][slot]};
+    const Vec3 v1{triangles.v[1][0][slot], triangles.v[1][1][slot], triangles.v[1][2][slot]};
+    const Vec3 v2{triangles.v[2][0][slot], triangles.v[2][1][slot], triangles.v[2][2][slot]};
+    if (!intersectTriangle(frame, ray, v0, v1, v2, hit.t, hit.u, hit.v)) return false;
+    if constexpr (AnyHit) return true;
+  } else {
+    if (!closerThan(hit.t, primitive, best)) return false;
+    hit.u = V / det;
+    hit.v = W / det;
+  }
+  if (closerThan(hit.t, primitive, best)) best = hit;
+  return false;
+}
+
 template <bool AnyHit>
 inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t child,
                      const grid_traversal::PacketRay& packetRay, const WatertightRay& frame, const Ray& ray,
@@ -52,20 +76,9 @@ inline bool testLeaf(const grid_traversal::TrianglePacket* packets, uint32_t chi
     const unsigned doubtful = grid_traversal::laneBits(lanes.anyZero);
     for (; candidates != 0; candidates &= candidates - 1) {
       const int lane = std::countr_zero(candidates);
-      const uint32_t primitive = packet->primitive[lane];
-      Hit hit{lanes.t[lane], primitive, 0, 0};
-      if (doubtful & (1u << lane)) {
-        const Vec3 v0{packet->v[0][0][lane], packet->v[0][1][lane], packet->v[0][2][lane]};
-        const Vec3 v1{packet->v[1][0][lane], packet->v[1][1][lane], packet->v[1][2][lane]};
-        const Vec3 v2{packet->v[2][0][lane], packet->v[2][1][lane], packet->v[2][2][lane]};
-        if (!intersectTriangle(frame, ray, v0, v1, v2, hit.t, hit.u, hit.v)) continue;
-        if constexpr (AnyHit) return true;
-      } else {
-        if (!closerThan(hit.t, primitive, best)) continue;
-        hit.u = lanes.V[lane] / lanes.det[lane];
-        hit.v = lanes.W[lane] / lanes.det[lane];
-      }
-      if (closerThan(hit.t, primitive, best)) best = hit;
+      if (takeLaneHit<AnyHit>(*packet, lane, (doubtful >> lane) & 1u, lanes.t[lane], lanes.V[lane], lanes.W[lane],
+                              lanes.det[lane], frame, ray, best))
+        return true;
     }
   }
   return false;

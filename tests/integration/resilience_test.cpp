@@ -20,6 +20,7 @@
 #include "common/net/message.h"
 #include "common/util/sqlite.h"
 #include "tests/integration/service_harness.h"
+#include "tests/support/process_memory.h"
 
 namespace portico {
 namespace {
@@ -430,20 +431,6 @@ TEST_F(Resilience, AWorkerWithoutTheStoresFileSystemFetchesCellsOverTheWire) {
   EXPECT_GT(stats["cells"]["bytes_read"].get<int64_t>(), 0);
 }
 
-// Peak resident memory of a live process, from /proc.
-uint64_t peakResidentBytes(pid_t pid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(status, line))
-    if (line.rfind("VmHWM:", 0) == 0) {
-      std::istringstream in(line.substr(6));
-      uint64_t kib = 0;
-      in >> kib;
-      return kib * 1024;
-    }
-  return 0;
-}
-
 // Two floors of the tower: ~480 MB of cells against 46 MiB per worker.
 TEST_F(Resilience, WorkersStayWithinTheirMemoryBudgetOnABuildingTenTimesLarger) {
   const fs::path dir = dir_ / "budget";
@@ -477,7 +464,7 @@ TEST_F(Resilience, WorkersStayWithinTheirMemoryBudgetOnABuildingTenTimesLarger) 
   }
   for (size_t w = 0; w < 2; ++w) {
     // What the job reported is at most the process's peak to date.
-    const uint64_t peak = peakResidentBytes(cluster.worker(w).pid());
+    const uint64_t peak = testing_support::peakResidentBytes(cluster.worker(w).pid());
     EXPECT_GT(peak, 0u);
     EXPECT_LE(double(peak), 1.25 * double(budget));
   }

@@ -17,6 +17,7 @@
 #include "common/image/png_file.h"
 #include "common/math.h"
 #include "tests/integration/service_harness.h"
+#include "tests/support/process_memory.h"
 
 namespace portico {
 namespace {
@@ -149,20 +150,6 @@ TEST_F(Textures, OneAndTwoWorkersGiveTheSameBits) {
   EXPECT_EQ(differingFloats(one, two), 0u);
 }
 
-// Peak resident memory of a live process, from /proc.
-uint64_t peakResidentBytes(pid_t pid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(status, line))
-    if (line.rfind("VmHWM:", 0) == 0) {
-      std::istringstream in(line.substr(6));
-      uint64_t kib = 0;
-      in >> kib;
-      return kib * 1024;
-    }
-  return 0;
-}
-
 // size x size RGB texels that a zlib'd PNG holds in little room: gradients
 // and a checker of 64-texel squares.
 void writeLargeTexture(const fs::path& path, uint32_t size) {
@@ -198,7 +185,7 @@ TEST_F(Textures, AWorkerStaysWithinItsMemoryWhileTheTexturesAreLargerThanIt) {
   LocalCluster cluster(dir / "cluster", 1, {{"--memory", "192MiB"}});
   const auto status = cluster.render(dir / "store", dir / "image.exr", 20000, 2);
   ASSERT_EQ(status.value("state", ""), "done") << status.dump(2) << readFile(dir / "cluster" / "worker-0.log");
-  const uint64_t peak = peakResidentBytes(cluster.worker(0).pid());
+  const uint64_t peak = testing_support::peakResidentBytes(cluster.worker(0).pid());
   std::cout << "worker: peak RSS " << (peak >> 20) << " MiB, --memory " << (budget >> 20) << " MiB, texture "
             << (uint64_t(kSize) * kSize * 3 >> 20) << " MiB\n";
   EXPECT_GT(peak, 0u);
