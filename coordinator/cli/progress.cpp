@@ -10,6 +10,9 @@
 namespace portico::cli {
 
 namespace {
+// Counts are read with a 64-bit default: nlohmann's value() returns the
+// default's type, and photon, ray and byte counts of a large job pass 2^31.
+
 int64_t steadyMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
       .count();
@@ -46,9 +49,9 @@ std::string passesDescription(const nlohmann::json& s) {
 std::string summaryLine(const nlohmann::json& s) {
   const auto& p = s["progress"];
   std::string line = fmt::format("job {} {:8} photons {}/{}  camera rays {}/{}  {:.2f} Mrays/s",
-                                 s.value("job", 0), s.value("state", "?"), p.value("photons_done", 0),
-                                 p.value("photons_total", 0), p.value("camera_rays_done", 0),
-                                 p.value("camera_rays_total", 0), s.value("rays_per_s", 0.0) / 1e6);
+                                 s.value("job", int64_t{0}), s.value("state", "?"), p.value("photons_done", int64_t{0}),
+                                 p.value("photons_total", int64_t{0}), p.value("camera_rays_done", int64_t{0}),
+                                 p.value("camera_rays_total", int64_t{0}), s.value("rays_per_s", 0.0) / 1e6);
   if (s.contains("eta_s")) line += fmt::format("  ETA {:.0f} s", s["eta_s"].get<double>());
   return line + passesText(s);
 }
@@ -58,7 +61,7 @@ std::string describeStatus(const nlohmann::json& s) {
   std::string text;
   if (s.contains("jobs")) {
     for (const auto& job : s["jobs"])
-      text += fmt::format("job {} {}{}\n", job.value("job", 0), job.value("state", "?"),
+      text += fmt::format("job {} {}{}\n", job.value("job", int64_t{0}), job.value("state", "?"),
                           job.value("error", "").empty() ? "" : " — " + job.value("error", ""));
     if (s["jobs"].empty()) text += "no jobs\n";
   } else {
@@ -66,33 +69,33 @@ std::string describeStatus(const nlohmann::json& s) {
     if (s.contains("error")) text += fmt::format("error: {}\n", s.value("error", ""));
     const auto& photons = s["photons"];
     text += fmt::format("photons: emitted {} deposited {} absorbed {} escaped {} queued {}\n",
-                        photons.value("emitted", 0), photons.value("deposits", 0), photons.value("absorbed", 0),
-                        photons.value("escaped", 0), photons.value("queued", 0));
+                        photons.value("emitted", int64_t{0}), photons.value("deposits", int64_t{0}), photons.value("absorbed", int64_t{0}),
+                        photons.value("escaped", int64_t{0}), photons.value("queued", int64_t{0}));
     if (s.contains("photon_pass") && s["photon_pass"]["reused_from_job"].is_number())
       text += fmt::format("photon pass: job {}'s, reused\n", s["photon_pass"]["reused_from_job"].get<uint64_t>());
-    text += fmt::format("rays: traced {} crossings {} ({:.3f} per camera ray)\n", s["rays"].value("traced", 0),
-                        s["rays"].value("crossings", 0), s["rays"].value("crossings_per_camera_ray", 0.0));
+    text += fmt::format("rays: traced {} crossings {} ({:.3f} per camera ray)\n", s["rays"].value("traced", int64_t{0}),
+                        s["rays"].value("crossings", int64_t{0}), s["rays"].value("crossings_per_camera_ray", 0.0));
     text += fmt::format("cells: loaded {} ({} distinct, {} reloads) cache hits {} bytes read {}\n",
-                        s["cells"].value("loaded", 0), s["cells"].value("distinct_loaded", 0),
-                        s["cells"].value("reloads", 0), s["cells"].value("cache_hits", 0),
-                        s["cells"].value("bytes_read", 0));
+                        s["cells"].value("loaded", int64_t{0}), s["cells"].value("distinct_loaded", int64_t{0}),
+                        s["cells"].value("reloads", int64_t{0}), s["cells"].value("cache_hits", int64_t{0}),
+                        s["cells"].value("bytes_read", int64_t{0}));
     if (s.contains("memory")) {
       const auto& memory = s["memory"];
-      text += fmt::format("memory: coordinator peak {:.1f} MiB", memory.value("coordinator_peak_rss_bytes", 0) / 1048576.0);
+      text += fmt::format("memory: coordinator peak {:.1f} MiB", memory.value("coordinator_peak_rss_bytes", int64_t{0}) / 1048576.0);
       for (const auto& [name, w] : memory["workers"].items())
-        text += fmt::format(", {} peak {:.1f} MiB of {:.1f}", name, w.value("peak_rss_bytes", 0) / 1048576.0,
-                            w.value("budget_bytes", 0) / 1048576.0);
+        text += fmt::format(", {} peak {:.1f} MiB of {:.1f}", name, w.value("peak_rss_bytes", int64_t{0}) / 1048576.0,
+                            w.value("budget_bytes", int64_t{0}) / 1048576.0);
       text += "\n";
     }
     if (s.contains("disk"))
       text += fmt::format("disk: job's files {:.1f} MiB (photons {:.1f}, queued rays {:.1f}), jobs.db {:.1f} MiB\n",
-                          s["disk"].value("job_bytes", 0) / 1048576.0, s["disk"].value("photon_file_bytes", 0) / 1048576.0,
-                          s["disk"].value("batch_file_bytes", 0) / 1048576.0,
-                          s["disk"].value("jobs_db_bytes", 0) / 1048576.0);
+                          s["disk"].value("job_bytes", int64_t{0}) / 1048576.0, s["disk"].value("photon_file_bytes", int64_t{0}) / 1048576.0,
+                          s["disk"].value("batch_file_bytes", int64_t{0}) / 1048576.0,
+                          s["disk"].value("jobs_db_bytes", int64_t{0}) / 1048576.0);
     text += passesDescription(s);
     if (!s["pending_cells"].empty()) {
       text += "pending work by cell:";
-      for (const auto& c : s["pending_cells"]) text += fmt::format(" {}:{}", c.value("cell", 0), c.value("work", 0));
+      for (const auto& c : s["pending_cells"]) text += fmt::format(" {}:{}", c.value("cell", int64_t{0}), c.value("work", int64_t{0}));
       text += "\n";
     }
   }
@@ -100,8 +103,8 @@ std::string describeStatus(const nlohmann::json& s) {
     text += fmt::format("workers: {}\n", s["workers"].size());
     for (const auto& w : s["workers"]) {
       text += fmt::format("  {} {} ({} leases), holds {} cells, recent:", w.value("name", "?"),
-                          w.value("idle", false) ? "idle" : "busy", w.value("leases", 0), w.value("cells_held", 0));
-      for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", 0));
+                          w.value("idle", false) ? "idle" : "busy", w.value("leases", int64_t{0}), w.value("cells_held", int64_t{0}));
+      for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", int64_t{0}));
       text += "\n";
     }
   }
@@ -137,10 +140,10 @@ void ProgressDisplay::finish(const nlohmann::json& s) {
   if (terminal_) std::fprintf(stderr, "\n");
   const std::string state = s.value("state", "?");
   if (state == "done")
-    std::cerr << fmt::format("job {} done in {:.1f} s: {}{}\n", s.value("job", 0), s.value("elapsed_s", 0.0),
+    std::cerr << fmt::format("job {} done in {:.1f} s: {}{}\n", s.value("job", int64_t{0}), s.value("elapsed_s", 0.0),
                              s["settings"].value("output", ""), passesText(s));
   else
-    std::cerr << fmt::format("job {} {}: {}\n", s.value("job", 0), state, s.value("error", ""));
+    std::cerr << fmt::format("job {} {}: {}\n", s.value("job", int64_t{0}), state, s.value("error", ""));
 }
 
 }  // namespace portico::cli
