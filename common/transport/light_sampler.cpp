@@ -52,30 +52,42 @@ std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t
   return ids;
 }
 
+LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates)
+    : candidates_(std::move(candidates)) {
+  prepared_.reserve(candidates_.size());
+  for (uint32_t id : candidates_) {
+    const AreaLight& light = lights[id];
+    Candidate c;
+    c.center = light.center();
+    c.normal = light.normal();
+    c.cornerCount = light.corners(c.corners);
+    // How far the light reaches from its centre: a point cannot be nearer
+    // the light than that without being over it, so the falloff is capped
+    // there.
+    c.reach = 0.5f * length(light.edge1 + light.edge2);
+    if (light.isTriangle()) {
+      c.reach = 0.0f;
+      for (int k = 0; k < c.cornerCount; ++k) c.reach = std::max(c.reach, length(c.corners[k] - c.center));
+    }
+    c.luminousPower = luminance(light.power());
+    prepared_.push_back(c);
+  }
+}
+
 LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u) const {
   thread_local std::vector<double> cumulative;
   cumulative.assign(candidates_.size(), 0.0);
   double total = 0;
-  for (size_t i = 0; i < candidates_.size(); ++i) {
-    const AreaLight& light = lights_[candidates_[i]];
-    const Vec3 toPoint = point - light.center();
+  for (size_t i = 0; i < prepared_.size(); ++i) {
+    const Candidate& light = prepared_[i];
+    const Vec3 toPoint = point - light.center;
     // A point behind the light's plane sees only its dark back.
-    const bool lightFacesPoint = dot(light.normal(), toPoint) > 0;
-    // How far the light reaches from its centre (half a parallelogram's
-    // diagonal): a point cannot be nearer the light than that bound says
-    // without being over it, so cap the falloff there.
-    Vec3 corners[4];
-    const int cornerCount = light.corners(corners);
-    float reach = 0.5f * length(light.edge1 + light.edge2);
-    if (light.isTriangle()) {
-      reach = 0.0f;
-      for (int k = 0; k < cornerCount; ++k) reach = std::max(reach, length(corners[k] - light.center()));
-    }
+    const bool lightFacesPoint = dot(light.normal, toPoint) > 0;
     bool pointFacesLight = false;   // any part of the light above the point's tangent plane
-    for (int k = 0; k < cornerCount; ++k) pointFacesLight |= dot(normal, corners[k] - point) > 0;
+    for (int k = 0; k < light.cornerCount; ++k) pointFacesLight |= dot(normal, light.corners[k] - point) > 0;
     if (lightFacesPoint && pointFacesLight) {
-      const double d2 = std::max(double(dot(toPoint, toPoint)), double(reach) * reach);
-      total += luminance(light.power()) / d2;
+      const double d2 = std::max(double(dot(toPoint, toPoint)), double(light.reach) * light.reach);
+      total += light.luminousPower / d2;
     }
     cumulative[i] = total;
   }

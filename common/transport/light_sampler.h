@@ -22,8 +22,7 @@ struct LightChoice {
 class LightSampler {
  public:
   // Samples among `candidates` (light ids).
-  LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates)
-      : lights_(lights), candidates_(std::move(candidates)) {}
+  LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates);
   static std::vector<uint32_t> allLights(const std::vector<AreaLight>& lights);
   // The lights of cells within `hops` portals of `cell` (breadth first over
   // the portal graph); hops < 0: every light.
@@ -36,8 +35,19 @@ class LightSampler {
   LightChoice choose(const Vec3& point, const Vec3& normal, float u) const;
 
  private:
-  const std::vector<AreaLight>& lights_;
+  // What choose() reads of a candidate, computed once per sampler: a room
+  // two portals from a tower's corridor has hundreds of candidate lights,
+  // and recomputing each one's normal, corners and power at every shading
+  // point was most of a render's time there.
+  struct Candidate {
+    Vec3 center, normal;
+    Vec3 corners[4];
+    int cornerCount = 4;
+    float reach = 0;       // half the diagonal (parallelogram), farthest corner (triangle)
+    float luminousPower = 0;
+  };
   std::vector<uint32_t> candidates_;
+  std::vector<Candidate> prepared_;   // one per candidate, in the same order
 };
 
 }  // namespace portico
