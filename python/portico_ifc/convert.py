@@ -151,6 +151,20 @@ def _pane_objects(panes, lines, owner, cells, names, out_dir):
     return objects
 
 
+def _glazing_summary(glazing, model, panes, paneless, objects, openings):
+    """Counts of glazed windows for the summary; sets each window's "glass" in `openings`."""
+    glass_of = {p.window: list(p.transmittance) for p in panes}
+    for o in openings:
+        if o["kind"] == "window":
+            o["glass"] = glass_of.get(o["name"])
+    return {"glazing": glazing,
+            "windows_glazed": len(panes),
+            "windows_at_opening": sum(1 for p in panes if p.at_opening),
+            "windows_without_glass": len(model.unglazed_windows),
+            "windows_glass_unplaced": len(paneless),
+            "glass_objects": sum(1 for o in objects if "glass" in o)}
+
+
 def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
     started = time.time()
     model = read_ifc(ifc_path, glazing)
@@ -239,10 +253,6 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
         json.dump(building, f, indent=1)
 
     openings = _match_openings(model.openings, portals, cells, lines, cell_of_point)
-    glass_of = {p.window: list(p.transmittance) for p in panes}
-    for o in openings:
-        if o["kind"] == "window":
-            o["glass"] = glass_of.get(o["name"])
     summary = {
         "schema": model.schema,
         "unit_scale": model.unit_scale,
@@ -257,12 +267,7 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
         "windows": sum(1 for o in openings if o["kind"] == "window"),
         "doors_with_portal": sum(1 for o in openings if o["kind"] == "door" and o["portal"]),
         "windows_with_portal": sum(1 for o in openings if o["kind"] == "window" and o["portal"]),
-        "glazing": glazing,
-        "windows_glazed": len(panes),
-        "windows_at_opening": sum(1 for p in panes if p.at_opening),
-        "windows_without_glass": len(model.unglazed_windows),
-        "windows_glass_unplaced": len(paneless),
-        "glass_objects": sum(1 for o in objects if "glass" in o),
+        **_glazing_summary(glazing, model, panes, paneless, objects, openings),
         "outdoors": outdoors,
         "outdoor_cells": len(outdoor),
         "site": building.get("site"),
