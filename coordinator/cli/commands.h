@@ -9,6 +9,7 @@
 
 #include "common/job/job_settings.h"
 #include "common/scene/import/building_importer.h"
+#include "coordinator/cli/ifc_conversion.h"
 
 namespace portico::cli {
 
@@ -18,9 +19,9 @@ void addRenderOptions(CLI::App& command, JobSettings& options);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
-// An .ifc input goes through the IFC converter first; ifcLights: auto, fixtures or panels.
+// An .ifc input goes through the IFC converter first, read as `ifc` says.
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
-                   const std::string& ifcLights = "auto");
+                   const IfcOptions& ifc = {});
 // `scene info`: counts (Tables 1 and 2 of the paper), bytes raw and
 // compressed, and the validation pass; exit status 1 when the store is invalid.
 struct SceneInfoOptions {

@@ -44,7 +44,7 @@ bool isIfcFile(const std::string& path) {
   return extension == ".ifc";
 }
 
-std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const std::string& lights) {
+std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const IfcOptions& options) {
   if (!std::filesystem::is_regular_file(ifc)) throw std::runtime_error(fmt::format("{}: does not exist", ifc));
   const std::string python = converterPython();
   if (!std::filesystem::exists(python))
@@ -54,7 +54,11 @@ std::string convertIfc(const std::string& ifc, const std::string& outDirectory, 
   const std::string modules = std::string(PORTICO_SOURCE_DIR) + "/python";
   const char* previous = std::getenv("PYTHONPATH");
   setenv("PYTHONPATH", previous && *previous ? (modules + ":" + previous).c_str() : modules.c_str(), 1);
-  const int status = runProcess({python, "-m", "portico_ifc", ifc, outDirectory, "--lights", lights});
+  std::vector<std::string> arguments{python,    "-m",         "portico_ifc",   ifc,
+                                     outDirectory, "--lights", options.lights, "--outdoors",
+                                     options.outdoors};
+  if (!options.glazing) arguments.push_back("--no-glazing");
+  const int status = runProcess(arguments);
   if (status != 0)
     throw std::runtime_error(fmt::format("{}: the IFC converter failed (exit status {}; its message is above)", ifc, status));
   return outDirectory + "/building.json";

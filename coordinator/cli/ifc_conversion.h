@@ -9,10 +9,17 @@ namespace portico::cli {
 
 bool isIfcFile(const std::string& path);
 
+// How the converter reads a model (docs/importing-buildings.md).
+struct IfcOptions {
+  std::string lights = "auto";   // auto, fixtures, panels or none
+  bool glazing = true;           // windows' glass as thin panes; false: windows left out, holes open
+  std::string outdoors = "open"; // open: outdoor cells for daylight; closed: black sky and grey ground boxes
+};
+
 // Runs the converter on `ifc`, writing building.json, meshes/ and
 // conversion.json into `outDirectory`; returns the building.json's path.
-// `lights`: auto, fixtures or panels. Throws std::runtime_error, one line
-// naming the file, when the converter cannot run or fails.
-std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const std::string& lights);
+// Throws std::runtime_error, one line naming the file, when the converter
+// cannot run or fails.
+std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const IfcOptions& options);
 
 }  // namespace portico::cli

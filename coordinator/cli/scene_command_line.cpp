@@ -34,7 +34,8 @@ void addImport(CLI::App& scene, CommandTable& table) {
     std::vector<std::string> inputs;
     ImportOptions import;
     std::string store;
-    std::string ifcLights = "auto";
+    IfcOptions ifc;
+    bool noGlazing = false;
   };
   auto o = std::make_shared<Options>();
   auto* import = scene.add_subcommand("import", "import a building.json, or mesh files, into a scene store");
@@ -45,16 +46,26 @@ void addImport(CLI::App& scene, CommandTable& table) {
   import->add_option("--camera", o->import.camera,
                      "the store's default camera: the building.json's camera of this name (default: the first; every "
                      "camera is stored, for render --camera NAME)");
-  import->add_option("--lights", o->ifcLights,
+  import->add_option("--lights", o->ifc.lights,
                      "IFC input: lamps from the model's light fixtures (fixtures), one ceiling panel per space (panels), "
-                     "or fixtures where the model has some, else panels (auto)")
+                     "or fixtures where the model has some, else panels (auto), or no lamps, for daylight (none)")
       ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "fixtures", "panels"}));
+      ->check(CLI::IsMember({"auto", "fixtures", "panels", "none"}));
+  import->add_flag("--no-glazing", o->noGlazing,
+                   "IFC input: leave windows out, their holes open (default: their glass becomes thin glass panes)");
+  import->add_option("--outdoors", o->ifc.outdoors,
+                     "IFC input: the air around the building is outdoors, for daylight (open), or closed by a black "
+                     "sky and a grey ground (closed)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"open", "closed"}));
   import->add_option("INPUT", o->inputs, "building.json, an IFC model (.ifc), or mesh files (OBJ, PLY, glTF/GLB, ...)")
       ->required();
   import->add_option("STORE", o->store, "scene store directory to write")->required();
   import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
-  table.add(import, [o] { return runSceneImport(o->inputs, o->import, o->store, o->ifcLights); });
+  table.add(import, [o] {
+    o->ifc.glazing = !o->noGlazing;
+    return runSceneImport(o->inputs, o->import, o->store, o->ifc);
+  });
 }
 
 void addInfo(CLI::App& scene, CommandTable& table) {

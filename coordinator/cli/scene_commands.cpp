@@ -45,7 +45,7 @@ constexpr size_t kObjectsWorthProgress = 1000;
 }  // namespace
 
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
-                   const std::string& ifcLights) {
+                   const IfcOptions& ifc) {
   // Progress on stderr, once a second, for imports of many objects (a
   // mesh file costs a few milliseconds to read).
   ImportOptions withProgress = options;
@@ -66,7 +66,7 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
     const std::string converted = store + ".ifc-conversion";
     std::filesystem::remove_all(converted);
     try {
-      summary = importBuilding({convertIfc(inputs[0], converted, ifcLights)}, store, withProgress);
+      summary = importBuilding({convertIfc(inputs[0], converted, ifc)}, store, withProgress);
       std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
                                  std::filesystem::copy_options::overwrite_existing);
     } catch (...) {

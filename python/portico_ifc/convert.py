@@ -1,14 +1,15 @@
 """IFC model -> building.json + one OBJ per (cell, material) (docs/importing-buildings.md).
 
-    python -m portico_ifc model.ifc OUTDIR [--lights auto|fixtures|panels]
+    python -m portico_ifc model.ifc OUTDIR [--lights auto|fixtures|panels|none] [--no-glazing] [--outdoors open|closed]
 
 Writes OUTDIR/building.json and OUTDIR/meshes/*.obj, and prints a summary
 (JSON) of what was found: spaces, cells, portals, doors and windows with a
-portal, lamps, cameras.
+portal, glazed windows, lamps, cameras.
 """
 
 import argparse
 import json
+import math
 import os
 import re
 import sys
@@ -19,6 +20,7 @@ import ifcopenshell
 
 from . import cell_partition as cp
 from .clip import distribute
+from .glazing import outdoor_cells, window_panes
 from .ifc_model import read_ifc
 from .lights_cameras import fixture_lamps, space_cameras, space_panels
 
@@ -63,10 +65,10 @@ def _write_obj(path, triangles):
             f.write(f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}\n")
 
 
-def _cell_names(cells, spaces):
+def _cell_names(cells, spaces, outdoor=()):
     names, seen = [], {}
-    for c in cells:
-        base = f"space-{_slug(spaces[c.label].name)}" if c.label != cp.AIR else "air"
+    for i, c in enumerate(cells):
+        base = f"space-{_slug(spaces[c.label].name)}" if c.label != cp.AIR else "outside" if i in outdoor else "air"
         seen[base] = seen.get(base, 0) + 1
         names.append(base)
     counts = {}
@@ -124,9 +126,48 @@ def _match_openings(openings, portals, cells, lines, cell_of_point):
     return found
 
 
-def convert(ifc_path, out_dir, lights="auto"):
+def _site_json(site):
+    """IFC's true north (x, y) in the plan is portico's (x, 0, -y); its
+    azimuth is measured from +Z towards +X, as --sun's."""
+    x, y = site.true_north
+    azimuth = math.degrees(math.atan2(x, -y)) % 360.0
+    return {"latitude": site.latitude, "longitude": site.longitude, "north_azimuth": round(azimuth, 4) % 360.0}
+
+
+def _pane_objects(panes, lines, owner, cells, names, out_dir):
+    """Panes as glass objects: one OBJ per (cell, transmittance)."""
+    if not panes:
+        return []
+    corners = np.concatenate([p.corners[[[0, 1, 2], [0, 2, 3]]] for p in panes])
+    tint = sorted({p.transmittance for p in panes})
+    of_triangle = np.repeat([tint.index(p.transmittance) for p in panes], 2)
+    objects = []
+    for c, triangles, source in distribute(corners, lines, owner, cells):
+        for t in np.unique(of_triangle[source]):
+            path = os.path.join("meshes", f"{c:04d}-glass-{t:02d}.obj")
+            _write_obj(os.path.join(out_dir, path), triangles[of_triangle[source] == t])
+            objects.append({"obj": path, "name": f"{names[c]}-glass-{t}", "cell": names[c],
+                            "glass": {"transmittance": list(tint[t]), "ior": 1.5}})
+    return objects
+
+
+def _glazing_summary(glazing, model, panes, paneless, objects, openings):
+    """Counts of glazed windows for the summary; sets each window's "glass" in `openings`."""
+    glass_of = {p.window: list(p.transmittance) for p in panes}
+    for o in openings:
+        if o["kind"] == "window":
+            o["glass"] = glass_of.get(o["name"])
+    return {"glazing": glazing,
+            "windows_glazed": len(panes),
+            "windows_at_opening": sum(1 for p in panes if p.at_opening),
+            "windows_without_glass": len(model.unglazed_windows),
+            "windows_glass_unplaced": len(paneless),
+            "glass_objects": sum(1 for o in objects if "glass" in o)}
+
+
+def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
     started = time.time()
-    model = read_ifc(ifc_path)
+    model = read_ifc(ifc_path, glazing)
     read_seconds = time.time() - started
     if not model.spaces:
         raise SystemExit(f"{ifc_path}: no IfcSpace with geometry; cells follow spaces, so there is nothing to cut")
@@ -147,7 +188,9 @@ def convert(ifc_path, out_dir, lights="auto"):
             return None
         return int(owner[tuple(idx)])
 
-    if lights == "fixtures" or (lights == "auto" and model.fixtures):
+    if lights == "none":
+        lamps = []
+    elif lights == "fixtures" or (lights == "auto" and model.fixtures):
         lamps = fixture_lamps(model.fixtures, cells, cell_of_point)
     else:
         lamps = space_panels(model.spaces, cells)
@@ -157,16 +200,19 @@ def convert(ifc_path, out_dir, lights="auto"):
         seen[cam["name"]] = seen.get(cam["name"], 0) + 1
         if seen[cam["name"]] > 1:
             cam["name"] = f"{cam['name']} ({seen[cam['name']]})"
-    names = _cell_names(cells, model.spaces)
+    outdoor = outdoor_cells(cells, portals, outer_lo, outer_hi)
+    names = _cell_names(cells, model.spaces, outdoor if outdoors == "open" else ())
+    panes, paneless = window_panes(model.glazings, model.openings, cells, outdoor, portals, lines, cell_of_point)
 
     os.makedirs(os.path.join(out_dir, "meshes"), exist_ok=True)
     objects = []
-    ground, sky = _enclosure(outer_lo + SKY_INSET, outer_hi - SKY_INSET)
     groups = [(e.mesh.corners(), e.material_of_triangle) for e in model.elements]
     material_names = [m[0] for m in model.materials] + ["ground", "sky"]
     material_albedo = [m[1] for m in model.materials] + [GROUND_ALBEDO, SKY_ALBEDO]
-    groups.append((ground, np.full(len(ground), len(model.materials))))
-    groups.append((sky, np.full(len(sky), len(model.materials) + 1)))
+    if outdoors == "closed":
+        ground, sky = _enclosure(outer_lo + SKY_INSET, outer_hi - SKY_INSET)
+        groups.append((ground, np.full(len(ground), len(model.materials))))
+        groups.append((sky, np.full(len(sky), len(model.materials) + 1)))
     corners = np.concatenate([g[0] for g in groups])
     material = np.concatenate([g[1] for g in groups])
     for c, triangles, source in distribute(corners, lines, owner, cells):
@@ -175,6 +221,7 @@ def convert(ifc_path, out_dir, lights="auto"):
             path = os.path.join("meshes", f"{c:04d}-{m:03d}.obj")
             _write_obj(os.path.join(out_dir, path), triangles[material[source] == m])
             objects.append({"obj": path, "name": name, "cell": names[c], "albedo": list(material_albedo[m])})
+    objects += _pane_objects(panes, lines, owner, cells, names, out_dir)
     for i, lamp in enumerate(lamps):
         path = os.path.join("meshes", f"lamp-{i:04d}.obj")
         q = np.array(lamp["quad"])
@@ -200,6 +247,8 @@ def convert(ifc_path, out_dir, lights="auto"):
         "objects": objects,
         "cameras": cameras,
     }
+    if model.site is not None:
+        building["site"] = _site_json(model.site)
     with open(os.path.join(out_dir, "building.json"), "w") as f:
         json.dump(building, f, indent=1)
 
@@ -218,9 +267,13 @@ def convert(ifc_path, out_dir, lights="auto"):
         "windows": sum(1 for o in openings if o["kind"] == "window"),
         "doors_with_portal": sum(1 for o in openings if o["kind"] == "door" and o["portal"]),
         "windows_with_portal": sum(1 for o in openings if o["kind"] == "window" and o["portal"]),
+        **_glazing_summary(glazing, model, panes, paneless, objects, openings),
+        "outdoors": outdoors,
+        "outdoor_cells": len(outdoor),
+        "site": building.get("site"),
         "light_fixtures": len(model.fixtures),
         "lights": len(lamps),
-        "light_source": "fixtures" if lamps and lamps[0]["name"].startswith("fixture") else "space panels",
+        "light_source": "none" if lights == "none" else "fixtures" if lamps and lamps[0]["name"].startswith("fixture") else "space panels",
         "cameras": len(cameras),
         "materials": len(model.materials),
         "elements": len(model.elements),
@@ -236,14 +289,20 @@ def main(argv=None):
     parser = argparse.ArgumentParser(prog="portico_ifc", description=__doc__.split("\n\n")[0])
     parser.add_argument("ifc")
     parser.add_argument("out_dir")
-    parser.add_argument("--lights", choices=("auto", "fixtures", "panels"), default="auto",
-                        help="auto: light fixtures where the model has some, else one ceiling panel per space")
+    parser.add_argument("--lights", choices=("auto", "fixtures", "panels", "none"), default="auto",
+                        help="auto: light fixtures where the model has some, else one ceiling panel per space; "
+                             "none: no lamps (daylight only)")
+    parser.add_argument("--no-glazing", dest="glazing", action="store_false",
+                        help="leave windows out, their holes open (default: their glass becomes thin panes)")
+    parser.add_argument("--outdoors", choices=("open", "closed"), default="open",
+                        help="open: the air around the building is outdoors (cells outside-N), for daylight; "
+                             "closed: black sky and grey ground boxes close the scene")
     args = parser.parse_args(argv)
     if not os.path.isfile(args.ifc):
         print(f"{args.ifc}: does not exist", file=sys.stderr)
         return 2
     try:
-        summary = convert(args.ifc, args.out_dir, args.lights)
+        summary = convert(args.ifc, args.out_dir, args.lights, args.glazing, args.outdoors)
     except (RuntimeError, ifcopenshell.Error) as error:       # IfcOpenShell's parse errors
         print(f"{args.ifc}: not a readable IFC model: {error}", file=sys.stderr)
         return 1

@@ -7,6 +7,7 @@ file's unit scale; the scale is reported).
 """
 
 import multiprocessing
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -18,12 +19,17 @@ import ifcopenshell.util.unit
 # Elements whose solids close a room: a cell face inside one of them is sealed.
 SEALING_TYPES = ("IfcWall", "IfcSlab", "IfcRoof", "IfcCovering", "IfcColumn", "IfcBeam", "IfcPlate",
                  "IfcCurtainWall", "IfcFooting", "IfcChimney")
-# Doors and windows are dropped: their openings (cut into the walls by
-# IfcOpenShell) stay open and become portals. Openings, spaces, the site and
-# annotations are not surfaces.
+# Doors are dropped: their openings (cut into the walls by IfcOpenShell)
+# stay open and become portals. Windows are read on their own (their glass
+# becomes thin panes, their frames surfaces), or dropped with glazing off.
+# Openings, spaces, the site and annotations are not surfaces.
 SKIPPED_TYPES = ("IfcDoor", "IfcWindow", "IfcOpeningElement", "IfcSpace", "IfcSite", "IfcAnnotation",
                  "IfcGrid", "IfcVirtualElement")
 DEFAULT_ALBEDO = (0.6, 0.6, 0.6)
+# A style named as glass but not transparent (Transparency 0 or absent)
+# still is glass: this transparency (clear float glass passes about 90 %).
+NAMED_GLASS_TRANSPARENCY = 0.9
+GLASS_NAME = re.compile(r"glas|glaz|vitr", re.IGNORECASE)
 
 
 @dataclass
@@ -79,6 +85,24 @@ class Opening:
     hi: np.ndarray
     host: tuple = ()              # GlobalIds of the wall, slab or roof it is cut from, and of its parts
     across: int = None            # the axis through the hole: across its host
+    filler: str = ""              # GlobalId of the door or window
+
+
+@dataclass
+class Glazing:
+    """The transparent part of a window: its glass triangles, as modelled
+    (often a thin solid per pane), and the glass's transmittance."""
+    name: str
+    guid: str
+    glass: Mesh
+    transmittance: tuple
+
+
+@dataclass
+class Site:
+    latitude: float               # decimal degrees, north positive
+    longitude: float              # decimal degrees, east positive
+    true_north: tuple             # (x, y): geographic north in the model's plan (IFC axes)
 
 
 @dataclass
@@ -99,6 +123,9 @@ class IfcModel:
     openings: list = field(default_factory=list)
     fixtures: list = field(default_factory=list)
     materials: list = field(default_factory=list)     # [(name, (r, g, b))]
+    glazings: list = field(default_factory=list)
+    unglazed_windows: list = field(default_factory=list)   # names of windows without a transparent part
+    site: Site = None
 
 
 def to_portico_axes(flat_vertices):
@@ -195,7 +222,117 @@ def _style_albedo(material):
     return rgb if all(c >= 0 for c in rgb) else DEFAULT_ALBEDO
 
 
-def read_ifc(path):
+def _compound_degrees(angle):
+    """IfcCompoundPlaneAngleMeasure (degrees, minutes, seconds[, millionths
+    of a second], all of one sign) in decimal degrees."""
+    parts = list(angle) + [0] * (4 - len(angle))
+    return parts[0] + parts[1] / 60 + parts[2] / 3600 + parts[3] / 3.6e9
+
+
+def _true_north(model):
+    """The Model context's TrueNorth in the plan of the model (IFC x, y),
+    turned by its world coordinate system; absent: +y."""
+    for context in model.by_type("IfcGeometricRepresentationContext"):
+        if context.is_a("IfcGeometricRepresentationSubContext") or context.ContextType != "Model":
+            continue
+        north = getattr(context, "TrueNorth", None)
+        x, y = (north.DirectionRatios[0], north.DirectionRatios[1]) if north else (0.0, 1.0)
+        world = context.WorldCoordinateSystem
+        ref = getattr(world, "RefDirection", None) if world is not None else None
+        if ref is not None:     # the context's x axis in world coordinates: turn by its angle
+            c, s = ref.DirectionRatios[0], ref.DirectionRatios[1]
+            length = np.hypot(c, s)
+            c, s = c / length, s / length
+            x, y = c * x - s * y, s * x + c * y
+        return (float(x), float(y))
+    return (0.0, 1.0)
+
+
+def _site(model):
+    for site in model.by_type("IfcSite"):
+        if site.RefLatitude and site.RefLongitude:
+            return Site(round(_compound_degrees(site.RefLatitude), 7), round(_compound_degrees(site.RefLongitude), 7),
+                        _true_north(model))
+    return None
+
+
+def _style_of(model, material):
+    """The IfcSurfaceStyle (or material) of an IfcOpenShell style, or None
+    for IfcOpenShell's defaults of unstyled products (instance 0)."""
+    if material.instance_id() <= 0:
+        return None
+    try:
+        entity = model.by_id(material.instance_id())
+    except RuntimeError:
+        return None
+    if entity.is_a("IfcSurfaceStyleShading"):
+        for style in model.get_inverse(entity):
+            if style.is_a("IfcSurfaceStyle"):
+                return style
+    return entity
+
+
+def _glass_transmittance(model, material):
+    """(r, g, b) for a style that is glass: transparent (IFC: Transparency 0
+    is opaque, 1 fully transparent; the colour is the surface's own, which
+    viewers blend with what lies behind, so it does not tint), or named as
+    glass. A TransmissionColour, where the style gives one, is the tint."""
+    style = _style_of(model, material)
+    if style is None:
+        return None
+    transparency = float(material.transparency) if material.transparency == material.transparency else 0.0
+    named = GLASS_NAME.search(getattr(style, "Name", None) or "") or GLASS_NAME.search(material.name or "")
+    if transparency <= 0 and not named:
+        return None
+    transparency = transparency if transparency > 0 else NAMED_GLASS_TRANSPARENCY
+    tint = (1.0, 1.0, 1.0)
+    for shading in getattr(style, "Styles", None) or ():
+        colour = getattr(shading, "TransmissionColour", None)
+        if colour is None:
+            continue
+        if hasattr(colour, "Red"):
+            tint = (colour.Red, colour.Green, colour.Blue)
+        else:
+            base = shading.SurfaceColour
+            tint = tuple(colour.wrappedValue * c for c in (base.Red, base.Green, base.Blue))
+    transmittance = tuple(round(min(1.0, max(0.0, transparency * c)), 4) for c in tint)
+    return transmittance if max(transmittance) > 0 else None
+
+
+def _triangle_materials(geometry, materials, count):
+    """(count,) indices into `materials` of each triangle's style."""
+    ids = [materials.add(m.name, _style_albedo(m)) for m in geometry.materials]
+    per_triangle = np.asarray(geometry.material_ids, dtype=np.int64)
+    if ids and len(per_triangle) == count:
+        lookup = np.asarray(ids, dtype=np.int64)
+        return np.where(per_triangle >= 0, lookup[np.clip(per_triangle, 0, len(ids) - 1)], 0)
+    return np.zeros(count, dtype=np.int64)
+
+
+def _read_window(model, product, geometry, mesh, materials, result):
+    """A window's glass becomes a Glazing, the rest (frames, sashes) an
+    element; a window without glass is left out, its hole open."""
+    name = product.Name or product.GlobalId
+    glass_of = [_glass_transmittance(model, m) for m in geometry.materials]
+    per_triangle = np.asarray(geometry.material_ids, dtype=np.int64)
+    if len(per_triangle) != len(mesh.triangles) or not any(glass_of):
+        result.unglazed_windows.append(name)
+        return
+    is_glass = np.array([k >= 0 and glass_of[k] is not None for k in per_triangle])
+    if not is_glass.any():
+        result.unglazed_windows.append(name)
+        return
+    # The tint of the glass style with the most triangles.
+    counts = np.bincount(per_triangle[is_glass], minlength=len(glass_of))
+    transmittance = glass_of[int(np.argmax(counts))]
+    result.glazings.append(Glazing(name, product.GlobalId, Mesh(mesh.vertices, mesh.triangles[is_glass]), transmittance))
+    if (~is_glass).any():
+        frame = Mesh(mesh.vertices, mesh.triangles[~is_glass])
+        of_triangle = _triangle_materials(geometry, materials, len(mesh.triangles))[~is_glass]
+        result.elements.append(Element(product.is_a(), name, product.GlobalId, frame, of_triangle))
+
+
+def read_ifc(path, glazing=True):
     model = ifcopenshell.open(path)
     project = model.by_type("IfcProject")
     result = IfcModel(name=(project[0].Name if project and project[0].Name else ""), schema=model.schema,
@@ -211,7 +348,9 @@ def read_ifc(path):
         opening = _opening_of(p)
         host = _host_of(opening) if opening else ()
         holes[(opening or p).id()] = (p, "door" if p.is_a("IfcDoor") else "window", host)
-    wanted = surfaces + list(model.by_type("IfcSpace")) + [model.by_id(i) for i in holes]
+    windows = {p.id() for p in model.by_type("IfcWindow")} if glazing else set()
+    wanted = (surfaces + list(model.by_type("IfcSpace")) + [model.by_id(i) for i in holes] +
+              [model.by_id(i) for i in windows])
     wanted = [p for p in {p.id(): p for p in wanted if p.Representation is not None}.values()]
 
     for product, geometry in _iterate_shapes(model, wanted):
@@ -224,23 +363,19 @@ def read_ifc(path):
         if product.id() in holes:
             filled, kind, host = holes[product.id()]
             lo, hi = mesh.bounds()
-            result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi, host))
+            result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi, host, filler=filled.GlobalId))
+        if product.id() in windows:
+            _read_window(model, product, geometry, mesh, materials, result)
         if product.is_a("IfcSpace"):
             label = " ".join(x for x in (product.Name, product.LongName) if x) or product.GlobalId
             result.spaces.append(Space(label, product.GlobalId, mesh))
             continue
-        if product.id() in holes:
+        if product.id() in holes or product.id() in windows:
             continue
         if product.id() in fixtures:
             lo, hi = mesh.bounds()
             result.fixtures.append(Fixture(name, lo, hi, _fixture_watts(product)))
-        ids = [materials.add(m.name, _style_albedo(m)) for m in geometry.materials]
-        per_triangle = np.asarray(geometry.material_ids, dtype=np.int64)
-        if ids and len(per_triangle) == len(triangles):
-            lookup = np.asarray(ids, dtype=np.int64)
-            of_triangle = np.where(per_triangle >= 0, lookup[np.clip(per_triangle, 0, len(ids) - 1)], 0)
-        else:
-            of_triangle = np.zeros(len(triangles), dtype=np.int64)
+        of_triangle = _triangle_materials(geometry, materials, len(triangles))
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))
     element_bounds = {e.guid: e.mesh.bounds() for e in result.elements}
@@ -261,4 +396,7 @@ def read_ifc(path):
     result.spaces.sort(key=lambda s: (s.name, s.guid))
     result.openings.sort(key=lambda o: (o.kind, o.name, tuple(o.lo)))
     result.fixtures.sort(key=lambda f: (f.name, tuple(f.lo)))
+    result.glazings.sort(key=lambda g: (g.guid, g.name))
+    result.unglazed_windows.sort()
+    result.site = _site(model)
     return result

@@ -415,8 +415,9 @@ BuildingDescription readBuildingJson(const std::string& path) {
   const json root = parseFile(path);
   const Reader reader(path);
   if (!root.is_object()) reader.fail("the top level must be a JSON object");
+  // "site" (latitude, longitude, north) is read by `render --sun-time` (docs/daylight.md).
   reader.requireKnownKeys(root, "top level",
-                          {"name", "units", "objects", "lights", "cells", "portals", "camera", "cameras"});
+                          {"name", "units", "objects", "lights", "cells", "portals", "camera", "cameras", "site"});
   BuildingDescription building;
   building.path = path;
   building.name = fs::path(path).stem().string();

@@ -63,17 +63,25 @@ class Office:
         ifcopenshell.api.geometry.edit_object_placement(self.f, product=product)
         return product
 
-    def _box(self, ifc_class, name, lo, hi, container=None):
-        """A product whose body is the box lo..hi (world coordinates), extruded up."""
+    def solid(self, lo, hi, origin):
+        """The box lo..hi (world coordinates) as a solid extruded up, in the
+        coordinates of a product placed at `origin`."""
         f = self.f
-        product = ifcopenshell.api.root.create_entity(f, ifc_class=ifc_class, name=name)
         size = np.subtract(hi, lo)
+        start = tuple(float(x) for x in np.subtract(lo, origin))
         profile = f.createIfcRectangleProfileDef(
             "AREA", None, f.createIfcAxis2Placement2D(f.createIfcCartesianPoint((size[0] / 2, size[1] / 2))),
             float(size[0]), float(size[1]))
-        solid = f.createIfcExtrudedAreaSolid(profile, f.createIfcAxis2Placement3D(f.createIfcCartesianPoint((0.0, 0.0, 0.0))),
-                                             f.createIfcDirection((0.0, 0.0, 1.0)), float(size[2]))
-        representation = f.createIfcShapeRepresentation(self.body, "Body", "SweptSolid", [solid])
+        return f.createIfcExtrudedAreaSolid(profile, f.createIfcAxis2Placement3D(f.createIfcCartesianPoint(start)),
+                                            f.createIfcDirection((0.0, 0.0, 1.0)), float(size[2]))
+
+    def _box(self, ifc_class, name, lo, hi, container=None, solids=None):
+        """A product placed at lo whose body is the box lo..hi (world
+        coordinates), extruded up; or the given solids, in its coordinates."""
+        f = self.f
+        product = ifcopenshell.api.root.create_entity(f, ifc_class=ifc_class, name=name)
+        representation = f.createIfcShapeRepresentation(self.body, "Body", "SweptSolid",
+                                                         solids or [self.solid(lo, hi, lo)])
         ifcopenshell.api.geometry.assign_representation(f, product=product, representation=representation)
         matrix = np.eye(4)
         matrix[:3, 3] = lo
@@ -82,15 +90,19 @@ class Office:
             ifcopenshell.api.spatial.assign_container(f, products=[product], relating_structure=container)
         return product
 
-    def _hole(self, host, filling_class, name, lo, hi, storey):
-        """An opening lo..hi voiding `host`, filled by a door or window (a thin leaf in its middle)."""
+    def _hole(self, host, filling_class, name, lo, hi, storey, make_filling=None):
+        """An opening lo..hi voiding `host`, filled by a door or window: a
+        thin leaf in its middle, or make_filling(name, lo, hi, storey)."""
         opening = self._box("IfcOpeningElement", f"{name} opening", lo, hi)
         ifcopenshell.api.feature.add_feature(self.f, feature=opening, element=host)
-        thin = int(np.argmin(np.subtract(hi, lo)))
-        leaf_lo, leaf_hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
-        middle = (leaf_lo[thin] + leaf_hi[thin]) / 2
-        leaf_lo[thin], leaf_hi[thin] = middle - 0.025, middle + 0.025
-        filling = self._box(filling_class, name, leaf_lo, leaf_hi, storey)
+        if make_filling is not None:
+            filling = make_filling(name, lo, hi, storey)
+        else:
+            thin = int(np.argmin(np.subtract(hi, lo)))
+            leaf_lo, leaf_hi = np.array(lo, dtype=float), np.array(hi, dtype=float)
+            middle = (leaf_lo[thin] + leaf_hi[thin]) / 2
+            leaf_lo[thin], leaf_hi[thin] = middle - 0.025, middle + 0.025
+            filling = self._box(filling_class, name, leaf_lo, leaf_hi, storey)
         ifcopenshell.api.feature.add_filling(self.f, opening=opening, element=filling)
 
     def storey(self, level):
