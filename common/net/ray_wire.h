@@ -23,6 +23,7 @@ inline void toWire(const RayState& ray, wire::Ray::Builder out) {
   out.setR(ray.weight.x);
   out.setG(ray.weight.y);
   out.setB(ray.weight.z);
+  out.setToSky(ray.toSky);
 }
 
 inline RayState fromWire(wire::Ray::Reader in) {
@@ -36,6 +37,7 @@ inline RayState fromWire(wire::Ray::Reader in) {
   ray.tMin = in.getTMin();
   ray.tMax = in.getTMax();
   ray.weight = {in.getR(), in.getG(), in.getB()};
+  ray.toSky = in.getToSky();
   return ray;
 }
 
