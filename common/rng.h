@@ -24,9 +24,6 @@ constexpr uint32_t PixelY = 7;
 constexpr uint32_t PixelShuffle = 8;   // keyed by pixel (not path) and step
 // Reflect or pass at a glass pane, keyed by the ray's state (glassKey).
 constexpr uint32_t GlassChoice = 9;
-// A direction over the sun's disc for a shading point's shadow ray.
-constexpr uint32_t SunU = 10;
-constexpr uint32_t SunV = 11;
 // Light samples of a shading point use LightSampleBase + 3 * i + {0,1,2}.
 constexpr uint32_t LightSampleBase = 16;
 }  // namespace dim

@@ -584,9 +584,11 @@ void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& n
   // A direction over the sun's disc: it reaches the point only through the
   // opening the ray towards it leaves by, the nearest it passes through,
   // and on past what stands outdoors.
-  const Vec3 direction = sampleSunDisc(daylight_->sky().sunDirection(),
-                                       randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::SunU),
-                                       randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::SunV));
+  // Its numbers are the camera path's direction dimensions at bounce 0,
+  // which a camera ray (aimed by its pixel sample) leaves unused.
+  const Vec3 direction = sampleSunDisc(
+      daylight_->sky().sunDirection(), randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
+      randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV));
   const float cosSurface = dot(normal, direction);
   if (cosSurface <= 0) return;
   const Vec3 origin = offsetAlongNormal(point, normal);
