@@ -7,9 +7,13 @@
 
 namespace portico {
 
+inline constexpr uint16_t kToSkyBit = 0x8000, kDepthBits = 0x7fff;
+
 inline void toWire(const RayState& ray, wire::Ray::Builder out) {
   out.setKind(static_cast<wire::RayKind>(ray.kind));
-  out.setDepth(ray.depth);
+  // A ray towards the sky (RayState::toSky) travels as the top bit of its
+  // depth: no ray is 32 768 bounces or portals deep.
+  out.setDepth(static_cast<uint16_t>((ray.depth & kDepthBits) | (ray.toSky ? kToSkyBit : 0)));
   out.setPathId(ray.pathId);
   out.setPixel(ray.pixel);
   out.setOx(ray.origin.x);
@@ -28,7 +32,8 @@ inline void toWire(const RayState& ray, wire::Ray::Builder out) {
 inline RayState fromWire(wire::Ray::Reader in) {
   RayState ray;
   ray.kind = static_cast<RayKind>(in.getKind());
-  ray.depth = in.getDepth();
+  ray.depth = in.getDepth() & kDepthBits;
+  ray.toSky = (in.getDepth() & kToSkyBit) != 0;
   ray.pathId = in.getPathId();
   ray.pixel = in.getPixel();
   ray.origin = {in.getOx(), in.getOy(), in.getOz()};

@@ -9,6 +9,7 @@
 #include "common/transport/photon_scattering.h"
 #include "common/transport/pixel_samples.h"
 #include "common/transport/sampling.h"
+#include "common/transport/sun_disc.h"
 #include "common/transport/surface_point.h"
 #include "common/transport/thin_glass.h"
 
@@ -69,6 +70,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
   std::vector<uint32_t> candidates = LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops);
   if (parameters.daylight.any()) {
     daylight_.emplace(scene, parameters.daylight);
+    outdoors_.emplace(scene);
     const std::vector<bool> near = LightSampler::cellsNear(scene, tracer.cell().id(), parameters.lightHops);
     for (const AreaLight& opening : daylight_->openings()) {
       AreaLight light = opening;
@@ -102,9 +104,7 @@ void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t coun
       throw std::invalid_argument("an emission batch names light " + std::to_string(lightId) + ", which the job lacks");
     for (uint64_t path = firstPath; path < firstPath + count; ++path) {
       checkStop();
-      const RayState photon = daylight_->emitPhoton(emitter, photonsOfLight, parameters_.seed, path);
-      ++out.counters.photonsEmitted;
-      tracePhoton(photon, out);
+      emitDaylightPhoton(emitter, photonsOfLight, path, out);
     }
     return;
   }
@@ -153,7 +153,12 @@ void CellKernel::trace(const RayState& ray, KernelOutputs& out) {
     return;
   }
   switch (ray.kind) {
-    case RayKind::Photon: tracePhoton(ray, out); break;
+    case RayKind::Photon:
+      if (ray.toSky)
+        traceSkyProbe(ray, out);
+      else
+        tracePhoton(ray, out);
+      break;
     case RayKind::Camera: traceCameraRay(ray, out); break;
     case RayKind::Shadow: traceShadowRay(ray, out); break;
     case RayKind::Gather: traceGatherRay(ray, out); break;
@@ -189,19 +194,86 @@ Vec3 portalCountColour(uint32_t crossings) {
 }
 
 void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out) {
-  // The neighbour traces the same ray (same origin and direction) from just
-  // before the portal. Restarting from the rounded crossing point instead
-  // would put a surface lying on the portal's plane, or a hair beyond it, at
-  // a slightly negative distance, and the ray would pass through it and out
-  // of the building. Going back 2^-16 of the coordinates' magnitude covers
-  // the rounding of both hit distances; the neighbour holds nothing the ray
-  // has already passed, so nothing is hit twice. The neighbour ignores the
-  // portal the ray came through: rays only leave through outward portals.
-  const float magnitude = std::max(std::abs(ray.origin.x), std::max(std::abs(ray.origin.y), std::abs(ray.origin.z))) +
-                          event.t * std::max(std::abs(ray.direction.x),
-                                             std::max(std::abs(ray.direction.y), std::abs(ray.direction.z)));
-  ray.tMin = std::max(0.0f, event.t - magnitude / 65536.0f);
-  out.crossings[event.neighborCell].push_back(ray);
+  // The neighbour traces the same ray from just before the portal (tMinBeforePortal).
+  ray.tMin = tMinBeforePortal(toRay(ray), event.t);
+  uint32_t next = event.neighborCell;
+  if (ray.toSky && outdoors_) {
+    if (ray.tMax < kInfinity) {
+      // Out by another opening before the one it samples: that opening's
+      // own samples count the sky seen this way.
+      if (outdoors_->outdoors(next)) {
+        ++out.counters.shadowBlocked;
+        return;
+      }
+    } else {
+      const OutdoorPassage::End end = outdoors_->follow(toRay(ray), next);
+      if (end.sky) {
+        reachSky(ray, out);
+        return;
+      }
+      next = end.cell;
+      ray.tMin = end.tMin;
+    }
+  }
+  out.crossings[next].push_back(ray);
+}
+
+void CellKernel::emitDaylightPhoton(size_t emitter, uint64_t photonsOfEmitter, uint64_t path, KernelOutputs& out) {
+  const RayState photon = daylight_->emitPhoton(emitter, photonsOfEmitter, parameters_.seed, path);
+  ++out.counters.photonsEmitted;
+  // The photon came from the sky along its line: it exists only if that
+  // line is clear outdoors. A blocked one is absorbed there, so the room
+  // gets the unblocked share of the opening's power, as it should (the
+  // light the outdoor geometry itself reflects is not followed). Where the
+  // line crosses only outdoor cells without geometry it is traced at once.
+  RayState probe = photon;
+  probe.toSky = true;
+  probe.direction = -photon.direction;
+  probe.pixel = tracer_.cell().id();
+  const OutdoorPassage::End end = outdoors_->follow(toRay(probe), daylight_->outdoorCell(emitter));
+  if (end.sky) {
+    tracePhoton(photon, out);
+    return;
+  }
+  probe.tMin = end.tMin;
+  ++out.counters.photonCrossings;
+  out.crossings[end.cell].push_back(probe);
+}
+
+void CellKernel::traceSkyProbe(const RayState& probe, KernelOutputs& out) {
+  RayState ray = probe;
+  // Panes outdoors pass it with their transmittance, as they do shadow rays.
+  const CellEvent event = traceThroughGlass(ray, out);
+  switch (event.kind) {
+    case CellEvent::Kind::Surface: ++out.counters.photonsAbsorbed; return;   // outdoors, in the photon's way
+    case CellEvent::Kind::Portal:
+      ++out.counters.photonCrossings;
+      cross(ray, event, out);
+      return;
+    case CellEvent::Kind::Leave: reachSky(ray, out); return;
+  }
+}
+
+void CellKernel::reachSky(const RayState& ray, KernelOutputs& out) {
+  if (ray.kind == RayKind::Shadow) {
+    ++out.counters.shadowReached;
+    addToFilm(ray.pixel, ray.weight, out);
+    return;
+  }
+  // The photon as its opening emitted it (bit for bit: the same photon as
+  // where nothing outdoors needs a probe), in the cell it starts in.
+  RayState photon;
+  photon.kind = RayKind::Photon;
+  photon.pathId = ray.pathId;
+  photon.origin = ray.origin;
+  photon.direction = -ray.direction;
+  photon.weight = ray.weight;
+  if (ray.pixel == tracer_.cell().id()) {
+    tracePhoton(photon, out);
+    return;
+  }
+  ++out.counters.photonCrossings;
+  out.crossings[ray.pixel].push_back(photon);
 }
 
 void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
@@ -253,9 +325,14 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
     switch (event.kind) {
       case CellEvent::Kind::Leave:
         ++out.counters.raysEscaped;
-        // Out of the building: the sky shows.
-        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance)
-          addToFilm(current.pixel, current.weight * daylight_->sky().radiance(current.direction), out);
+        // Out of the building: the sky shows, and the sun's disc.
+        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance) {
+          const SkyModel& sky = daylight_->sky();
+          Vec3 radiance = sky.radiance(current.direction);
+          if (sky.hasSun() && insideSunDisc(current.direction, sky.sunDirection()))
+            radiance += sky.sunIrradiance() * (1.0f / kSunDiscSolidAngle);
+          addToFilm(current.pixel, current.weight * radiance, out);
+        }
         return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
@@ -344,8 +421,9 @@ CellEvent CellKernel::traceThroughGlass(RayState& ray, KernelOutputs& out) const
     if (event.kind != CellEvent::Kind::Surface || glassEvents >= kMaxGlassEvents) return event;
     const Material& material = materialAt(event.primitive);
     if (!material.glass()) return event;
-    if (ray.kind == RayKind::Shadow) {
-      // A shadow ray keeps its line: the pane lets through its transmittance.
+    if (ray.kind == RayKind::Shadow || ray.toSky) {
+      // A shadow ray (or a photon's way back to the sky) keeps its line:
+      // the pane lets through its transmittance.
       const Vec3 paneNormal = normalize(tracer_.cell().mesh().geometricNormal(event.primitive));
       ray.weight = ray.weight * thinGlass(material, dot(paneNormal, ray.direction)).transmittance;
       ray.tMin = event.t;
@@ -415,29 +493,45 @@ void CellKernel::addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& 
 
 void CellKernel::traceShadowRay(const RayState& shadow, KernelOutputs& out) {
   RayState ray = shadow;
-  // Glass panes let through their transmittance of the light.
-  const CellEvent event = traceThroughGlass(ray, out);
-  switch (event.kind) {
-    case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
-    case CellEvent::Kind::Portal:
-      ++out.counters.rayCrossings;
-      cross(ray, event, out);
-      return;
-    case CellEvent::Kind::Leave:
-      // Nothing in this cell before tMax: the light is reached only if the
-      // segment ends inside this cell; otherwise it left the building.
-      if (ray.tMax < kInfinity && tracer_.cell().bounds().contains(ray.origin + ray.direction * ray.tMax)) {
-        ++out.counters.shadowReached;
-        addToFilm(ray.pixel, ray.weight, out);
-      } else {
+  for (;;) {
+    // Glass panes let through their transmittance of the light.
+    const CellEvent event = traceThroughGlass(ray, out);
+    switch (event.kind) {
+      case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
+      case CellEvent::Kind::Portal:
+        ++out.counters.rayCrossings;
+        cross(ray, event, out);
+        return;
+      case CellEvent::Kind::Leave: break;
+    }
+    if (!(ray.tMax < kInfinity)) {
+      // Out of the building: the sky is what a ray towards it reaches.
+      if (ray.toSky)
+        reachSky(ray, out);
+      else
         ++out.counters.raysEscaped;
-      }
       return;
+    }
+    // Nothing in this cell before tMax: the light is reached only if the
+    // segment ends inside this cell; otherwise it left the building.
+    if (!tracer_.cell().bounds().contains(ray.origin + ray.direction * ray.tMax)) {
+      ++out.counters.raysEscaped;
+      return;
+    }
+    if (!ray.toSky) {
+      ++out.counters.shadowReached;
+      addToFilm(ray.pixel, ray.weight, out);
+      return;
+    }
+    // At the opening it samples: on through it, until the ray leaves the
+    // building or something outdoors is in its way.
+    ray.tMin = ray.tMax;
+    ray.tMax = kInfinity;
   }
 }
 
 void CellKernel::addShadowRay(const RayState& ray, const Vec3& origin, const Vec3& direction, float distance,
-                              const Vec3& contribution, KernelOutputs& out) {
+                              const Vec3& contribution, bool toSky, KernelOutputs& out) {
   RayState shadow;
   shadow.kind = RayKind::Shadow;
   shadow.depth = ray.depth;
@@ -448,6 +542,7 @@ void CellKernel::addShadowRay(const RayState& ray, const Vec3& origin, const Vec
   // Stop just short of the light so its own triangles do not block it.
   shadow.tMax = distance * (1.0f - 1e-4f);
   shadow.weight = contribution;
+  shadow.toSky = toSky;
   ++out.counters.shadowRays;
   traceShadowRay(shadow, out);
 }
@@ -475,19 +570,25 @@ void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3
     const float cosSurface = dot(normal, direction);
     const float cosLight = -dot(light.normal(), direction);
     if (cosSurface <= 0 || cosLight <= 0) continue;
-    const Vec3 radiance = choice.light < sceneLights ? light.radiance : daylight_->sky().radiance(direction);
+    const bool sky = choice.light >= sceneLights;
+    const Vec3 radiance = sky ? daylight_->sky().radiance(direction) : light.radiance;
     // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
     const float geometry = cosSurface * cosLight * light.area() / distance2;
     addShadowRay(ray, origin, direction, distance,
-                 ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), out);
+                 ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), sky, out);
   }
 }
 
 void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                            KernelOutputs& out) {
-  // The sun is a direction: it reaches the point only through the opening
-  // the ray towards it leaves by, the nearest it passes through.
-  const Vec3 direction = daylight_->sky().sunDirection();
+  // A direction over the sun's disc: it reaches the point only through the
+  // opening the ray towards it leaves by, the nearest it passes through,
+  // and on past what stands outdoors.
+  // Its numbers are the camera path's direction dimensions at bounce 0,
+  // which a camera ray (aimed by its pixel sample) leaves unused.
+  const Vec3 direction = sampleSunDisc(
+      daylight_->sky().sunDirection(), randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
+      randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV));
   const float cosSurface = dot(normal, direction);
   if (cosSurface <= 0) return;
   const Vec3 origin = offsetAlongNormal(point, normal);
@@ -500,7 +601,7 @@ void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& n
   }
   if (!nearest) return;
   addShadowRay(ray, origin, direction, *nearest, ray.weight * brdf * daylight_->sky().sunIrradiance() * cosSurface,
-               out);
+               true, out);
 }
 
 bool CellKernel::passOrReflect(RayState& ray, const CellEvent& hit, const Material& glass) const {

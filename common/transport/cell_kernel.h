@@ -18,6 +18,7 @@
 #include "common/transport/daylight_openings.h"
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
+#include "common/transport/outdoor_passage.h"
 #include "common/transport/indirect_light.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/ray_state.h"
@@ -73,6 +74,14 @@ class CellKernel {
     if (stop_ && stop_->load(std::memory_order_relaxed)) throw TracingStopped();
   }
   void tracePhoton(RayState photon, KernelOutputs& out);
+  // A daylight photon starts on its opening if nothing outdoors stands in
+  // its way back to the sky: at once when the way crosses no geometry,
+  // else after its probe (RayState::toSky) has gone out and found the sky.
+  void emitDaylightPhoton(size_t emitter, uint64_t photonsOfEmitter, uint64_t path, KernelOutputs& out);
+  void traceSkyProbe(const RayState& probe, KernelOutputs& out);
+  // A ray towards the sky left the building with nothing in its way: a
+  // shadow ray adds its light, a probe starts its photon.
+  void reachSky(const RayState& ray, KernelOutputs& out);
   void traceCameraRay(const RayState& ray, KernelOutputs& out);
   // Traces `ray` through the glass panes in its way (at most
   // kMaxGlassEvents): a shadow ray keeps its line, weighed by each pane's
@@ -87,8 +96,9 @@ class CellKernel {
   void cross(RayState ray, const CellEvent& event, KernelOutputs& out);
   void sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, KernelOutputs& out);
   void sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, KernelOutputs& out);
+  // toSky: the light is the sky beyond the opening at `distance`.
   void addShadowRay(const RayState& ray, const Vec3& origin, const Vec3& direction, float distance,
-                    const Vec3& contribution, KernelOutputs& out);
+                    const Vec3& contribution, bool toSky, KernelOutputs& out);
   // A ray reaching a glass pane: reflected (true: `ray` is the mirrored
   // ray) or passed through (`ray` continues beyond the pane), chosen at
   // random in proportion to the pane's reflectance, with its weight times
@@ -108,6 +118,7 @@ class CellKernel {
   const IrradianceCache* irradiance_;
   // Daylight's emitters, when the job has daylight.
   std::optional<DaylightEmitters> daylight_;
+  std::optional<OutdoorPassage> outdoors_;
   // The scene's lights, then one per daylight opening (the sky seen
   // through it) for the light sampler; openings of cells within the
   // light hops are its candidates, and the sun's.

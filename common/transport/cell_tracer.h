@@ -7,16 +7,9 @@
 
 #include "common/accel/accelerator.h"
 #include "common/scene/store/cell_geometry.h"
+#include "common/transport/cell_portals.h"
 
 namespace portico {
-
-struct CellEvent {
-  enum class Kind { Surface, Portal, Leave } kind = Kind::Leave;
-  float t = kInfinity;
-  uint32_t primitive = kNoPrimitive;    // Surface
-  float u = 0, v = 0;                   // Surface: barycentrics of vertices 1 and 2
-  uint32_t neighborCell = 0;            // Portal
-};
 
 class CellTracer {
  public:
@@ -28,25 +21,9 @@ class CellTracer {
   void neighborsNear(const Vec3& p, float radius, std::vector<uint32_t>& neighbors) const;
 
  private:
-  struct PortalTriangle {
-    Vec3 v0, v1, v2;
-    Vec3 outward;            // unit normal pointing out of this cell
-    uint32_t neighborCell;
-    // The triangle's box, grown by far more than the triangle test's
-    // rounding: a ray segment whose box misses it cannot hit the triangle
-    // (cell_tracer.cpp), so most rays skip the exact test.
-    Bounds3 reach;
-  };
-  struct PortalPolygon {
-    std::vector<Vec3> points;
-    Vec3 normal;
-    uint32_t neighborCell;
-    Bounds3 bounds;   // of the points: a cheap rejection before the exact distance
-  };
   const CellGeometry& cell_;
   const Accelerator& accelerator_;
-  std::vector<PortalTriangle> portalTriangles_;
-  std::vector<PortalPolygon> portalPolygons_;
+  CellPortals portals_;
 };
 
 }  // namespace portico

@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "common/transport/sampling.h"
+#include "common/transport/sun_disc.h"
 
 namespace portico {
 
@@ -29,7 +30,7 @@ AreaLight openingLight(uint32_t cell, LightShape shape, const Vec3& a, Vec3 e1, 
 }
 }  // namespace
 
-std::vector<AreaLight> daylightOpenings(const SceneStore& scene) {
+std::vector<AreaLight> daylightOpenings(const SceneStore& scene, std::vector<uint32_t>* outdoorCells) {
   std::vector<AreaLight> openings;
   const auto& cells = scene.cells();
   for (const Portal& portal : scene.portals()) {
@@ -47,17 +48,20 @@ std::vector<AreaLight> daylightOpenings(const SceneStore& scene) {
     const float size = length(e1) + length(e2);
     if (p.size() == 4 && length(p[0] + e1 + e2 - p[2]) <= 1e-5f * size) {
       openings.push_back(openingLight(indoor, LightShape::Parallelogram, p[0], e1, e2, indoors));
-      continue;
+    } else {
+      for (size_t k = 1; k + 1 < p.size(); ++k)
+        openings.push_back(openingLight(indoor, LightShape::Triangle, p[0], p[k] - p[0], p[k + 1] - p[0], indoors));
     }
-    for (size_t k = 1; k + 1 < p.size(); ++k)
-      openings.push_back(openingLight(indoor, LightShape::Triangle, p[0], p[k] - p[0], p[k + 1] - p[0], indoors));
+    if (outdoorCells) outdoorCells->resize(openings.size(), outdoorA ? portal.cellA : portal.cellB);
   }
   for (size_t k = 0; k < openings.size(); ++k) openings[k].id = static_cast<uint32_t>(k);
   return openings;
 }
 
 DaylightEmitters::DaylightEmitters(const SceneStore& scene, const DaylightSettings& settings)
-    : openings_(daylightOpenings(scene)), sky_(settings) {}
+    : sky_(settings) {
+  openings_ = daylightOpenings(scene, &outdoorCells_);
+}
 
 Vec3 DaylightEmitters::power(size_t emitter) const {
   const AreaLight& opening = openings_[emitter % openings_.size()];
@@ -85,7 +89,8 @@ RayState DaylightEmitters::emitPhoton(size_t emitter, uint64_t photonsOfEmitter,
     // carries L pi A / N of the sky's light.
     photon.weight = sky_.radiance(-photon.direction) * (kPi * opening.area() / share);
   } else {
-    photon.direction = -sky_.sunDirection();
+    photon.direction = -sampleSunDisc(sky_.sunDirection(), randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
+                                      randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
     photon.weight = power(emitter) / share;
   }
   return photon;

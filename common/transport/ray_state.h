@@ -19,6 +19,16 @@ struct RayState {
   Vec3 origin, direction;   // direction is unit length
   float tMin = 0, tMax = kInfinity;
   Vec3 weight;              // photon power, camera/gather throughput, or shadow contribution
+  // Daylight's rays towards the sky, which the building's outdoors may
+  // shadow (outdoor_passage.h). A shadow ray: its light is the sky beyond
+  // an opening; it may not go outdoors before tMax (the opening it
+  // samples: the sky seen there is that opening's), and at tMax it goes on
+  // (tMax infinite) until it leaves the building, reaching its light only
+  // then. A photon: the way back from where a daylight photon starts on an
+  // opening, against its direction (`pixel` holds the cell it starts in);
+  // where it leaves the building the photon starts, and where something
+  // outdoors is in its way it is absorbed there.
+  bool toSky = false;
 };
 
 // A ray from the network is traced only if it is well formed.

@@ -2,11 +2,13 @@
 // worked out by hand or published.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "common/transport/daylight_openings.h"
 #include "common/transport/sampling.h"
 #include "common/transport/sky_model.h"
+#include "common/transport/sun_disc.h"
 #include "common/transport/thin_glass.h"
 
 namespace portico {
@@ -141,6 +143,31 @@ TEST(DaylightOpenings, ARayPassesThroughAnOpeningOnlyWithinIt) {
   window.shape = LightShape::Triangle;
   EXPECT_TRUE(DaylightEmitters::distanceThrough(window, Vec3(1, 1.2f, 0.2f), Vec3(1, 0, 0)));
   EXPECT_FALSE(DaylightEmitters::distanceThrough(window, Vec3(1, 1.8f, 0.8f), Vec3(1, 0, 0)));
+}
+
+TEST(SunDisc, DirectionsFillTheDiscOfHalfADegreeUniformly) {
+  const Vec3 centre = normalize(Vec3(0.3f, 0.6f, -0.5f));
+  const double radius = 0.265 * kPi / 180;   // radians
+  double widest = 0, innerHalf = 0;
+  Vec3 mean(0);
+  constexpr int kSamples = 20000;
+  for (int i = 0; i < kSamples; ++i) {
+    const float u1 = randomUniform(7, RandomStream::Camera, i, 0, dim::DirectionU);
+    const Vec3 d = sampleSunDisc(centre, u1, randomUniform(7, RandomStream::Camera, i, 0, dim::DirectionV));
+    EXPECT_NEAR(length(d), 1.0f, 1e-6f);
+    if (u1 < 0.99f) ASSERT_TRUE(insideSunDisc(d, centre)) << i;   // the rim is a matter of rounding
+    const double angle = 2 * std::asin(0.5 * length(d - centre));
+    widest = std::max(widest, angle);
+    innerHalf += angle < radius / std::sqrt(2.0);   // the inner half of the disc's solid angle
+    mean += d;
+  }
+  EXPECT_GT(widest, 0.99 * radius);
+  EXPECT_LT(widest, 1.001 * radius);
+  EXPECT_NEAR(innerHalf / kSamples, 0.5, 0.02);   // uniform over the solid angle
+  EXPECT_GT(dot(normalize(mean), centre), 1.0f - 1e-6f);
+  // A direction a degree away is outside; the solid angle is pi r^2.
+  EXPECT_FALSE(insideSunDisc(normalize(centre + Vec3(0.0175f, 0, 0)), centre));
+  EXPECT_NEAR(kSunDiscSolidAngle, kPi * radius * radius, 1e-3 * kSunDiscSolidAngle);
 }
 
 }  // namespace
