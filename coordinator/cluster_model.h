@@ -1,14 +1,16 @@
 // The cluster model: a discrete-event simulation of a finished job on N
-// workers on N machines, from the job's own lease log (JobStore::leaseLog).
-// It schedules with the coordinator's own code, on a simulated clock:
-// WorkerInfo (lease sizing, speed and load-cost estimates, leases in
-// flight), CellCacheModel, chooseCell and addMoreCells. What it models
-// rather than runs: the leases (each cell's measured seconds per unit of
-// work, its recorded loads included), the second copies more workers make
+// workers, from the job's own lease log (JobStore::leaseLog): on N machines
+// (a cluster), or all on one machine of C cores with the coordinator (the
+// machine a record was measured on). It schedules with the coordinator's
+// own code, on a simulated clock: WorkerInfo (lease sizing, speed and
+// load-cost estimates, leases in flight), CellCacheModel, chooseCell and
+// addMoreCells. What it models rather than runs: the leases (each cell's
+// measured cost per unit of work, without what waiting for a core added to
+// it, and the record's own loads), the second copies more workers make
 // (measured load seconds per triangle; a worker's cache as an LRU of its
-// --memory) and the coordinator, one server that spends its
-// measured CPU per lease plus what chooseCell costs it at N workers, timed
-// here. docs/large-buildings.md, "Cluster model".
+// --memory), the coordinator, one thread that spends its measured CPU per
+// lease plus what chooseCell costs it at N workers, timed here, and the
+// cores they share (SharedCores). docs/large-buildings.md, "Cluster model".
 #pragma once
 
 #include <cstdint>
@@ -20,12 +22,15 @@
 
 namespace portico {
 
-// What the model knows of a job: its cells, its lease log, and the
-// coordinator's measured CPU per lease.
+// What the model knows of a job: its cells, its lease log, the
+// coordinator's measured CPU per lease, and the time the coordinator took
+// between the photon pass's last Result and the render's first lease
+// (queuing the camera rays).
 struct ClusterRecord {
   std::vector<CellInfo> cells;
   std::vector<LeaseLogEntry> leases;
   double coordinatorSecondsPerLease = 0;
+  double phaseChangeSeconds = 0;
 };
 
 struct ClusterModelOptions {
@@ -36,6 +41,12 @@ struct ClusterModelOptions {
   // What a loaded cell takes in a worker's cache per byte of its file:
   // decides when a modelled worker drops a cell, hence its second copies.
   double cachedBytesPerFileByte = 3;
+  // 0: the coordinator and each worker on a machine of its own. C > 0:
+  // all of them on one machine of C cores (processor sharing).
+  double hostCores = 0;
+  // The record's tracing work (photons, rays) times this; its loads as
+  // recorded: a job of F times the photons on the same building.
+  double workScale = 1;
 };
 
 struct PhasePrediction {
@@ -57,9 +68,10 @@ struct ClusterPrediction {
 };
 
 // Each phase starts with all its work queued (the lease log's work per
-// cell, in leases of the sizes recorded); the render phase after the last
-// photon lease, with its own accelerators: cells held from the photon pass
-// are loaded again (the worker's cache keys them by structure).
+// cell, in pieces of the recorded leases' sizes); the render phase after
+// the last photon lease and the recorded phase change, with its own
+// accelerators: cells held from the photon pass are loaded again (the
+// worker's cache keys them by structure).
 ClusterPrediction simulateCluster(const ClusterRecord& record, const ClusterModelOptions& options);
 
 }  // namespace portico

@@ -654,6 +654,8 @@ void Coordinator::recordResultCounters(const std::string& identity, const LeaseR
     store_.addCounter(lease.job, name, counter.getValue());
     if (name == kLeaseTimeCounter) entry.leaseMicros = counter.getValue();
     else if (name == kLoadTimeCounter) entry.loadMicros = counter.getValue();
+    else if (name == kLeaseCpuCounter) entry.cpuMicros = counter.getValue();
+    else if (name == kLeaseRunQueueCounter) entry.runQueueMicros = counter.getValue();
     else if (name == kTrianglesLoadedCounter) entry.trianglesLoaded = counter.getValue();
     else if (name == "cells.loaded") entry.cellsLoaded = counter.getValue();
   }

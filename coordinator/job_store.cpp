@@ -303,6 +303,12 @@ constexpr const char* kSchemaVersion8 = R"sql(
       );
       CREATE INDEX lease_log_by_job ON lease_log(job);
     )sql";
+// Version 9: each lease's CPU on its worker and its wait for a core (NULL
+// in rows logged before).
+constexpr const char* kSchemaVersion9 = R"sql(
+      ALTER TABLE lease_log ADD COLUMN cpu_us INTEGER;
+      ALTER TABLE lease_log ADD COLUMN run_queue_us INTEGER;
+    )sql";
 }  // namespace
 
 void JobStore::migrate() {
@@ -330,6 +336,7 @@ void JobStore::migrate() {
   step(6, [&] { db_.exec(kSchemaVersion6); });
   step(7, [&] { db_.exec(kSchemaVersion7); });
   step(8, [&] { db_.exec(kSchemaVersion8); });
+  step(9, [&] { db_.exec(kSchemaVersion9); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -805,17 +812,24 @@ void JobStore::raiseCounter(uint64_t job, std::string_view name, int64_t value) 
 void JobStore::logLease(const LeaseLogEntry& e) {
   auto& s = db_.prepare(
       "INSERT INTO lease_log(job, lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, "
-      "load_us, cells_loaded, triangles_loaded) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      "load_us, cells_loaded, triangles_loaded, cpu_us, run_queue_us) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
+      "?, ?)");
   s.bind(1, int64_t(e.job)).bind(2, int64_t(e.lease)).bind(3, int64_t(e.phase)).bind(4, int64_t(e.cell));
   s.bind(5, int64_t(e.moreCells)).bind(6, e.work).bind(7, e.worker).bind(8, e.sentMs).bind(9, e.resultMs);
   s.bind(10, e.leaseMicros).bind(11, e.loadMicros).bind(12, e.cellsLoaded).bind(13, e.trianglesLoaded);
+  // Unrecorded (-1) as NULL, as the rows of schema 8 have them.
+  if (e.cpuMicros >= 0) s.bind(14, e.cpuMicros);
+  else s.bindNull(14);
+  if (e.runQueueMicros >= 0) s.bind(15, e.runQueueMicros);
+  else s.bindNull(15);
   s.run();
 }
 
 std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
   auto& s = db_.prepare(
       "SELECT lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, load_us, cells_loaded, "
-      "triangles_loaded FROM lease_log WHERE job = ? ORDER BY result_ms, lease");
+      "triangles_loaded, IFNULL(cpu_us, -1), IFNULL(run_queue_us, -1) FROM lease_log WHERE job = ? "
+      "ORDER BY result_ms, lease");
   s.bind(1, int64_t(job));
   std::vector<LeaseLogEntry> log;
   while (s.step()) {
@@ -833,6 +847,8 @@ std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
     e.loadMicros = s.columnInt(9);
     e.cellsLoaded = s.columnInt(10);
     e.trianglesLoaded = s.columnInt(11);
+    e.cpuMicros = s.columnInt(12);
+    e.runQueueMicros = s.columnInt(13);
     log.push_back(std::move(e));
   }
   s.reset();

@@ -74,7 +74,9 @@ struct LeaseRecord {
 
 // A completed lease as the coordinator saw it: its cell, work, worker, when
 // it was sent and its Result applied, and the worker's own time in it
-// (loads included) and in its cell loads.
+// (loads included) and in its cell loads; of that time, its tracing
+// thread's CPU and its wait for a core (-1: not recorded, a row of schema 8
+// or a kernel without schedstat).
 struct LeaseLogEntry {
   uint64_t job = 0;
   uint64_t lease = 0;
@@ -86,11 +88,12 @@ struct LeaseLogEntry {
   int64_t sentMs = 0, resultMs = 0;
   int64_t leaseMicros = 0, loadMicros = 0;
   int64_t cellsLoaded = 0, trianglesLoaded = 0;
+  int64_t cpuMicros = -1, runQueueMicros = -1;
 };
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 8;
+  static constexpr int kSchemaVersion = 9;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;

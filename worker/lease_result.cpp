@@ -74,6 +74,10 @@ void encodeCounters(const KernelOutputs& out, const LeaseFigures& figures, wire:
                    std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() -
                                                                          figures.started)
                        .count()});
+  const ThreadTimes times = threadTimes();
+  named.push_back({std::string_view(kLeaseCpuCounter), times.cpuMicros - figures.startedTimes.cpuMicros});
+  if (times.runQueueMicros >= 0 && figures.startedTimes.runQueueMicros >= 0)
+    named.push_back({std::string_view(kLeaseRunQueueCounter), times.runQueueMicros - figures.startedTimes.runQueueMicros});
   // Which structure each cell got (auto's choices): the job's statistics
   // list them per cell and count them per spec.
   std::deque<std::string> buildNames;   // owns the names `named` views

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "common/transport/cell_kernel.h"
+#include "common/util/process_memory.h"
 #include "proto/wire.capnp.h"
 #include "worker/cell_cache.h"
 
@@ -23,6 +24,7 @@ struct LeaseFigures {
   // When the lease began here: its own time, loads and encoding included,
   // is counted as its counters are encoded.
   std::chrono::steady_clock::time_point started;
+  ThreadTimes startedTimes;   // the tracing thread's, then
 };
 
 std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(uint64_t lease, const KernelOutputs& out,

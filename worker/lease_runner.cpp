@@ -25,6 +25,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
                                                       const std::string& storeDirectory, int64_t forwardRays,
                                                       const std::atomic<bool>* stop) {
   const auto started = std::chrono::steady_clock::now();
+  const ThreadTimes startedTimes = threadTimes();
   const LoadedLease lease = loadLease(cache, chooser, assign, std::move(photonRecords), storeDirectory);
   const TracedLease traced = traceLoadedLease(cache, chooser, lease, assign, forwardRays, stop);
   LeaseFigures figures;
@@ -34,6 +35,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   figures.forwarded = traced.forwarded;
   figures.moreCells = int64_t(assign.getMoreCells().size());
   figures.started = started;
+  figures.startedTimes = startedTimes;
   auto message = encodeResult(assign.getLease(), traced.out, figures);
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
                 assign.getLease(), assign.getCell(), assign.getBatches().size(), traced.out.counters.photonDeposits,

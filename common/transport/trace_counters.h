@@ -12,6 +12,11 @@ namespace portico {
 // A Result's counter of the lease's time on its worker, in microseconds
 // (loads included); the coordinator reads each worker's speed from it.
 inline constexpr std::string_view kLeaseTimeCounter = "time.lease_us";
+// Of that time, its tracing thread's CPU, and its time runnable but waiting
+// for a core (absent where the kernel does not count it): the rest it was
+// blocked. The cluster model reads a lease's own cost from them.
+inline constexpr std::string_view kLeaseCpuCounter = "time.lease_cpu_us";
+inline constexpr std::string_view kLeaseRunQueueCounter = "time.lease_run_queue_us";
 // Its cells loaded: their time on the worker (read and accelerator build,
 // microseconds) and their triangles; the coordinator reads each worker's
 // cost of loading a cell from them.

@@ -28,7 +28,22 @@ struct MeasuredJob {
   size_t workers = 0;             // distinct workers in its lease log
   uint64_t workerMemoryBytes = 0;
   double photonSeconds = 0, renderSeconds = 0;
+  // The cores its threads had: its workers' CPU in leases and the
+  // coordinator's, over its time (0: CPU not recorded).
+  double coresHad = 0;
 };
+
+// The coordinator's time between the photon pass's last Result and the
+// render's first lease (0 where the log cannot tell).
+double phaseChangeSeconds(const std::vector<LeaseLogEntry>& leases) {
+  int64_t lastPhotonResult = 0, firstRenderSent = 0;
+  for (const LeaseLogEntry& lease : leases) {
+    if (lease.phase == 0) lastPhotonResult = std::max(lastPhotonResult, lease.resultMs);
+    else if (lease.sentMs > 0 && (firstRenderSent == 0 || lease.sentMs < firstRenderSent)) firstRenderSent = lease.sentMs;
+  }
+  if (lastPhotonResult == 0 || firstRenderSent == 0) return 0;
+  return double(std::max<int64_t>(0, firstRenderSent - lastPhotonResult)) * 1e-3;
+}
 
 // The coordinator holds its jobs.db exclusively: the model reads a copy of
 // it (and its WAL), never the live file.
@@ -76,7 +91,30 @@ MeasuredJob readJob(const std::string& argument) {
     measured.workerMemoryBytes = std::max<uint64_t>(measured.workerMemoryBytes, uint64_t(it->second));
   measured.photonSeconds = double(counter("time.photons_ms")) * 1e-3;
   measured.renderSeconds = double(counter("time.render_ms")) * 1e-3;
+  measured.record.phaseChangeSeconds = phaseChangeSeconds(measured.record.leases);
+  double cpu = 0;
+  for (const LeaseLogEntry& lease : measured.record.leases) cpu += double(std::max<int64_t>(0, lease.cpuMicros)) * 1e-6;
+  const double seconds = measured.photonSeconds + measured.renderSeconds;
+  if (cpu > 0 && seconds > 0)
+    measured.coresHad = (cpu + measured.record.coordinatorSecondsPerLease * double(measured.record.leases.size())) / seconds;
   return measured;
+}
+
+// Where the workers' time in their leases went: what the model takes as a
+// lease's own cost (CPU and blocked) and what waiting for a core added.
+std::string workerTimeSummary(const std::vector<LeaseLogEntry>& leases) {
+  double wall = 0, cpu = 0, waited = 0;
+  bool recorded = false;
+  for (const LeaseLogEntry& lease : leases) {
+    wall += double(lease.leaseMicros) * 1e-6;
+    if (lease.cpuMicros < 0) continue;
+    recorded = true;
+    cpu += double(lease.cpuMicros) * 1e-6;
+    waited += double(std::max<int64_t>(0, lease.runQueueMicros)) * 1e-6;
+  }
+  if (!recorded) return fmt::format("workers {:.1f} s in leases (CPU not recorded)", wall);
+  return fmt::format("workers {:.1f} s in leases: {:.1f} s CPU, {:.1f} s waiting for a core, {:.1f} s blocked", wall,
+                     cpu, waited, std::max(0.0, wall - cpu - waited));
 }
 
 std::vector<size_t> workerCounts(const std::string& list) {
@@ -94,16 +132,39 @@ std::vector<size_t> workerCounts(const std::string& list) {
   return counts;
 }
 
-ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options) {
+// --host-cores: a count, or "measured" (-1 here).
+double hostCoresOf(const std::string& value) {
+  if (value == "measured") return -1;
+  size_t used = 0;
+  double cores = -1;
+  try {
+    cores = std::stod(value, &used);
+  } catch (const std::exception&) {
+  }
+  if (used != value.size() || !(cores >= 0 && cores <= 4096))
+    throw std::invalid_argument(fmt::format("--host-cores: '{}' is not a core count (0 to 4096) or 'measured'", value));
+  return cores;
+}
+
+// `environment`: the run whose cores --host-cores measured takes.
+ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options,
+                            const MeasuredJob& environment) {
   ClusterModelOptions model;
   model.workers = workers;
   model.workerMemoryBytes = job.workerMemoryBytes ? job.workerMemoryBytes : parseByteSize(options.memory);
   model.latencySeconds = options.latencyMicros * 1e-6;
+  const double cores = hostCoresOf(options.hostCores);
+  if (cores < 0 && environment.coresHad <= 0)
+    throw std::invalid_argument(fmt::format("--host-cores measured: {} has no CPU in its lease log (schema 8)",
+                                            environment.name));
+  model.hostCores = cores < 0 ? environment.coresHad : cores;
+  model.workScale = options.workScale;
   return model;
 }
 
-ClusterPrediction predict(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options) {
-  return simulateCluster(job.record, modelOf(job, workers, options));
+ClusterPrediction predict(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options,
+                          const MeasuredJob& environment) {
+  return simulateCluster(job.record, modelOf(job, workers, options, environment));
 }
 
 double percent(double predicted, double measured) { return measured > 0 ? 100.0 * (predicted - measured) / measured : 0; }
@@ -112,6 +173,9 @@ double percent(double predicted, double measured) { return measured > 0 ? 100.0 
 int runBenchCluster(const BenchClusterOptions& options) {
   if (options.records.empty()) throw std::invalid_argument("bench cluster: name at least one JOBS_DB[:JOB]");
   const std::vector<size_t> counts = workerCounts(options.workers);
+  // Scaled work is another job: nothing measured to compare with.
+  const bool scaled = options.workScale != 1;
+  const double cores = hostCoresOf(options.hostCores);
   std::vector<MeasuredJob> jobs;
   for (const std::string& argument : options.records) jobs.push_back(readJob(argument));
   std::ofstream csv;
@@ -122,6 +186,7 @@ int runBenchCluster(const BenchClusterOptions& options) {
            "worker_utilization,choose_cell_us\n";
   }
   const auto row = [&](const MeasuredJob& job, size_t workers, double measured, const ClusterPrediction& p) {
+    if (scaled) measured = 0;
     std::cout << fmt::format("{:>7} {:>10} {:>10} {:>7} {:>9.1f} {:>9.1f} {:>8} {:>7} {:>6.0f}% {:>6.0f}% {:>8.1f}\n",
                              workers, measured > 0 ? fmt::format("{:.1f}", measured) : "-",
                              fmt::format("{:.1f}", p.seconds()),
@@ -140,17 +205,24 @@ int runBenchCluster(const BenchClusterOptions& options) {
                                          "workers", "measured", "predicted", "error", "photons", "render", "leases",
                                          "loads", "coord", "work", "choose");
   for (const MeasuredJob& job : jobs) {
-    std::cout << fmt::format("{}: {} leases by {} workers, coordinator {:.2f} ms CPU per lease\n", job.name,
-                             job.record.leases.size(), job.workers, job.record.coordinatorSecondsPerLease * 1e3)
+    std::cout << fmt::format("{}: {} leases by {} workers, coordinator {:.2f} ms CPU per lease; {}; the job had "
+                             "{:.2f} cores\n",
+                             job.name, job.record.leases.size(), job.workers,
+                             job.record.coordinatorSecondsPerLease * 1e3, workerTimeSummary(job.record.leases),
+                             job.coresHad)
               << header;
-    row(job, job.workers, job.photonSeconds + job.renderSeconds, predict(job, job.workers, options));
+    row(job, job.workers, job.photonSeconds + job.renderSeconds, predict(job, job.workers, options, job));
     // The other measured runs, predicted from this one's record.
     for (const MeasuredJob& other : jobs)
       if (&other != &job && other.workers != job.workers)
-        row(job, other.workers, other.photonSeconds + other.renderSeconds, predict(job, other.workers, options));
+        row(job, other.workers, other.photonSeconds + other.renderSeconds, predict(job, other.workers, options, other));
   }
-  std::cout << fmt::format("predicted from {}:\n", jobs.front().name) << header;
-  for (size_t workers : counts) row(jobs.front(), workers, 0, predict(jobs.front(), workers, options));
+  std::cout << fmt::format("predicted from {}{}{}:\n", jobs.front().name,
+                           cores != 0 ? fmt::format(", all on {:.2f} cores", cores < 0 ? jobs.front().coresHad : cores)
+                                      : std::string(", a machine per worker"),
+                           scaled ? fmt::format(", its tracing work x{}", options.workScale) : std::string())
+            << header;
+  for (size_t workers : counts) row(jobs.front(), workers, 0, predict(jobs.front(), workers, options, jobs.front()));
   return 0;
 }
 

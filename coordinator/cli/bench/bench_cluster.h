@@ -14,6 +14,11 @@ struct BenchClusterOptions {
   std::string workers = "1,2,16,64,256";
   std::string memory = "1GiB";     // each modelled worker's --memory
   double latencyMicros = 100;      // one way, coordinator to worker
+  // "0": a machine per worker; C: all of them share C cores
+  // (ClusterModelOptions::hostCores); "measured": as many as the job's own
+  // threads had in the run predicted (its CPU over its time).
+  std::string hostCores = "0";
+  double workScale = 1;            // the records' tracing work times this
   std::string csv;
 };
 

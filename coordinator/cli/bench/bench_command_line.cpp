@@ -150,6 +150,16 @@ void addCluster(CLI::App& bench, CommandTable& table) {
   command->add_option("--memory", o->memory, "each modelled worker's --memory when the record has none")
       ->capture_default_str();
   command->add_option("--latency-us", o->latencyMicros, "one-way network latency")->capture_default_str();
+  command
+      ->add_option("--host-cores", o->hostCores,
+                   "the coordinator and the workers share this many cores (the machine the records ran on); "
+                   "0: a machine each; measured: the cores the predicted run's job had (its CPU over its time)")
+      ->capture_default_str();
+  command
+      ->add_option("--work-scale", o->workScale,
+                   "the records' tracing work (photons, rays) times this, their loads as recorded")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e6));
   command->add_option("--csv", o->csv, "write one row per prediction");
   table.add(command, [o] { return runBenchCluster(*o); });
 }

@@ -1,4 +1,5 @@
 #include "coordinator/cluster_model.h"
+#include "coordinator/shared_cores.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +8,11 @@ namespace {
 
 // A record of `cells` cells, each with `leasesPerCell` photon leases of
 // 10 000 work taking 50 ms each and a render lease of 10 000 taking 20 ms;
-// each cell 10 000 triangles loaded in 1 ms.
-ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinatorSecondsPerLease) {
+// each cell 10 000 triangles loaded in 1 ms. `waited`: the share of each
+// lease's wall time it spent waiting for a core (CPU recorded; -1: a
+// record without CPU, schema 8).
+ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinatorSecondsPerLease,
+                            double waited = -1) {
   ClusterRecord record;
   for (uint32_t c = 0; c < cells; ++c) {
     CellInfo info;
@@ -21,8 +25,78 @@ ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinato
                                k == 0 ? 1 : 0, k == 0 ? 10000 : 0});
     record.leases.push_back({1, 0, 1, c, 0, 10000, "w", 0, 0, 21000, 1000, 1, 10000});
   }
+  if (waited >= 0)
+    for (LeaseLogEntry& lease : record.leases) {
+      // The same own time, stretched by the wait: wall = own / (1 - waited).
+      const int64_t own = lease.leaseMicros;
+      lease.leaseMicros = std::llround(double(own) / (1 - waited));
+      lease.loadMicros = std::llround(double(lease.loadMicros) / (1 - waited));
+      lease.cpuMicros = own;
+      lease.runQueueMicros = lease.leaseMicros - own;
+    }
   record.coordinatorSecondsPerLease = coordinatorSecondsPerLease;
   return record;
+}
+
+TEST(SharedCores, ThreadsBeyondTheCoresShareThemEqually) {
+  SharedCores two(2);
+  two.start(0, 1.0);
+  two.start(1, 1.0);
+  two.start(2, 2.0);
+  // Three threads on two cores: 2/3 of a core each; the 1 s bursts end at 1.5 s.
+  EXPECT_NEAR(two.nextEnd(0), 1.5, 1e-9);
+  const auto first = two.advance(0, 1.5);
+  EXPECT_EQ(first.size(), 2u);
+  // Alone, the third runs at a full core: its last second ends at 2.5 s.
+  EXPECT_NEAR(two.nextEnd(1.5), 2.5, 1e-9);
+  EXPECT_EQ(two.advance(1.5, 2.5), std::vector<size_t>{2});
+  EXPECT_TRUE(two.idle());
+  SharedCores cluster(0);   // a core each, however many
+  for (size_t t = 0; t < 8; ++t) cluster.start(t, 1.0);
+  EXPECT_NEAR(cluster.nextEnd(3), 4, 1e-9);
+}
+
+TEST(ClusterModel, ALeaseCostsItsOwnTimeNotWhatWaitingForACoreAddedToIt) {
+  ClusterModelOptions options;
+  const ClusterPrediction alone = simulateCluster(uniformRecord(32, 2, 1e-4), options);
+  // The same leases measured while they waited half their wall time.
+  const ClusterPrediction waited = simulateCluster(uniformRecord(32, 2, 1e-4, 0.5), options);
+  EXPECT_NEAR(waited.seconds(), alone.seconds(), 0.02 * alone.seconds());
+}
+
+TEST(ClusterModel, WorkersSharingTheCoresOfOneMachineShareItsSpeed) {
+  const ClusterRecord record = uniformRecord(64, 4, 1e-4, 0.0);
+  ClusterModelOptions options;
+  options.workers = 1;
+  options.hostCores = 2;
+  const double one = simulateCluster(record, options).seconds();
+  options.workers = 2;
+  const double two = simulateCluster(record, options).seconds();
+  EXPECT_NEAR(two, one / 2, 0.1 * one / 2);   // a core each (the coordinator is nearly idle)
+  options.hostCores = 1;
+  const double twoOnOneCore = simulateCluster(record, options).seconds();
+  EXPECT_NEAR(twoOnOneCore, one, 0.1 * one);   // no faster than one worker
+  // Four workers on two cores: as two.
+  options.workers = 4;
+  options.hostCores = 2;
+  EXPECT_NEAR(simulateCluster(record, options).seconds(), two, 0.1 * two);
+}
+
+TEST(ClusterModel, AWorkScaleMultipliesTheTracingAndKeepsTheLoads) {
+  const ClusterRecord record = uniformRecord(64, 4, 1e-4, 0.0);
+  ClusterModelOptions options;
+  options.workers = 2;
+  const ClusterPrediction base = simulateCluster(record, options);
+  options.workScale = 1;
+  EXPECT_DOUBLE_EQ(simulateCluster(record, options).phases[0].workerBusySeconds, base.phases[0].workerBusySeconds);
+  options.workScale = 2;
+  const ClusterPrediction doubled = simulateCluster(record, options);
+  // Photon leases: 4 x 49 ms of tracing and one 1 ms load per cell, the
+  // tracing doubled; render: 20 ms and a load.
+  const double photonLoads = 64 * 0.001;
+  EXPECT_NEAR(doubled.phases[0].workerBusySeconds - photonLoads, 2 * (base.phases[0].workerBusySeconds - photonLoads),
+              0.02 * base.phases[0].workerBusySeconds);
+  EXPECT_NEAR(doubled.seconds(), 2 * base.seconds(), 0.1 * base.seconds());
 }
 
 TEST(ClusterModel, OneWorkerTakesItsLeasesTimeAndMoreWorkersShareIt) {
