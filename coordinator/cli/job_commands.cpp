@@ -113,25 +113,25 @@ CLI::Option* addSunTimeOptions(CLI::App& command, DaylightSettings& d) {
         }
       },
       "YYYY-MM-DDTHH:MM[:SS]+HH:MM"));
-  command
-      .add_option_function<double>(
-          "--latitude", [sunTime](double degrees) { sunTime().latitudeDegrees = degrees; },
-          "with --sun-time: degrees north (negative: south; default: the store's site)")
-      ->check(realNumber(-90, 90))
-      ->needs(when);
-  command
-      .add_option_function<double>(
-          "--longitude", [sunTime](double degrees) { sunTime().longitudeDegrees = degrees; },
-          "with --sun-time: degrees east (negative: west; default: the store's site)")
-      ->check(realNumber(-180, 180))
-      ->needs(when);
-  command
-      .add_option_function<double>(
-          "--north-azimuth", [sunTime](double degrees) { sunTime().northAzimuthDegrees = degrees; },
-          "with --sun-time: the azimuth of geographic north as --sun measures it (from +Z towards +X; default: the "
-          "store's site's, else 0: +Z is north, and then east is -X)")
-      ->check(realNumber(-360, 360))
-      ->needs(when);
+  const struct {
+    const char* name;
+    std::optional<double> SunTime::*field;
+    double most;
+    const char* help;
+  } places[] = {
+      {"--latitude", &SunTime::latitudeDegrees, 90,
+       "with --sun-time: degrees north (negative: south; default: the store's site)"},
+      {"--longitude", &SunTime::longitudeDegrees, 180,
+       "with --sun-time: degrees east (negative: west; default: the store's site)"},
+      {"--north-azimuth", &SunTime::northAzimuthDegrees, 360,
+       "with --sun-time: the azimuth of geographic north as --sun measures it (from +Z towards +X; default: the "
+       "store's site's, else 0: +Z is north, and then east is -X)"}};
+  for (const auto& place : places)
+    command
+        .add_option_function<double>(
+            place.name, [sunTime, field = place.field](double degrees) { sunTime().*field = degrees; }, place.help)
+        ->check(realNumber(-place.most, place.most))
+        ->needs(when);
   return when;
 }
 }  // namespace

@@ -18,7 +18,8 @@ using namespace harness;
 
 const fs::path kScene = fs::path(PORTICO_SOURCE_DIR) / "tests" / "scenes" / "daylight_window";
 // Its openings are in the +X wall: with north at azimuth 5, the sun of a
-// June evening in Karlsruhe (west-north-west) shines in through them.
+// June evening in Karlsruhe (azimuth 281: a little north of west, portico
+// azimuth 84) shines in through them.
 constexpr const char* kSite = R"("site": {"latitude": 49.1003, "longitude": 8.4366, "north_azimuth": 5.0},)";
 constexpr const char* kEvening = "2026-06-21T19:00+02:00";
 
@@ -80,7 +81,7 @@ TEST_F(SunTime, RendersTheSameBitsAsSunWithTheAnglesItResolvedTo) {
   const SolarPosition sun = solarPosition(parseIsoInstant(kEvening), 49.1003, 8.4366);
   EXPECT_EQ(azimuth, float(porticoAzimuth(5.0, sun.azimuthDegrees)));
   EXPECT_EQ(elevation, float(sun.elevationDegrees));
-  EXPECT_NEAR(sun.azimuthDegrees, 298, 5);   // west-north-west at 17:00 UTC
+  EXPECT_NEAR(sun.azimuthDegrees, 281, 2);   // a little north of west at 17:00 UTC
   EXPECT_GT(sun.elevationDegrees, 10);
   EXPECT_NE(readFile(dir_ / "timed.exr.log").find(fmt::format("sun: --sun {:.2f},{:.2f}", azimuth, elevation)),
             std::string::npos)
