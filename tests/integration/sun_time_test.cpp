@@ -2,6 +2,7 @@
 // store and `scene info`; `render --sun-time` renders the same bits as
 // `--sun AZ,EL` with the angles it resolved to (which the job's statistics
 // show, and which are the solar model's); bad input is refused in one line.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 

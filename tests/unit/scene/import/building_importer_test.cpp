@@ -374,7 +374,7 @@ TEST(BuildingImport, KeepsTheSiteThroughAReCut) {
   EXPECT_EQ(*SceneStore::open(temp / "store").site(), expected);
   ImportOptions grid;
   grid.gridResolution = 2;
-  importBuilding({(temp / "store").string()}, temp / "grid", grid);
+  importBuilding({temp / "store"}, temp / "grid", grid);
   ASSERT_TRUE(SceneStore::open(temp / "grid").site());
   EXPECT_EQ(*SceneStore::open(temp / "grid").site(), expected);
   importBuilding({building.json()}, temp / "nowhere");
