@@ -53,7 +53,10 @@ TEST(SolarPosition, EquinoxNoonSunStandsAtNinetyMinusTheLatitude) {
   const int64_t march20 = 1773964800;   // 2026-03-20T00:00Z
   for (const double latitude : {49.1003, 0.0, -33.8688, 65.0}) {
     const SolarPosition noon = highestOfDay(march20, latitude, -40.0);
-    EXPECT_NEAR(noon.elevationDegrees, 90.0 - std::fabs(latitude), 0.05) << "latitude " << latitude;
+    // At the equator the sun passes the zenith at 0.25 degrees a minute:
+    // the minute steps miss its top by up to about 0.1 degrees there.
+    EXPECT_NEAR(noon.elevationDegrees, 90.0 - std::fabs(latitude), latitude == 0.0 ? 0.15 : 0.05)
+        << "latitude " << latitude;
   }
 }
 
