@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/accel/accelerator.h"
+#include "common/job/sun_time.h"
 #include "common/net/message.h"
 #include "common/net/job_spec_wire.h"
 #include "common/transport/daylight_openings.h"
@@ -134,6 +135,8 @@ uint64_t defaultPhotonCount(size_t lightCount, size_t cellCount, size_t litCellC
 
 JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   const JobSettings defaults;
+  // A sun by date and time becomes the azimuth and elevation --sun gives.
+  settings.daylight = resolveSunTime(settings.daylight, scene.site(), scene.directory());
   // A store camera by name becomes the job's camera, exactly as stored (its
   // cell too), and brings its image size unless the job gives one.
   const Camera* sizeFrom = &scene.camera();

@@ -108,6 +108,25 @@ nlohmann::json renderPassStatistics(JobStore& store, const JobRecord& job, wire:
   passes["stopped"] = progress.stopReason.empty() ? nlohmann::json() : nlohmann::json(progress.stopReason);
   return passes;
 }
+
+// The job's sun and sky as resolved (a --sun-time's azimuth and elevation
+// too); null without daylight.
+nlohmann::json daylightSettings(wire::JobSpec::Reader spec) {
+  if (!spec.hasDaylight()) return nullptr;
+  const auto d = spec.getDaylight();
+  const auto sky = d.getSky();
+  nlohmann::json daylight = {{"sky", sky == wire::SkyKind::UNIFORM    ? "uniform"
+                                     : sky == wire::SkyKind::PREETHAM ? "preetham"
+                                     : sky == wire::SkyKind::OVERCAST ? "overcast"
+                                                                      : "none"},
+                             {"turbidity", d.getTurbidity()},
+                             {"sun", d.getSun()}};
+  if (d.getSun()) {
+    daylight["sun_azimuth"] = d.getSunAzimuth();
+    daylight["sun_elevation"] = d.getSunElevation();
+  }
+  return daylight;
+}
 }  // namespace
 
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
@@ -125,7 +144,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
                        {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
-                       {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"}};
+                       {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"},
+                       {"daylight", daylightSettings(spec)}};
   // A job that reused an earlier job's photon pass shows that pass's photons.
   const auto photonCounters = job.photonSource ? store.counters(job.photonSource) : counters;
   stats["photons"] = {{"emitted", get(photonCounters, "photons.emitted")},

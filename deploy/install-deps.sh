@@ -22,6 +22,7 @@ packages=(
   libgtest-dev libgmock-dev
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libtbb-dev libassimp-dev zlib1g-dev
+  liberfa-dev
   python3 python3-yaml python3-venv
 )
 

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 12;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky)
+const protocolVersion :UInt32 = 13;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky)
 
 enum Phase {
   photons @0;
@@ -120,6 +120,27 @@ struct Daylight {
   sunR @8 :Float32;        # sun's irradiance; all zero: the sun model's
   sunG @9 :Float32;
   sunB @10 :Float32;
+  # In a Submit: the sun by date, time and place, which the coordinator
+  # resolves into sunAzimuth and sunElevation; absent once resolved.
+  sunTime @11 :SunTime;
+}
+
+# common/job/job_settings.h SunTime: each place value unset takes the
+# store's site's.
+struct SunTime {
+  unixSeconds @0 :Int64;   # the instant, POSIX seconds (UTC)
+  latitude :union {
+    site @1 :Void;
+    degrees @2 :Float64;   # north positive
+  }
+  longitude :union {
+    site @3 :Void;
+    degrees @4 :Float64;   # east positive
+  }
+  northAzimuth :union {
+    site @5 :Void;
+    degrees @6 :Float64;   # portico azimuth of geographic north
+  }
 }
 
 enum SkyKind {

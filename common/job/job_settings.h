@@ -34,6 +34,19 @@ struct JobCamera {
   bool operator==(const JobCamera&) const = default;
 };
 
+// A sun by date, time and place (`--sun-time`, `--latitude`, `--longitude`,
+// `--north-azimuth`): in a submit only. The coordinator resolves it into
+// the sun's azimuth and elevation (resolveSunTime, common/job/sun_time.h),
+// with the store's site where the job gives no place, and clears it: the
+// stored job is the one `--sun AZ,EL` makes.
+struct SunTime {
+  int64_t unixSeconds = 0;                   // the instant, POSIX seconds (UTC)
+  std::optional<double> latitudeDegrees;     // unset: the store's site
+  std::optional<double> longitudeDegrees;
+  std::optional<double> northAzimuthDegrees; // unset: the store's site's, else 0
+  bool operator==(const SunTime&) const = default;
+};
+
 // Daylight (docs/daylight.md): a sky and a sun outside the building, whose
 // light enters through the portals into outdoor cells. Radiance and
 // irradiance are per RGB channel in the units of lamps' radiance
@@ -45,6 +58,7 @@ struct DaylightSettings {
   bool sun = false;
   // Azimuth from +Z towards +X, elevation above the horizontal (+Y up).
   float sunAzimuthDegrees = 0, sunElevationDegrees = 0;
+  std::optional<SunTime> sunTime;    // set: the angles above are to be resolved from it
   Vec3 sunIrradiance;                // on a plane facing the sun; zero: the sun model's
   bool any() const { return sun || sky != Sky::None; }
   bool operator==(const DaylightSettings&) const = default;

@@ -45,6 +45,13 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
     daylight.setSunAzimuth(d.sunAzimuthDegrees);
     daylight.setSunElevation(d.sunElevationDegrees);
     daylight.setSunR(d.sunIrradiance.x), daylight.setSunG(d.sunIrradiance.y), daylight.setSunB(d.sunIrradiance.z);
+    if (d.sunTime) {
+      auto sunTime = daylight.initSunTime();
+      sunTime.setUnixSeconds(d.sunTime->unixSeconds);
+      if (d.sunTime->latitudeDegrees) sunTime.getLatitude().setDegrees(*d.sunTime->latitudeDegrees);
+      if (d.sunTime->longitudeDegrees) sunTime.getLongitude().setDegrees(*d.sunTime->longitudeDegrees);
+      if (d.sunTime->northAzimuthDegrees) sunTime.getNorthAzimuth().setDegrees(*d.sunTime->northAzimuthDegrees);
+    }
   }
 }
 
@@ -92,6 +99,14 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
     d.sunAzimuthDegrees = daylight.getSunAzimuth();
     d.sunElevationDegrees = daylight.getSunElevation();
     d.sunIrradiance = Vec3(daylight.getSunR(), daylight.getSunG(), daylight.getSunB());
+    if (daylight.hasSunTime()) {
+      const auto sunTime = daylight.getSunTime();
+      SunTime& t = d.sunTime.emplace();
+      t.unixSeconds = sunTime.getUnixSeconds();
+      if (sunTime.getLatitude().isDegrees()) t.latitudeDegrees = sunTime.getLatitude().getDegrees();
+      if (sunTime.getLongitude().isDegrees()) t.longitudeDegrees = sunTime.getLongitude().getDegrees();
+      if (sunTime.getNorthAzimuth().isDegrees()) t.northAzimuthDegrees = sunTime.getNorthAzimuth().getDegrees();
+    }
   }
   return settings;
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/job/sun_time.h"
 #include "common/transport/sampling.h"
 
 namespace portico {
@@ -134,12 +135,17 @@ Vec3 SkyModel::irradianceFacing(const Vec3& n) const {
 
 std::string daylightProblem(const DaylightSettings& s) {
   using Sky = DaylightSettings::Sky;
-  if (s.sun) {
+  if (s.sunTime) {
+    // Its angles are resolved at submit (resolveSunTime), then checked here.
+    if (const std::string problem = sunTimeProblem(*s.sunTime); !problem.empty()) return problem;
+  } else if (s.sun) {
     if (!(std::isfinite(s.sunAzimuthDegrees) && s.sunAzimuthDegrees >= -360.0f && s.sunAzimuthDegrees <= 360.0f))
       return fmt::format("--sun: azimuth {} must be a number of degrees from -360 to 360", s.sunAzimuthDegrees);
     if (!(std::isfinite(s.sunElevationDegrees) && s.sunElevationDegrees > 0.0f && s.sunElevationDegrees <= 90.0f))
       return fmt::format("--sun: elevation {} must be above 0 and at most 90 degrees (the sun above the horizon)",
                          s.sunElevationDegrees);
+  }
+  if (s.sun) {
     if (!isFinite(s.sunIrradiance) || std::min({s.sunIrradiance.x, s.sunIrradiance.y, s.sunIrradiance.z}) < 0 ||
         maxComponent(s.sunIrradiance) > 1e7f)
       return fmt::format("--sun-irradiance {},{},{} must be numbers from 0 to 1e7", s.sunIrradiance.x,

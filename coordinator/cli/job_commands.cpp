@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "common/net/client.h"
+#include "common/job/sun_time.h"
 #include "common/net/job_spec_wire.h"
 #include "common/transport/sky_model.h"
 #include "common/util/cli_bounds.h"
@@ -87,11 +88,59 @@ void addCameraOptions(CLI::App& command, JobSettings& o) {
 }
 }  // namespace
 
+namespace {
+// A sun by date, time and place (docs/daylight.md): the coordinator
+// computes its azimuth and elevation at submit, with the store's site
+// where no place is given. Returns --sun-time, which the others need.
+CLI::Option* addSunTimeOptions(CLI::App& command, DaylightSettings& d) {
+  auto sunTime = [&d]() -> SunTime& { return d.sunTime ? *d.sunTime : d.sunTime.emplace(); };
+  auto* when = command.add_option_function<std::string>(
+      "--sun-time",
+      [&d, sunTime](const std::string& text) {
+        sunTime().unixSeconds = parseIsoInstant(text);
+        d.sun = true;
+        if (d.sky == DaylightSettings::Sky::None) d.sky = DaylightSettings::Sky::Preetham;
+      },
+      "daylight: the sun at this instant, ISO 8601 with its UTC offset (2026-06-21T14:30+02:00, or Z for UTC), "
+      "seen from --latitude/--longitude or else the store's site; not with --sun");
+  when->check(CLI::Validator(
+      [](std::string& text) -> std::string {
+        try {
+          parseIsoInstant(text);
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "YYYY-MM-DDTHH:MM[:SS]+HH:MM"));
+  const struct {
+    const char* name;
+    std::optional<double> SunTime::*field;
+    double most;
+    const char* help;
+  } places[] = {
+      {"--latitude", &SunTime::latitudeDegrees, 90,
+       "with --sun-time: degrees north (negative: south; default: the store's site)"},
+      {"--longitude", &SunTime::longitudeDegrees, 180,
+       "with --sun-time: degrees east (negative: west; default: the store's site)"},
+      {"--north-azimuth", &SunTime::northAzimuthDegrees, 360,
+       "with --sun-time: the azimuth of geographic north as --sun measures it (from +Z towards +X; default: the "
+       "store's site's, else 0: +Z is north, and then east is -X)"}};
+  for (const auto& place : places)
+    command
+        .add_option_function<double>(
+            place.name, [sunTime, field = place.field](double degrees) { sunTime().*field = degrees; }, place.help)
+        ->check(realNumber(-place.most, place.most))
+        ->needs(when);
+  return when;
+}
+}  // namespace
+
 // Sun and sky (docs/daylight.md). Each value is checked as it is read, so
 // that a wrong one is refused in one line naming its option.
 void addDaylightOptions(CLI::App& command, DaylightSettings& d) {
   using Sky = DaylightSettings::Sky;
-  command
+  auto* sun = command
       .add_option_function<std::string>(
           "--sun",
           [&d](const std::string& text) {
@@ -117,6 +166,7 @@ void addDaylightOptions(CLI::App& command, DaylightSettings& d) {
             return problem;
           },
           "AZIMUTH,ELEVATION"));
+  addSunTimeOptions(command, d)->excludes(sun);
   command
       .add_option_function<std::string>(
           "--sky",

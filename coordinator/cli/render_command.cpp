@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <iostream>
 #include <thread>
 
 #include "common/net/client.h"
@@ -18,6 +19,20 @@ namespace portico::cli {
 
 void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message);
 
+namespace {
+// The sun the coordinator computed for --sun-time, as --sun would give it:
+// one line on stderr once the status shows it; false until then.
+bool showResolvedSun(const nlohmann::json& status) {
+  const auto settings = status.find("settings");
+  if (settings == status.end() || !settings->contains("daylight") || !(*settings)["daylight"].is_object()) return false;
+  const auto& daylight = (*settings)["daylight"];
+  if (!daylight.value("sun", false)) return false;
+  std::cerr << fmt::format("sun: --sun {:.2f},{:.2f} (azimuth from +Z towards +X, elevation)\n",
+                           daylight.value("sun_azimuth", 0.0), daylight.value("sun_elevation", 0.0));
+  return true;
+}
+}  // namespace
+
 int runRender(const JobSettings& render, const LocalRunOptions& local) {
   if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
   capnp::MallocMessageBuilder submit;
@@ -27,6 +42,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
   net::CoordinatorClient client(services.endpoint(), services.keys());
   const uint64_t job = client.submit(submit);
   ProgressDisplay display(false);
+  bool sunShown = false;
   std::string state;
   nlohmann::json status;
   const auto waitStarted = std::chrono::steady_clock::now();
@@ -37,6 +53,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
       if (e.num() == EINTR) continue;   // Ctrl-C: the loop condition decides
       throw;
     }
+    if (render.daylight.sunTime && !sunShown) sunShown = showResolvedSun(status);
     display.update(status);
     state = status.value("state", "");
     if (jobEnded(state)) break;

@@ -188,6 +188,10 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
                     {"height", camera.height},
                     {"cell", camera.cell}};
   info["cameras"] = camerasJson(store);
+  info["site"] = store.site() ? nlohmann::json{{"latitude", store.site()->latitudeDegrees},
+                                               {"longitude", store.site()->longitudeDegrees},
+                                               {"north_azimuth", store.site()->northAzimuthDegrees}}
+                              : nlohmann::json(nullptr);
   nlohmann::json cells = nlohmann::json::array();
   for (const CellInfo& cell : store.cells())
     cells.push_back({{"id", cell.id}, {"name", cell.name}, {"triangles", cell.triangleCount}, {"bytes", cell.byteCount}});
@@ -215,6 +219,9 @@ int runSceneInfo(const std::string& directory, const SceneInfoOptions& options) 
                            camera.cell < store.cells().size() ? fmt::format(" ('{}')", store.cells()[camera.cell].name)
                                                               : std::string());
   std::cout << describeCameraNames(store) << "\n";
+  if (const auto& site = store.site())
+    std::cout << fmt::format("site: latitude {}, longitude {}, north at azimuth {} (for --sun-time)\n",
+                             site->latitudeDegrees, site->longitudeDegrees, site->northAzimuthDegrees);
   // A store of 10^4 cells would bury the summary: list the largest few.
   constexpr size_t kListedCells = 64, kLargestCells = 10;
   std::vector<const CellInfo*> listed;

@@ -268,6 +268,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
                        camera.name, formatVec(camera.origin)));
     camera.cell = *cell;
   }
+  scene.site = building.site;
   return scene;
 }
 
@@ -361,6 +362,7 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
                  options.gridResolution > 0
                      ? fmt::format("grid {}^3", options.gridResolution)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
+  if (scene.site) writer.setSite(*scene.site);
   for (const ImportedMaterial& material : scene.materials) {
     const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
     if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);

@@ -406,6 +406,28 @@ std::vector<BuildingCamera> readCameras(const Reader& reader, const json& root) 
   return cameras;
 }
 
+// "site": {"latitude": 49.1, "longitude": 8.4, "north_azimuth": 0}, in
+// degrees; north_azimuth may be left out (0: +Z is north).
+SiteLocation readSite(const Reader& reader, const json& entry) {
+  if (!entry.is_object())
+    reader.fail("\"site\" must be an object with \"latitude\", \"longitude\" and \"north_azimuth\" (degrees)");
+  reader.requireKnownKeys(entry, "site", {"latitude", "longitude", "north_azimuth"});
+  // Read as double: a float's 24 bits would move a site by up to a metre.
+  const auto degrees = [&](const char* key, std::string (*problem)(double)) {
+    const std::string what = fmt::format("site.{}", key);
+    const json& value = reader.required(entry, key, "site");
+    reader.number(value, what);   // refuses anything but a finite number, naming it
+    const double number = value.get<double>();
+    if (const std::string wrong = problem(number); !wrong.empty()) reader.fail(fmt::format("{} = {} {}", what, number, wrong));
+    return number;
+  };
+  SiteLocation site;
+  site.latitudeDegrees = degrees("latitude", latitudeProblem);
+  site.longitudeDegrees = degrees("longitude", longitudeProblem);
+  if (reader.member(entry, "north_azimuth")) site.northAzimuthDegrees = degrees("north_azimuth", northAzimuthProblem);
+  return site;
+}
+
 }  // namespace
 
 std::string BuildingObject::label() const { return fmt::format("objects[{}] ('{}')", index, name); }
@@ -429,6 +451,7 @@ BuildingDescription readBuildingJson(const std::string& path) {
   if (const json* portals = reader.member(root, "portals"))
     building.portals = readPortals(reader, *portals, building.cells);
   building.cameras = readCameras(reader, root);
+  if (const json* site = reader.member(root, "site")) building.site = readSite(reader, *site);
   return building;
 }
 

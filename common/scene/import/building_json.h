@@ -12,6 +12,7 @@
 
 #include "common/math.h"
 #include "common/scene/store/scene_types.h"
+#include "common/scene/store/site_location.h"
 
 namespace portico {
 
@@ -71,6 +72,7 @@ struct BuildingDescription {
   std::optional<std::vector<BuildingCell>> cells;   // absent: one cell around everything
   std::vector<BuildingPortal> portals;
   std::vector<BuildingCamera> cameras;              // at least one
+  std::optional<SiteLocation> site;                 // "site": where the building stands
 };
 
 // Throws std::runtime_error, one line starting with the path and naming the

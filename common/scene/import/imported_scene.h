@@ -5,12 +5,14 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common/math.h"
 #include "common/scene/import/quad_light.h"
 #include "common/scene/store/scene_types.h"
+#include "common/scene/store/site_location.h"
 
 namespace portico {
 
@@ -77,6 +79,7 @@ struct ImportedScene {
   std::vector<ImportedPortal> portals;
   std::vector<ImportedLight> lights;
   std::vector<Camera> cameras;           // the default first; cell: index into cells
+  std::optional<SiteLocation> site;      // where the building stands, if known
   Bounds3 bounds;                        // triangles, camera origins and given cells, not padded
   uint64_t degenerateTrianglesDropped = 0;   // zero-area triangles of the meshes, left out
   uint64_t triangleCount() const {

@@ -51,6 +51,7 @@ ImportedScene sceneFromStore(const std::string& directory) {
                                          Parallelogram{light.corner, light.edge1, light.edge2}, light.radiance,
                                          light.shape});
   scene.cameras = store.cameras();
+  scene.site = store.site();
   for (const Camera& camera : scene.cameras) scene.bounds.extend(Bounds3(camera.origin, camera.origin));
   return scene;
 }

@@ -183,6 +183,20 @@ class CatalogueReader {
     return cameras;
   }
 
+  // Version 7 on: zero or one row; before, no site.
+  std::optional<SiteLocation> site(int version) {
+    if (version < 7) return std::nullopt;
+    sql::Statement& row = db_.prepare("SELECT latitude, longitude, north_azimuth FROM site");
+    std::optional<SiteLocation> site;
+    while (row.step()) {
+      if (site) fail("table site has more than one row");
+      site = SiteLocation{row.columnDouble(0), row.columnDouble(1), row.columnDouble(2)};
+    }
+    if (site)
+      if (const std::string problem = siteLocationProblem(*site); !problem.empty()) fail("table site: " + problem);
+    return site;
+  }
+
  private:
   sql::Database& db_;
   fs::path directory_;
@@ -217,6 +231,7 @@ SceneStore SceneStore::open(const std::string& directory) {
     store.materials_ = reader.materials(version);
     store.lights_ = reader.lights(store.cells_.size(), version);
     store.cameras_ = reader.cameras(store.cells_.size(), version);
+    store.site_ = reader.site(version);
     store.indexByCell();
   } catch (const CatalogueError&) {
     throw;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "common/scene/store/scene_types.h"
+#include "common/scene/store/site_location.h"
 
 namespace portico {
 
@@ -29,6 +30,8 @@ class SceneStore {
   const Camera& camera() const { return cameras_.front(); }   // the default camera
   // The camera of this name; nullptr if the store has none.
   const Camera* findCamera(std::string_view name) const;
+  // Where the building stands (building.json "site"); nullopt when unknown.
+  const std::optional<SiteLocation>& site() const { return site_; }
   // Free-form facts about the store (format, generator, seed, ...).
   const std::map<std::string, std::string>& meta() const { return meta_; }
   std::string cellPath(uint32_t cell) const;      // absolute path of the cell file
@@ -50,6 +53,7 @@ class SceneStore {
   std::vector<AreaLight> lights_;
   std::vector<Camera> cameras_;
   std::map<std::string, std::string> meta_;
+  std::optional<SiteLocation> site_;
   std::vector<std::vector<uint32_t>> neighbours_, lightsByCell_;
   void indexByCell();
 };
@@ -98,6 +102,8 @@ class SceneStoreWriter {
   // Another named camera; names are unique in a store (checked at commit).
   void addCamera(const Camera& camera);
   void setMeta(const std::string& key, const std::string& value);
+  // Where the building stands (SiteLocation); none unless set.
+  void setSite(const SiteLocation& site);
   // Writes cells/<id>.cell with its triangles and the portals that touch it.
   void writeCell(const CellContent& cell);
   // Validates (every portal's cells written, every camera's cell exists, ...) and publishes.

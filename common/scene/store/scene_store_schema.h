@@ -22,7 +22,10 @@ namespace portico::scene_schema {
 //      textures/). Versions 1 to 4 are still read, with no textures.
 //   6: materials.transmittance_r/g/b and ior (thin glass). Versions 1 to 5
 //      are still read, without glass.
-constexpr int kVersion = 6;
+//   7: table site (where the building stands: latitude, longitude, north
+//      azimuth; no row when unknown). Versions 1 to 6 are still read,
+//      without a site.
+constexpr int kVersion = 7;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -82,6 +85,11 @@ CREATE TABLE cameras(
   width INTEGER NOT NULL,
   height INTEGER NOT NULL,
   cell INTEGER NOT NULL REFERENCES cells(id));
+CREATE TABLE site(
+  id INTEGER PRIMARY KEY CHECK (id = 0),
+  latitude REAL NOT NULL,
+  longitude REAL NOT NULL,
+  north_azimuth REAL NOT NULL);
 )sql";
 
 }  // namespace portico::scene_schema

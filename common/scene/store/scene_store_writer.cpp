@@ -70,6 +70,7 @@ struct SceneStoreWriter::Impl {
   std::optional<Camera> camera;          // the default
   std::vector<Camera> otherCameras;      // the other named cameras, in order
   std::map<std::string, std::string> meta;
+  std::optional<SiteLocation> site;
   std::map<uint32_t, WrittenCell> cells;
 
   [[noreturn]] void fail(const std::string& problem) const {
@@ -226,6 +227,12 @@ void SceneStoreWriter::setMaterialTexture(uint32_t material, const std::string& 
 void SceneStoreWriter::setMeta(const std::string& key, const std::string& value) {
   impl_->requireUncommitted();
   impl_->meta[key] = value;
+}
+
+void SceneStoreWriter::setSite(const SiteLocation& site) {
+  impl_->requireUncommitted();
+  if (const std::string problem = siteLocationProblem(site); !problem.empty()) impl_->fail("site: " + problem);
+  impl_->site = site;
 }
 
 void SceneStoreWriter::writeCell(const CellContent& cell) {
@@ -417,6 +424,12 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
   };
   insertCamera(*camera);
   for (const Camera& other : otherCameras) insertCamera(other);
+  if (site)
+    db.prepare("INSERT INTO site VALUES (0, ?, ?, ?)")
+        .bind(1, site->latitudeDegrees)
+        .bind(2, site->longitudeDegrees)
+        .bind(3, site->northAzimuthDegrees)
+        .run();
   transaction.commit();
 }
 

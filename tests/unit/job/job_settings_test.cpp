@@ -8,6 +8,7 @@
 #include <limits>
 #include <string>
 
+#include "common/job/sun_time.h"
 #include "common/net/job_spec_wire.h"
 #include "common/scene/generator/demo_generator.h"
 #include "common/scene/import/building_importer.h"
@@ -148,9 +149,18 @@ TEST(JobSettings, TheWireFormKeepsEveryField) {
   settings.timeLimitSeconds = 12.5;
   settings.maxPasses = 9;
   settings.cameraName = "floor2-corridor";
+  settings.daylight.sky = DaylightSettings::Sky::Preetham;
+  settings.daylight.sun = true;
+  settings.daylight.turbidity = 4.5f;
+  // A sun by time: a place of its own, the site's north.
+  settings.daylight.sunTime = SunTime{1782045000, 49.1003, -8.4366, std::nullopt};
   capnp::MallocMessageBuilder message;
   toWire(settings, message.initRoot<wire::JobSpec>());
   EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);
+  settings.daylight.sunTime = SunTime{-5, std::nullopt, std::nullopt, 270.0};
+  capnp::MallocMessageBuilder other;
+  toWire(settings, other.initRoot<wire::JobSpec>());
+  EXPECT_EQ(jobSettingsFromWire(other.getRoot<wire::JobSpec>().asReader()), settings);
 }
 
 // The refusal resolveJobSettings gives ("" for none).
@@ -161,6 +171,24 @@ std::string resolveRefusal(const JobSettings& settings, const SceneStore& scene)
     return e.what();
   }
   return "";
+}
+
+// `--sun-time`: resolved once into the angles `--sun` gives, the time cleared.
+TEST(JobSettings, ASunTimeIsResolvedIntoTheSunsAngles) {
+  const SceneStore& rooms = twoRooms(0);   // no site
+  JobSettings settings;
+  settings.daylight.sky = DaylightSettings::Sky::Preetham;
+  settings.daylight.sun = true;
+  settings.daylight.sunTime = SunTime{1782045000, 49.1003, 8.4366, 0.0};
+  const JobSettings resolved = resolveJobSettings(settings, rooms);
+  EXPECT_FALSE(resolved.daylight.sunTime);
+  EXPECT_EQ(resolved.daylight, resolveSunTime(settings.daylight, std::nullopt, rooms.directory()));
+  EXPECT_NEAR(resolved.daylight.sunElevationDegrees, 61.6, 0.5);   // Karlsruhe, June, an hour after noon
+  EXPECT_EQ(resolveJobSettings(resolved, rooms), resolved);
+  settings.daylight.sunTime->latitudeDegrees.reset();
+  settings.daylight.sunTime->longitudeDegrees.reset();
+  const std::string refusal = resolveRefusal(settings, rooms);
+  EXPECT_NE(refusal.find("no place to see the sun from"), std::string::npos) << refusal;
 }
 
 // `--camera NAME`: the store camera as stored (its cell, its image size),

@@ -360,6 +360,49 @@ TEST(BuildingImportErrors, TheUnbrokenBuildingImports) {
   EXPECT_EQ(store.camera().cell, 0u);
 }
 
+// "site": where the building stands, kept in the store (exactly, as
+// doubles) and through a --grid re-cut; without it the store has none.
+TEST(BuildingImport, KeepsTheSiteThroughAReCut) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  importBuilding({building.json({{"\"units\": \"metres\",",
+                                  "\"units\": \"metres\", \"site\": {\"latitude\": 49.1003, \"longitude\": "
+                                  "8.4366, \"north_azimuth\": 0.0},"}})},
+                 temp / "store");
+  const SiteLocation expected{49.1003, 8.4366, 0.0};
+  ASSERT_TRUE(SceneStore::open(temp / "store").site());
+  EXPECT_EQ(*SceneStore::open(temp / "store").site(), expected);
+  ImportOptions grid;
+  grid.gridResolution = 2;
+  importBuilding({temp / "store"}, temp / "grid", grid);
+  ASSERT_TRUE(SceneStore::open(temp / "grid").site());
+  EXPECT_EQ(*SceneStore::open(temp / "grid").site(), expected);
+  importBuilding({building.json()}, temp / "nowhere");
+  EXPECT_FALSE(SceneStore::open(temp / "nowhere").site());
+}
+
+TEST(BuildingImportErrors, ASiteOffTheEarthNamesTheKey) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  const auto withSite = [&](const std::string& site) {
+    return building.importError({{"\"units\": \"metres\",", "\"units\": \"metres\", \"site\": " + site + ","}});
+  };
+  std::string error = withSite(R"({"latitude": 91, "longitude": 8})");
+  EXPECT_NE(error.find("site.latitude = 91 must be a number of degrees from -90 to 90"), std::string::npos) << error;
+  error = withSite(R"({"latitude": 49, "longitude": -180.5})");
+  EXPECT_NE(error.find("site.longitude = -180.5 must be"), std::string::npos) << error;
+  error = withSite(R"({"latitude": NaN, "longitude": 8})");
+  EXPECT_NE(error.find("site.latitude is NaN, not a finite number"), std::string::npos) << error;
+  error = withSite(R"({"latitude": "49", "longitude": 8})");
+  EXPECT_NE(error.find("site.latitude must be a number"), std::string::npos) << error;
+  error = withSite(R"({"longitude": 8})");
+  EXPECT_NE(error.find("site has no \"latitude\""), std::string::npos) << error;
+  error = withSite(R"({"latitude": 49, "longitude": 8, "north": 3})");
+  EXPECT_NE(error.find("site: unknown key \"north\""), std::string::npos) << error;
+  error = withSite("[49, 8]");
+  EXPECT_NE(error.find("\"site\" must be an object"), std::string::npos) << error;
+}
+
 TEST(BuildingImportErrors, MissingMeshNamesTheFileAndObject) {
   TempDirectory temp;
   const std::string error = BrokenBuilding(temp).importError({{"\"floor.obj\"", "\"ghost.obj\""}});

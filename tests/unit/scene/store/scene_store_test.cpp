@@ -48,6 +48,7 @@ struct TinyScene {
   AreaLight light;
   Camera camera;
   bool whiteIsGlass = false;   // material 0 thin glass
+  std::optional<SiteLocation> site;   // where it stands
   std::vector<Camera> extraCameras;   // named cameras beside the default
 
   TinyScene() {
@@ -102,6 +103,7 @@ struct TinyScene {
     writer.addLight(light);
     writer.setCamera(camera);
     for (const Camera& extra : extraCameras) writer.addCamera(extra);
+    if (site) writer.setSite(*site);
     for (uint32_t id : {2u, 0u, 1u}) writer.writeCell(cells[id]);
     writer.commit();
   }
@@ -183,8 +185,9 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "6");
+  EXPECT_EQ(store.meta().at("format_version"), "7");
   EXPECT_FALSE(store.materials()[0].glass());
+  EXPECT_FALSE(store.site());
 
   for (const CellContent& cell : scene.cells) {
     const auto geometry = CellGeometry::load(store.cellPath(cell.id), cell.id, store.materials().size());
@@ -570,6 +573,39 @@ TEST(SceneStore, RoundTripsGlassAndReadsAVersionFiveStoreWithout) {
   EXPECT_EQ(store.materials()[0].ior, 1.5f);
 }
 
+// The site (schema 7) round-trips exactly; a version 6 store has none.
+TEST(SceneStore, RoundTripsTheSiteAndReadsAVersionSixStoreWithout) {
+  TempDirectory temp;
+  TinyScene scene;
+  scene.site = SiteLocation{49.1003, 8.4366, -12.5};
+  scene.write(temp / "store");
+  {
+    const SceneStore store = SceneStore::open(temp / "store");
+    ASSERT_TRUE(store.site());
+    EXPECT_EQ(*store.site(), *scene.site);   // doubles, bit for bit
+  }
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("DROP TABLE site");
+    db.setUserVersion(6);
+  }
+  EXPECT_FALSE(SceneStore::open(temp / "store").site());
+}
+
+TEST(SceneStore, RefusesASiteOffTheEarthNamingTheValue) {
+  TempDirectory temp;
+  SceneStoreWriter writer(temp / "store");
+  const std::string error = errorOf([&] { writer.setSite(SiteLocation{91, 8, 0}); });
+  EXPECT_NE(error.find("site: latitude 91 must be a number of degrees from -90 to 90"), std::string::npos) << error;
+  // A catalogue edited by hand is refused on reading too.
+  TinyScene scene;
+  scene.site = SiteLocation{10, 20, 0};
+  scene.write(temp / "good");
+  sql::Database(temp / "good/scene.db", sql::Database::Mode::ReadWriteCreate).exec("UPDATE site SET longitude = 200");
+  const std::string read = errorOf([&] { SceneStore::open(temp / "good"); });
+  EXPECT_NE(read.find("table site: longitude 200 must be"), std::string::npos) << read;
+}
+
 TEST(SceneStore, RefusesGlassThatMakesLight) {
   TempDirectory temp;
   SceneStoreWriter writer(temp / "store");
@@ -588,7 +624,8 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 6);
+    EXPECT_EQ(db.userVersion(), 7);
+    db.exec("DROP TABLE site");
     db.exec("DROP TABLE material_textures");
     keepOnlyTheDefaultCameraAsVersionThreeDid(db);
     db.exec("ALTER TABLE materials DROP COLUMN hidden_from_camera");
