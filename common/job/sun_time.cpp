@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -11,23 +12,6 @@
 namespace portico {
 
 namespace {
-
-// Days from 1970-01-01 to a proleptic Gregorian date (H. Hinnant's
-// days_from_civil).
-int64_t daysFromCivil(int64_t year, unsigned month, unsigned day) {
-  year -= month <= 2;
-  const int64_t era = (year >= 0 ? year : year - 399) / 400;
-  const auto yearOfEra = static_cast<unsigned>(year - era * 400);
-  const unsigned dayOfYear = (153 * (month + (month > 2 ? -3 : 9)) + 2) / 5 + day - 1;
-  const unsigned dayOfEra = yearOfEra * 365 + yearOfEra / 4 - yearOfEra / 100 + dayOfYear;
-  return era * 146097 + static_cast<int64_t>(dayOfEra) - 719468;
-}
-
-unsigned daysInMonth(int64_t year, unsigned month) {
-  constexpr unsigned kDays[] = {31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
-  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
-  return month == 2 && leap ? 29 : kDays[month - 1];
-}
 
 // Reads exactly `digits` decimal digits at `at`; nullopt otherwise.
 std::optional<int> digitsAt(std::string_view text, size_t at, size_t digits) {
@@ -80,29 +64,23 @@ int64_t parseIsoInstant(std::string_view text) {
                 "clock time is another instant in every time zone");
   const auto offset = offsetSeconds(text.substr(at));
   if (!offset) return fail(fmt::format("has no valid UTC offset after the time: {}", kForm));
-  if (*month < 1 || *month > 12 || *day < 1 || unsigned(*day) > daysInMonth(*year, unsigned(*month)))
-    return fail(fmt::format("is no date: {:04}-{:02} has no day {}", *year, *month, *day));
+  const std::chrono::year_month_day date{std::chrono::year(*year), std::chrono::month(unsigned(*month)),
+                                        std::chrono::day(unsigned(*day))};
+  if (!date.ok()) return fail(fmt::format("is no date: {:04}-{:02} has no day {}", *year, *month, *day));
   if (*hour > 23 || *minute > 59 || second > 59)
     return fail(fmt::format("is no time of day: {:02}:{:02}:{:02}", *hour, *minute, second));
-  const int64_t days = daysFromCivil(*year, unsigned(*month), unsigned(*day));
+  const int64_t days = std::chrono::sys_days(date).time_since_epoch().count();
   return days * 86400 + *hour * 3600 + *minute * 60 + second - *offset;
 }
 
 std::string formatUtcInstant(int64_t unixSeconds) {
-  // civil_from_days, the inverse of daysFromCivil.
-  const int64_t days = unixSeconds / 86400 - (unixSeconds % 86400 < 0 ? 1 : 0);
-  const int64_t secondOfDay = unixSeconds - days * 86400;
-  const int64_t z = days + 719468;
-  const int64_t era = (z >= 0 ? z : z - 146096) / 146097;
-  const auto dayOfEra = static_cast<unsigned>(z - era * 146097);
-  const unsigned yearOfEra = (dayOfEra - dayOfEra / 1460 + dayOfEra / 36524 - dayOfEra / 146096) / 365;
-  const unsigned dayOfYear = dayOfEra - (365 * yearOfEra + yearOfEra / 4 - yearOfEra / 100);
-  const unsigned mp = (5 * dayOfYear + 2) / 153;
-  const unsigned day = dayOfYear - (153 * mp + 2) / 5 + 1;
-  const unsigned month = mp < 10 ? mp + 3 : mp - 9;
-  const int64_t year = int64_t(yearOfEra) + era * 400 + (month <= 2);
-  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z", year, month, day, secondOfDay / 3600,
-                     secondOfDay / 60 % 60, secondOfDay % 60);
+  using namespace std::chrono;
+  const sys_seconds instant{seconds(unixSeconds)};
+  const sys_days day = floor<days>(instant);
+  const year_month_day date{day};
+  const int64_t secondOfDay = (instant - day).count();
+  return fmt::format("{:04}-{:02}-{:02}T{:02}:{:02}:{:02}Z", int(date.year()), unsigned(date.month()),
+                     unsigned(date.day()), secondOfDay / 3600, secondOfDay / 60 % 60, secondOfDay % 60);
 }
 
 double porticoAzimuth(double northAzimuthDegrees, double geographicDegrees) {

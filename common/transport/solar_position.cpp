@@ -4,6 +4,7 @@
 #include <erfam.h>
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 #include <stdexcept>
 
@@ -19,11 +20,8 @@ constexpr double kAstronomicalUnitMetres = 149597870700.0;
 
 // The instant's calendar year (proleptic Gregorian, UTC).
 int yearOf(int64_t unixSeconds) {
-  int year = 0, month = 0, day = 0;
-  double fraction = 0;
-  const int64_t days = unixSeconds / 86400 - (unixSeconds % 86400 < 0 ? 1 : 0);
-  eraJd2cal(kUnixEpochJulianDate, double(days), &year, &month, &day, &fraction);
-  return year;
+  using namespace std::chrono;
+  return int(year_month_day{floor<days>(sys_seconds{seconds(unixSeconds)})}.year());
 }
 }  // namespace
 
