@@ -155,6 +155,31 @@ struct Split {
   int bins = kBins;     // per axis
   int bin = 0;          // references with bin < this go left
   float cost = 0;       // SAH, in packet tests per unit of the parent's half area
+  // When every reference was binned: the two sides' boxes and the left
+  // side's count, exact, so the partition need not measure them.
+  bool exact = false;
+  uint32_t leftCount = 0;
+  __m128 leftLo, leftHi, rightLo, rightHi;
+};
+
+// The one-axis side test of a split: bins(centroid)[axis] < split.bin,
+// without the other axes. For x >= 0 truncation gives a bin below split.bin
+// exactly when x < split.bin (and clamping to the last bin keeps
+// x >= split.bin on the right); x < 0 is bin 0 either way.
+struct SideTest {
+  float base, scale, limit;
+  int axis;
+  SideTest(const Binning& binning, const Split& split) : limit(float(split.bin)), axis(split.axis) {
+    alignas(16) float b[4], s[4];
+    _mm_store_ps(b, binning.base);
+    _mm_store_ps(s, binning.scale);
+    base = b[axis], scale = s[axis];
+  }
+  bool left(const PrimitiveReference& reference) const {
+    const float* lo = reinterpret_cast<const float*>(&reference.lo);
+    const float* hi = reinterpret_cast<const float*>(&reference.hi);
+    return (lo[axis] + hi[axis] - base) * scale < limit;
+  }
 };
 
 template <int Width>
@@ -243,7 +268,26 @@ class Builder {
     if (twoSets) bins.merge(odd);
     Split best = sweep(bins);
     best.bins = kBins;
+    if (stride == 1 && best.axis >= 0) sidesOf(bins, best);
     return best;
+  }
+
+  // The exact boxes and left count of the split's two sides, from bins that
+  // hold every reference of the range.
+  template <int kBins>
+  static void sidesOf(const BinSet<kBins>& bins, Split& split) {
+    const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
+    __m128 lo[2] = {infinity, infinity}, hi[2] = {minusInfinity, minusInfinity};
+    uint32_t leftCount = 0;
+    for (int b = 0; b < kBins; ++b) {
+      const int side = b < split.bin ? 0 : 1;
+      lo[side] = _mm_min_ps(lo[side], bins.lo[split.axis][b]);
+      hi[side] = _mm_max_ps(hi[side], bins.hi[split.axis][b]);
+      if (side == 0) leftCount += uint32_t(bins.count[b][split.axis]);
+    }
+    split.exact = true;
+    split.leftCount = leftCount;
+    split.leftLo = lo[0], split.leftHi = hi[0], split.rightLo = lo[1], split.rightHi = hi[1];
   }
 
   // The cheapest plane of the binned range, the three axes at once (one per
@@ -303,23 +347,11 @@ class Builder {
     __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
     __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
     __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
-    // bins(centroid)[axis] < split.bin, without the other axes: for x >= 0
-    // truncation gives a bin below split.bin exactly when x < split.bin
-    // (and clamping to the last bin keeps x >= split.bin on the right);
-    // x < 0 is bin 0 either way.
-    alignas(16) float base[4], scale[4];
-    _mm_store_ps(base, binning.base);
-    _mm_store_ps(scale, binning.scale);
-    const float axisBase = base[split.axis], axisScale = scale[split.axis], limit = float(split.bin);
-    const auto goesLeft = [&](__m128 centroid) {
-      alignas(16) float c[4];
-      _mm_store_ps(c, centroid);
-      return (c[split.axis] - axisBase) * axisScale < limit;
-    };
+    const SideTest test(binning, split);
     uint32_t i = range.begin, j = range.end;
     while (i < j) {
       const __m128 centroid = _mm_add_ps(references_[i].lo, references_[i].hi);
-      if (goesLeft(centroid)) {
+      if (test.left(references_[i])) {
         leftCentroidLo = _mm_min_ps(leftCentroidLo, centroid);
         leftCentroidHi = _mm_max_ps(leftCentroidHi, centroid);
         leftLo = _mm_min_ps(leftLo, references_[i].lo);
@@ -393,8 +425,73 @@ class Builder {
       const float leafCost = float(packets(range.count())) * halfArea(range.lo, range.hi);
       if (leafCost <= best.cost + kTraversalCost * halfArea(range.lo, range.hi)) return false;
     }
-    partition(range, best, left, right);
+    if (best.exact) partitionByCount(range, best, left, right);
+    else partition(range, best, left, right);
     return true;
+  }
+
+  // Partitions the range by an exact split, whose sides' boxes and counts
+  // the bins measured: the partition only moves references. Blocks of the
+  // left part's misplaced references (those going right) and of the right
+  // part's (going left) are listed without branches, then swapped in pairs
+  // (Edelkamp and Weiss's BlockQuicksort): no branch on a reference's side.
+  // The children's centroid boxes are bounded rather than measured: the
+  // parent's, cut to twice their triangles' box.
+  void partitionByCount(const Range& range, const Split& split, Range& left, Range& right) {
+    const SideTest test(Binning(range, split.bins), split);
+    const uint32_t middle = range.begin + split.leftCount;
+    constexpr uint32_t kBlock = 64;
+    uint32_t leftMisplaced[kBlock], rightMisplaced[kBlock];
+    uint32_t i = range.begin, j = middle;
+    uint32_t leftListed = 0, leftDone = 0, rightListed = 0, rightDone = 0;
+    PrimitiveReference* references = references_.data();
+    for (;;) {
+      if (leftDone == leftListed) {
+        if (i == middle) break;
+        leftListed = leftDone = 0;
+        for (const uint32_t stop = std::min(i + kBlock, middle); i < stop; ++i) {
+          leftMisplaced[leftListed] = i;
+          leftListed += !test.left(references[i]);
+        }
+      }
+      if (rightDone == rightListed) {
+        if (j == range.end) break;
+        rightListed = rightDone = 0;
+        for (const uint32_t stop = std::min(j + kBlock, range.end); j < stop; ++j) {
+          rightMisplaced[rightListed] = j;
+          rightListed += test.left(references[j]);
+        }
+      }
+      const uint32_t pairs = std::min(leftListed - leftDone, rightListed - rightDone);
+      for (uint32_t k = 0; k < pairs; ++k)
+        std::swap(references[leftMisplaced[leftDone + k]], references[rightMisplaced[rightDone + k]]);
+      leftDone += pairs, rightDone += pairs;
+    }
+    left.begin = range.begin, left.end = middle;
+    right.begin = middle, right.end = range.end;
+    left.lo = split.leftLo, left.hi = split.leftHi;
+    right.lo = split.rightLo, right.hi = split.rightHi;
+    const auto centroidBounds = [&range](Range& side) {
+      side.centroidLo = _mm_max_ps(range.centroidLo, _mm_add_ps(side.lo, side.lo));
+      side.centroidHi = _mm_min_ps(range.centroidHi, _mm_add_ps(side.hi, side.hi));
+    };
+    centroidBounds(left);
+    centroidBounds(right);
+    // And along the split axis, to the plane (widened by a little more than
+    // the side test's rounding: a centroid just outside only loses resolution).
+    alignas(16) float leftHi[4], rightLo[4], lo[4], hi[4];
+    _mm_store_ps(leftHi, left.centroidHi);
+    _mm_store_ps(rightLo, right.centroidLo);
+    _mm_store_ps(lo, range.centroidLo);
+    _mm_store_ps(hi, range.centroidHi);
+    const int axis = split.axis;
+    const float extent = hi[axis] - lo[axis];
+    const float plane = lo[axis] + extent * (float(split.bin) / (float(split.bins) * 0.99999f));
+    const float slack = 1e-5f * (extent + std::abs(plane));
+    leftHi[axis] = std::min(leftHi[axis], plane + slack);
+    rightLo[axis] = std::max(rightLo[axis], plane - slack);
+    left.centroidHi = _mm_load_ps(leftHi);
+    right.centroidLo = _mm_load_ps(rightLo);
   }
 
   // Writes the node for the range (and, depth first, its subtrees); returns its index.
