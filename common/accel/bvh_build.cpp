@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -102,6 +103,11 @@ struct BinSet {
       for (int b = 0; b < kBins; ++b) lo[axis][b] = infinity, hi[axis][b] = minusInfinity;
     std::memset(count, 0, sizeof(count));
   }
+  void add(int axis, int bin, __m128 referenceLo, __m128 referenceHi) {
+    lo[axis][bin] = _mm_min_ps(lo[axis][bin], referenceLo);
+    hi[axis][bin] = _mm_max_ps(hi[axis][bin], referenceHi);
+    ++count[bin][axis];
+  }
   void merge(const BinSet& other) {
     for (int axis = 0; axis < 3; ++axis)
       for (int b = 0; b < kBins; ++b) {
@@ -139,14 +145,12 @@ struct Binning {
       s[axis] = extent[axis] > 0 ? float(bins) * 0.99999f / extent[axis] : 0.0f;
     scale = _mm_load_ps(s);
   }
-  // The bins of a centroid along the three axes (lane 3 unused).
+  // The bins of a centroid along the three axes (lane 3 unused), clamped to
+  // [0, bins - 1] before truncation (rounding may stray by one at either
+  // end): the same bins as clamping after it.
   __m128i bins(__m128 centroid) const {
-    const __m128i index = _mm_cvttps_epi32(_mm_mul_ps(_mm_sub_ps(centroid, base), scale));
-    // Clamped to [0, bins - 1]: rounding may stray by one at either end.
-    const __m128i top = _mm_set1_epi32(binCount - 1);
-    const __m128i clampedHigh = _mm_or_si128(_mm_and_si128(_mm_cmpgt_epi32(index, top), top),
-                                             _mm_andnot_si128(_mm_cmpgt_epi32(index, top), index));
-    return _mm_andnot_si128(_mm_cmplt_epi32(clampedHigh, _mm_setzero_si128()), clampedHigh);
+    const __m128 x = _mm_mul_ps(_mm_sub_ps(centroid, base), scale);
+    return _mm_cvttps_epi32(_mm_min_ps(_mm_max_ps(x, _mm_setzero_ps()), _mm_set1_ps(float(binCount - 1))));
   }
 };
 
@@ -203,21 +207,37 @@ class Builder {
   }
 
  private:
+  // A vertex in lanes 0-2 of a register; lane 3 holds the next float of
+  // the positions, read only where the mesh promises one (padding, or a
+  // next vertex).
+  __m128 loadVertex(uint32_t vertex) const {
+    const float* p = mesh_.positions + 3 * size_t(vertex);
+    return vertex + 1 < mesh_.vertexCount || mesh_.positionsPaddingFloats > 0 ? _mm_loadu_ps(p)
+                                                                               : _mm_setr_ps(p[0], p[1], p[2], 0);
+  }
+
   // References to every finite, non-degenerate triangle, and their range.
   Range gatherReferences() {
-    references_.resize(mesh_.triangleCount);
+    references_.reset(new PrimitiveReference[mesh_.triangleCount]);
     uint32_t count = 0;
     __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
     __m128 centroidLo = lo, centroidHi = hi;
+    const __m128 infinity = _mm_set1_ps(kInfinity), absolute = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     for (uint32_t primitive = 0; primitive < mesh_.triangleCount; ++primitive) {
+      const uint32_t* corner = mesh_.indices + 3 * size_t(primitive);
+      const __m128 a = loadVertex(corner[0]), b = loadVertex(corner[1]), c = loadVertex(corner[2]);
+      // Finite: |v| < infinity, false for NaN too.
+      const __m128 finite = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(_mm_and_ps(a, absolute), infinity),
+                                                  _mm_cmplt_ps(_mm_and_ps(b, absolute), infinity)),
+                                       _mm_cmplt_ps(_mm_and_ps(c, absolute), infinity));
+      if ((_mm_movemask_ps(finite) & 7) != 7) continue;
       Vec3 v0, v1, v2;
       mesh_.triangle(primitive, v0, v1, v2);
-      if (!isFinite(v0) || !isFinite(v1) || !isFinite(v2) || isDegenerateTriangle(v0, v1, v2)) continue;
-      const __m128 a = _mm_setr_ps(v0.x, v0.y, v0.z, 0), b = _mm_setr_ps(v1.x, v1.y, v1.z, 0),
-                   c = _mm_setr_ps(v2.x, v2.y, v2.z, 0);
+      if (isDegenerateTriangle(v0, v1, v2)) continue;
       PrimitiveReference& reference = references_[count++];
       reference.lo = _mm_min_ps(_mm_min_ps(a, b), c);
-      reference.hi = _mm_max_ps(_mm_max_ps(a, b), c);
+      reference.hi = _mm_and_ps(_mm_max_ps(_mm_max_ps(a, b), c), xyz);
       std::memcpy(reinterpret_cast<char*>(&reference.lo) + 12, &primitive, 4);
       lo = _mm_min_ps(lo, reference.lo);
       hi = _mm_max_ps(hi, reference.hi);
@@ -225,7 +245,7 @@ class Builder {
       centroidLo = _mm_min_ps(centroidLo, centroid);
       centroidHi = _mm_max_ps(centroidHi, centroid);
     }
-    references_.resize(count);
+    referenceCount_ = count;
     Range range;
     range.begin = 0;
     range.end = count;
@@ -250,21 +270,19 @@ class Builder {
     bins.clear();
     if (twoSets) odd.clear();
     const auto add = [&binning](BinSet<kBins>& set, const PrimitiveReference& reference) {
-      alignas(16) int32_t index[4];
-      _mm_store_si128(reinterpret_cast<__m128i*>(index), binning.bins(_mm_add_ps(reference.lo, reference.hi)));
-      for (int axis = 0; axis < 3; ++axis) {
-        set.lo[axis][index[axis]] = _mm_min_ps(set.lo[axis][index[axis]], reference.lo);
-        set.hi[axis][index[axis]] = _mm_max_ps(set.hi[axis][index[axis]], reference.hi);
-        ++set.count[index[axis]][axis];
-      }
+      const __m128i index = binning.bins(_mm_add_ps(reference.lo, reference.hi));
+      set.add(0, _mm_cvtsi128_si32(index), reference.lo, reference.hi);
+      set.add(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(index, 1)), reference.lo, reference.hi);
+      set.add(2, _mm_cvtsi128_si32(_mm_shuffle_epi32(index, 2)), reference.lo, reference.hi);
     };
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
+    const PrimitiveReference* references = references_.get();
     uint32_t i = range.begin;
     for (; twoSets && i + stride < range.end; i += 2 * stride) {
-      add(bins, references_[i]);
-      add(odd, references_[i + stride]);
+      add(bins, references[i]);
+      add(odd, references[i + stride]);
     }
-    for (; i < range.end; i += stride) add(bins, references_[i]);
+    for (; i < range.end; i += stride) add(bins, references[i]);
     if (twoSets) bins.merge(odd);
     Split best = sweep(bins);
     best.bins = kBins;
@@ -385,8 +403,8 @@ class Builder {
       _mm_store_ps(c, _mm_add_ps(r.lo, r.hi));
       return c[axis];
     };
-    std::nth_element(references_.begin() + range.begin, references_.begin() + middle,
-                     references_.begin() + range.end,
+    std::nth_element(references_.get() + range.begin, references_.get() + middle,
+                     references_.get() + range.end,
                      [&](const PrimitiveReference& a, const PrimitiveReference& b) { return centre(a) < centre(b); });
     left.begin = range.begin, left.end = middle;
     right.begin = middle, right.end = range.end;
@@ -444,7 +462,7 @@ class Builder {
     uint32_t leftMisplaced[kBlock], rightMisplaced[kBlock];
     uint32_t i = range.begin, j = middle;
     uint32_t leftListed = 0, leftDone = 0, rightListed = 0, rightDone = 0;
-    PrimitiveReference* references = references_.data();
+    PrimitiveReference* references = references_.get();
     for (;;) {
       if (leftDone == leftListed) {
         if (i == middle) break;
@@ -554,28 +572,33 @@ class Builder {
     return bvh_child::leaf(first, count);
   }
 
-  // The leaves' packets, in the order writeLeaf numbered them.
+  // The leaves' packets, in the order writeLeaf numbered them: each
+  // vertex of the four triangles loaded as a row and transposed into the
+  // packet's columns.
   void writePackets() {
-    out_.packets.reserve(packetCount_);
+    out_.packets.resize(packetCount_);
+    grid_traversal::TrianglePacket* packet = out_.packets.data();
     for (const auto& [begin, end] : leafRanges_) {
-      for (uint32_t start = begin; start < end; start += kPacketSize) {
-        grid_traversal::TrianglePacket packet;
+      for (uint32_t start = begin; start < end; start += kPacketSize, ++packet) {
+        __m128 rows[3][kPacketSize];
         for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
           const uint32_t primitive = references_[std::min(start + lane, end - 1)].primitive();
-          Vec3 v[3];
-          mesh_.triangle(primitive, v[0], v[1], v[2]);
-          for (int vertex = 0; vertex < 3; ++vertex)
-            for (int axis = 0; axis < 3; ++axis) packet.v[vertex][axis][lane] = v[vertex][axis];
-          packet.primitive[lane] = primitive;
+          const uint32_t* corner = mesh_.indices + 3 * size_t(primitive);
+          for (int vertex = 0; vertex < 3; ++vertex) rows[vertex][lane] = loadVertex(corner[vertex]);
+          packet->primitive[lane] = primitive;
         }
-        out_.packets.push_back(packet);
+        for (int vertex = 0; vertex < 3; ++vertex) {
+          _MM_TRANSPOSE4_PS(rows[vertex][0], rows[vertex][1], rows[vertex][2], rows[vertex][3]);
+          for (int axis = 0; axis < 3; ++axis) _mm_store_ps(packet->v[vertex][axis], rows[vertex][axis]);
+        }
       }
     }
   }
 
   const MeshView& mesh_;
   BvhData<Width>& out_;
-  std::vector<PrimitiveReference> references_;
+  std::unique_ptr<PrimitiveReference[]> references_;   // referenceCount_ of them
+  uint32_t referenceCount_ = 0;
   std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's references
   uint32_t packetCount_ = 0;
 };
