@@ -92,27 +92,48 @@ struct Range {
 // The bins of the three axes: the box of the references in each bin, and
 // their counts side by side (count[bin][axis], lane 3 unused), so that the
 // SAH sweep takes the three axes in the lanes of one SSE register.
+struct BinBox {
+  __m128 lo, hi;
+};
+
 template <int kBins>
 struct BinSet {
-  __m128 lo[3][kBins], hi[3][kBins];
+  BinBox box[3][kBins];
   alignas(16) int32_t count[kBins][4];
 
   void clear() {
     const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
     for (int axis = 0; axis < 3; ++axis)
-      for (int b = 0; b < kBins; ++b) lo[axis][b] = infinity, hi[axis][b] = minusInfinity;
+      for (int b = 0; b < kBins; ++b) box[axis][b] = {infinity, minusInfinity};
     std::memset(count, 0, sizeof(count));
   }
-  void add(int axis, int bin, __m128 referenceLo, __m128 referenceHi) {
-    lo[axis][bin] = _mm_min_ps(lo[axis][bin], referenceLo);
-    hi[axis][bin] = _mm_max_ps(hi[axis][bin], referenceHi);
-    ++count[bin][axis];
+  // Adds a reference to its bin of each axis. The bins' byte offsets come
+  // from the SIMD bin indices by shifts and adds in the lanes (one register
+  // move per axis and array, no scalar address arithmetic).
+  void add(__m128i bins, __m128 referenceLo, __m128 referenceHi) {
+    const __m128i boxOffset = _mm_add_epi32(_mm_slli_epi32(bins, 5),
+                                            _mm_setr_epi32(0, kBins * sizeof(BinBox), 2 * kBins * sizeof(BinBox), 0));
+    const __m128i countOffset = _mm_add_epi32(_mm_slli_epi32(bins, 4), _mm_setr_epi32(0, 4, 8, 0));
+    static_assert(sizeof(BinBox) == 32 && sizeof(count[0]) == 16);
+    char* const boxes = reinterpret_cast<char*>(box);
+    char* const counts = reinterpret_cast<char*>(count);
+    const auto extend = [&](uint32_t boxAt, uint32_t countAt) {
+      BinBox& bin = *reinterpret_cast<BinBox*>(boxes + boxAt);
+      bin.lo = _mm_min_ps(bin.lo, referenceLo);
+      bin.hi = _mm_max_ps(bin.hi, referenceHi);
+      ++*reinterpret_cast<int32_t*>(counts + countAt);
+    };
+    extend(uint32_t(_mm_cvtsi128_si32(boxOffset)), uint32_t(_mm_cvtsi128_si32(countOffset)));
+    extend(uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(boxOffset, 1))),
+           uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(countOffset, 1))));
+    extend(uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(boxOffset, 2))),
+           uint32_t(_mm_cvtsi128_si32(_mm_shuffle_epi32(countOffset, 2))));
   }
   void merge(const BinSet& other) {
     for (int axis = 0; axis < 3; ++axis)
       for (int b = 0; b < kBins; ++b) {
-        lo[axis][b] = _mm_min_ps(lo[axis][b], other.lo[axis][b]);
-        hi[axis][b] = _mm_max_ps(hi[axis][b], other.hi[axis][b]);
+        box[axis][b].lo = _mm_min_ps(box[axis][b].lo, other.box[axis][b].lo);
+        box[axis][b].hi = _mm_max_ps(box[axis][b].hi, other.box[axis][b].hi);
       }
     for (int b = 0; b < kBins; ++b)
       for (int axis = 0; axis < 3; ++axis) count[b][axis] += other.count[b][axis];
@@ -270,10 +291,7 @@ class Builder {
     bins.clear();
     if (twoSets) odd.clear();
     const auto add = [&binning](BinSet<kBins>& set, const PrimitiveReference& reference) {
-      const __m128i index = binning.bins(_mm_add_ps(reference.lo, reference.hi));
-      set.add(0, _mm_cvtsi128_si32(index), reference.lo, reference.hi);
-      set.add(1, _mm_cvtsi128_si32(_mm_shuffle_epi32(index, 1)), reference.lo, reference.hi);
-      set.add(2, _mm_cvtsi128_si32(_mm_shuffle_epi32(index, 2)), reference.lo, reference.hi);
+      set.add(binning.bins(_mm_add_ps(reference.lo, reference.hi)), reference.lo, reference.hi);
     };
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
     const PrimitiveReference* references = references_.get();
@@ -299,8 +317,8 @@ class Builder {
     uint32_t leftCount = 0;
     for (int b = 0; b < kBins; ++b) {
       const int side = b < split.bin ? 0 : 1;
-      lo[side] = _mm_min_ps(lo[side], bins.lo[split.axis][b]);
-      hi[side] = _mm_max_ps(hi[side], bins.hi[split.axis][b]);
+      lo[side] = _mm_min_ps(lo[side], bins.box[split.axis][b].lo);
+      hi[side] = _mm_max_ps(hi[side], bins.box[split.axis][b].hi);
       if (side == 0) leftCount += uint32_t(bins.count[b][split.axis]);
     }
     split.exact = true;
@@ -321,8 +339,8 @@ class Builder {
     __m128i count = _mm_setzero_si128();
     for (int b = kBins - 1; b > 0; --b) {
       for (int axis = 0; axis < 3; ++axis) {
-        lo[axis] = _mm_min_ps(lo[axis], bins.lo[axis][b]);
-        hi[axis] = _mm_max_ps(hi[axis], bins.hi[axis][b]);
+        lo[axis] = _mm_min_ps(lo[axis], bins.box[axis][b].lo);
+        hi[axis] = _mm_max_ps(hi[axis], bins.box[axis][b].hi);
       }
       count = _mm_add_epi32(count, _mm_load_si128(reinterpret_cast<const __m128i*>(bins.count[b])));
       rightCount[b] = count;
@@ -335,8 +353,8 @@ class Builder {
     const __m128i zero = _mm_setzero_si128();
     for (int b = 1; b < kBins; ++b) {
       for (int axis = 0; axis < 3; ++axis) {
-        lo[axis] = _mm_min_ps(lo[axis], bins.lo[axis][b - 1]);
-        hi[axis] = _mm_max_ps(hi[axis], bins.hi[axis][b - 1]);
+        lo[axis] = _mm_min_ps(lo[axis], bins.box[axis][b - 1].lo);
+        hi[axis] = _mm_max_ps(hi[axis], bins.box[axis][b - 1].hi);
       }
       count = _mm_add_epi32(count, _mm_load_si128(reinterpret_cast<const __m128i*>(bins.count[b - 1])));
       const __m128 cost = _mm_add_ps(_mm_mul_ps(halfAreas3(lo, hi), packets4(count)),
