@@ -596,7 +596,22 @@ class Builder {
   void writePackets() {
     out_.packets.resize(packetCount_);
     grid_traversal::TrianglePacket* packet = out_.packets.data();
-    for (const auto& [begin, end] : leafRanges_) {
+    const size_t leaves = leafRanges_.size();
+    // The mesh is read in the leaves' order, not the file's: its lines are
+    // prefetched a few leaves ahead, the indices first, the vertices once
+    // their indices have arrived.
+    constexpr size_t kIndicesAhead = 4, kVerticesAhead = 2;
+    for (size_t leaf = 0; leaf < leaves; ++leaf) {
+      if (leaf + kIndicesAhead < leaves)
+        for (uint32_t r = leafRanges_[leaf + kIndicesAhead].first; r < leafRanges_[leaf + kIndicesAhead].second; ++r)
+          _mm_prefetch(reinterpret_cast<const char*>(mesh_.indices + 3 * size_t(references_[r].primitive())), _MM_HINT_T0);
+      if (leaf + kVerticesAhead < leaves)
+        for (uint32_t r = leafRanges_[leaf + kVerticesAhead].first; r < leafRanges_[leaf + kVerticesAhead].second; ++r) {
+          const uint32_t* corner = mesh_.indices + 3 * size_t(references_[r].primitive());
+          for (int vertex = 0; vertex < 3; ++vertex)
+            _mm_prefetch(reinterpret_cast<const char*>(mesh_.positions + 3 * size_t(corner[vertex])), _MM_HINT_T0);
+        }
+      const auto [begin, end] = leafRanges_[leaf];
       for (uint32_t start = begin; start < end; start += kPacketSize, ++packet) {
         __m128 rows[3][kPacketSize];
         for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
