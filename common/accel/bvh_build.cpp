@@ -19,6 +19,7 @@
 // bins and partitions each triangle of the levels' ranges a bounded number
 // of times.
 #include <emmintrin.h>
+#include <immintrin.h>
 
 #include <algorithm>
 #include <cmath>
@@ -175,6 +176,102 @@ struct Binning {
   }
 };
 
+// Bins the references begin, begin + stride, ... of the array (alternate
+// ones into odd when twoSets), merged into bins at the end.
+template <int kBins>
+void binReferences(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, const Binning& binning,
+                   const PrimitiveReference* references, uint32_t begin, uint32_t end, uint32_t stride) {
+  bins.clear();
+  if (twoSets) odd.clear();
+  const auto add = [&binning](BinSet<kBins>& set, const PrimitiveReference& reference)
+                       __attribute__((always_inline)) {
+    set.add(binning.bins(_mm_add_ps(reference.lo, reference.hi)), reference.lo, reference.hi);
+  };
+  uint32_t i = begin;
+  for (; twoSets && i + stride < end; i += 2 * stride) {
+    add(bins, references[i]);
+    add(odd, references[i + stride]);
+  }
+  for (; i < end; i += stride) add(bins, references[i]);
+  if (twoSets) bins.merge(odd);
+}
+
+// binReferences with AVX, where the processor has it (chosen at run time).
+const bool kAvxBinning = __builtin_cpu_supports("avx");
+
+}  // namespace
+}  // namespace portico
+
+// Only the binning loop below is compiled for AVX: everything it calls is
+// defined above, as baseline code.
+#pragma GCC push_options
+#pragma GCC target("avx")
+
+namespace portico {
+namespace {
+
+// The same bins as binReferences, each bin's box updated by one 8-lane
+// minimum: the bin holds (lo, -hi) while binning, so the minimum of -hi is
+// minus the maximum of hi, exactly.
+template <int kBins>
+void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, const Binning& rangeBinning,
+                      const PrimitiveReference* references, uint32_t begin, uint32_t end, uint32_t stride) {
+  const Binning binning = rangeBinning;   // a copy the bins' stores cannot alias
+  static_assert(sizeof(BinBox) == sizeof(__m256) && sizeof(PrimitiveReference) == sizeof(__m256));
+  const __m256 signOfHi = _mm256_setr_ps(0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f);
+  const auto clear = [&](BinSet<kBins>& set) {
+    const __m256 infinity = _mm256_set1_ps(kInfinity);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) _mm256_store_ps(reinterpret_cast<float*>(&set.box[axis][b]), infinity);
+    std::memset(set.count, 0, sizeof(set.count));
+  };
+  const auto restoreHi = [&](BinSet<kBins>& set) {
+    for (int axis = 0; axis < 3; ++axis)
+      for (int b = 0; b < kBins; ++b) {
+        float* box = reinterpret_cast<float*>(&set.box[axis][b]);
+        _mm256_store_ps(box, _mm256_xor_ps(_mm256_load_ps(box), signOfHi));
+      }
+  };
+  const auto add = [&](BinSet<kBins>& set, const PrimitiveReference& reference) __attribute__((always_inline)) {
+    const __m128i offsets = binning.bins(_mm_add_ps(reference.lo, reference.hi));
+    const __m256 box = _mm256_xor_ps(_mm256_load_ps(reinterpret_cast<const float*>(&reference)), signOfHi);
+    const __m128i boxOffset = _mm_add_epi32(_mm_slli_epi32(offsets, 5),
+                                            _mm_setr_epi32(0, kBins * sizeof(BinBox), 2 * kBins * sizeof(BinBox), 0));
+    const __m128i countOffset = _mm_add_epi32(_mm_slli_epi32(offsets, 4), _mm_setr_epi32(0, 4, 8, 0));
+    char* const boxes = reinterpret_cast<char*>(set.box);
+    char* const counts = reinterpret_cast<char*>(set.count);
+    const auto extend = [&](uint32_t boxAt, uint32_t countAt) {
+      float* bin = reinterpret_cast<float*>(boxes + boxAt);
+      _mm256_store_ps(bin, _mm256_min_ps(_mm256_load_ps(bin), box));
+      ++*reinterpret_cast<int32_t*>(counts + countAt);
+    };
+    extend(uint32_t(_mm_cvtsi128_si32(boxOffset)), uint32_t(_mm_cvtsi128_si32(countOffset)));
+    extend(uint32_t(_mm_extract_epi32(boxOffset, 1)), uint32_t(_mm_extract_epi32(countOffset, 1)));
+    extend(uint32_t(_mm_extract_epi32(boxOffset, 2)), uint32_t(_mm_extract_epi32(countOffset, 2)));
+  };
+  clear(bins);
+  if (twoSets) clear(odd);
+  uint32_t i = begin;
+  for (; twoSets && i + stride < end; i += 2 * stride) {
+    add(bins, references[i]);
+    add(odd, references[i + stride]);
+  }
+  for (; i < end; i += stride) add(bins, references[i]);
+  restoreHi(bins);
+  if (twoSets) {
+    restoreHi(odd);
+    bins.merge(odd);
+  }
+}
+
+}  // namespace
+}  // namespace portico
+
+#pragma GCC pop_options
+
+namespace portico {
+namespace {
+
 struct Split {
   int axis = -1;
   int bins = kBins;     // per axis
@@ -287,21 +384,12 @@ class Builder {
     // references (neighbours in space) often fall in the same bins, and one
     // set would chain every update on the one before.
     const bool twoSets = range.count() >= kTwoBinSets;
-    BinSet<kBins> bins, odd;
-    bins.clear();
-    if (twoSets) odd.clear();
-    const auto add = [&binning](BinSet<kBins>& set, const PrimitiveReference& reference) {
-      set.add(binning.bins(_mm_add_ps(reference.lo, reference.hi)), reference.lo, reference.hi);
-    };
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
-    const PrimitiveReference* references = references_.get();
-    uint32_t i = range.begin;
-    for (; twoSets && i + stride < range.end; i += 2 * stride) {
-      add(bins, references[i]);
-      add(odd, references[i + stride]);
-    }
-    for (; i < range.end; i += stride) add(bins, references[i]);
-    if (twoSets) bins.merge(odd);
+    BinSet<kBins> bins, odd;
+    if (kAvxBinning)
+      binReferencesAvx(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
+    else
+      binReferences(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
     Split best = sweep(bins);
     best.bins = kBins;
     if (stride == 1 && best.axis >= 0) sidesOf(bins, best);
