@@ -314,6 +314,8 @@ class Builder {
     if (root.count() == 0) return;
     // About what the furnished halls need (leaves of ~6 triangles in ~2 packets).
     out_.nodes.reserve(size_t(root.count()) / (2 * Width) + 2);
+    // At most one leaf a triangle; pages reserved and never written cost nothing.
+    leafRanges_.reserve(root.count());
     root.leaf = false;   // the root is always a node, even over one leaf
     alignas(16) float lo[4], hi[4];
     _mm_store_ps(lo, root.lo);
@@ -595,6 +597,13 @@ class Builder {
     right.begin = middle, right.end = range.end;
     left.lo = split.leftLo, left.hi = split.leftHi;
     right.lo = split.rightLo, right.hi = split.rightHi;
+    boundCentroids(range, split, left, right);
+  }
+
+  // The sides' centroid boxes, bounded rather than measured: the parent's,
+  // cut to twice the side's box (a centroid, lo + hi, lies within it) and,
+  // along the split axis, to the plane.
+  static void boundCentroids(const Range& range, const Split& split, Range& left, Range& right) {
     const auto centroidBounds = [&range](Range& side) {
       side.centroidLo = _mm_max_ps(range.centroidLo, _mm_add_ps(side.lo, side.lo));
       side.centroidHi = _mm_min_ps(range.centroidHi, _mm_add_ps(side.hi, side.hi));
@@ -682,8 +691,7 @@ class Builder {
   // vertex of the four triangles loaded as a row and transposed into the
   // packet's columns.
   void writePackets() {
-    out_.packets.resize(packetCount_);
-    grid_traversal::TrianglePacket* packet = out_.packets.data();
+    out_.packets.reserve(packetCount_);
     const size_t leaves = leafRanges_.size();
     // The mesh is read in the leaves' order, not the file's: its lines are
     // prefetched a few leaves ahead, the indices first, the vertices once
@@ -700,18 +708,20 @@ class Builder {
             _mm_prefetch(reinterpret_cast<const char*>(mesh_.positions + 3 * size_t(corner[vertex])), _MM_HINT_T0);
         }
       const auto [begin, end] = leafRanges_[leaf];
-      for (uint32_t start = begin; start < end; start += kPacketSize, ++packet) {
+      for (uint32_t start = begin; start < end; start += kPacketSize) {
+        grid_traversal::TrianglePacket packet;
         __m128 rows[3][kPacketSize];
         for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
           const uint32_t primitive = references_[std::min(start + lane, end - 1)].primitive();
           const uint32_t* corner = mesh_.indices + 3 * size_t(primitive);
           for (int vertex = 0; vertex < 3; ++vertex) rows[vertex][lane] = loadVertex(corner[vertex]);
-          packet->primitive[lane] = primitive;
+          packet.primitive[lane] = primitive;
         }
         for (int vertex = 0; vertex < 3; ++vertex) {
           _MM_TRANSPOSE4_PS(rows[vertex][0], rows[vertex][1], rows[vertex][2], rows[vertex][3]);
-          for (int axis = 0; axis < 3; ++axis) _mm_store_ps(packet->v[vertex][axis], rows[vertex][axis]);
+          for (int axis = 0; axis < 3; ++axis) _mm_store_ps(packet.v[vertex][axis], rows[vertex][axis]);
         }
+        out_.packets.push_back(packet);
       }
     }
   }
