@@ -14,7 +14,10 @@
 // leaf unless a split is predicted cheaper (in 8-wide trees, whose AVX2
 // traversal tests two packets at once, always a leaf). A range whose
 // centroids all fall in one bin, or one deeper than kBvhForcedMedianDepth,
-// is cut at its median instead. The leaves' packets are written once the
+// is cut at its median instead. A range binned in full knows its sides'
+// boxes and counts from the bins, so its partition only moves references
+// (partitionByCount); a sampled one measures them while partitioning. The
+// leaves' packets are written once the
 // tree is built, into one array of the exact size. O(n log n): each level
 // bins and partitions each triangle of the levels' ranges a bounded number
 // of times.
