@@ -114,11 +114,16 @@ struct BinSet {
   // Adds a reference to its bin of each axis. The bins' byte offsets come
   // from the SIMD bin indices by shifts and adds in the lanes (one register
   // move per axis and array, no scalar address arithmetic).
-  void add(__m128i bins, __m128 referenceLo, __m128 referenceHi) {
-    const __m128i boxOffset = _mm_add_epi32(_mm_slli_epi32(bins, 5),
-                                            _mm_setr_epi32(0, kBins * sizeof(BinBox), 2 * kBins * sizeof(BinBox), 0));
-    const __m128i countOffset = _mm_add_epi32(_mm_slli_epi32(bins, 4), _mm_setr_epi32(0, 4, 8, 0));
+  // The byte offsets in box and in count of a reference's bins (lanes 0-2: axes).
+  static void offsetsOf(__m128i bins, __m128i& boxOffset, __m128i& countOffset) {
     static_assert(sizeof(BinBox) == 32 && sizeof(count[0]) == 16);
+    boxOffset = _mm_add_epi32(_mm_slli_epi32(bins, 5),
+                              _mm_setr_epi32(0, kBins * sizeof(BinBox), 2 * kBins * sizeof(BinBox), 0));
+    countOffset = _mm_add_epi32(_mm_slli_epi32(bins, 4), _mm_setr_epi32(0, 4, 8, 0));
+  }
+  void add(__m128i bins, __m128 referenceLo, __m128 referenceHi) {
+    __m128i boxOffset, countOffset;
+    offsetsOf(bins, boxOffset, countOffset);
     char* const boxes = reinterpret_cast<char*>(box);
     char* const counts = reinterpret_cast<char*>(count);
     const auto extend = [&](uint32_t boxAt, uint32_t countAt) {
@@ -236,11 +241,9 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
       }
   };
   const auto add = [&](BinSet<kBins>& set, const PrimitiveReference& reference) __attribute__((always_inline)) {
-    const __m128i offsets = binning.bins(_mm_add_ps(reference.lo, reference.hi));
     const __m256 box = _mm256_xor_ps(_mm256_load_ps(reinterpret_cast<const float*>(&reference)), signOfHi);
-    const __m128i boxOffset = _mm_add_epi32(_mm_slli_epi32(offsets, 5),
-                                            _mm_setr_epi32(0, kBins * sizeof(BinBox), 2 * kBins * sizeof(BinBox), 0));
-    const __m128i countOffset = _mm_add_epi32(_mm_slli_epi32(offsets, 4), _mm_setr_epi32(0, 4, 8, 0));
+    __m128i boxOffset, countOffset;
+    BinSet<kBins>::offsetsOf(binning.bins(_mm_add_ps(reference.lo, reference.hi)), boxOffset, countOffset);
     char* const boxes = reinterpret_cast<char*>(set.box);
     char* const counts = reinterpret_cast<char*>(set.count);
     const auto extend = [&](uint32_t boxAt, uint32_t countAt) {
@@ -368,7 +371,6 @@ class Builder {
       centroidLo = _mm_min_ps(centroidLo, centroid);
       centroidHi = _mm_max_ps(centroidHi, centroid);
     }
-    referenceCount_ = count;
     Range range;
     range.begin = 0;
     range.end = count;
@@ -731,8 +733,7 @@ class Builder {
 
   const MeshView& mesh_;
   BvhData<Width>& out_;
-  std::unique_ptr<PrimitiveReference[]> references_;   // referenceCount_ of them
-  uint32_t referenceCount_ = 0;
+  std::unique_ptr<PrimitiveReference[]> references_;   // one per triangle of the mesh, the held ones first
   std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's references
   uint32_t packetCount_ = 0;
 };
