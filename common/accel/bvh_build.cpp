@@ -25,6 +25,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <memory>
@@ -32,6 +33,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/accel/bvh_build.h"
 #include "common/accel/bvh_node.h"
 #include "common/accel/triangle_intersect.h"
 
@@ -205,7 +207,8 @@ void binReferences(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, const 
 }
 
 // binReferences with AVX, where the processor has it (chosen at run time).
-const bool kAvxBinning = __builtin_cpu_supports("avx");
+const bool kAvxSupported = __builtin_cpu_supports("avx");
+std::atomic<bool> avxBinning{kAvxSupported};
 
 }  // namespace
 }  // namespace portico
@@ -393,7 +396,7 @@ class Builder {
     const bool twoSets = range.count() >= kTwoBinSets;
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
     BinSet<kBins> bins, odd;
-    if (kAvxBinning)
+    if (avxBinning.load(std::memory_order_relaxed))
       binReferencesAvx(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
     else
       binReferences(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
@@ -739,6 +742,10 @@ class Builder {
 };
 
 }  // namespace
+
+bool bvhAvxBinningInUse() { return avxBinning.load(std::memory_order_relaxed); }
+
+void useBvhAvxBinning(bool use) { avxBinning.store(use && kAvxSupported, std::memory_order_relaxed); }
 
 template <int Width>
 BvhData<Width> buildBvh(const MeshView& mesh) {
