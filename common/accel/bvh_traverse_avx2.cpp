@@ -15,7 +15,7 @@
 // infinite), which leaves the running entry and exit as they were: the axis
 // is then not used to cull, and the child is visited; an unused slot's
 // empty box is still culled by the other axes (+inf entry, -inf exit), as
-// long as origin' * inverse is finite there (bvhAvx2Suits).
+// long as origin' * inverse is finite there (checked by WideBvh::traverse).
 #include <emmintrin.h>
 #include <immintrin.h>
 
@@ -184,12 +184,13 @@ struct Avx2Boxes {
 }  // namespace
 
 template <bool AnyHit>
-bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best) {
-  return traverseBvh<8, AnyHit, Avx2Boxes>(tree, ray, slabs, best);
+bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, const WatertightRay& frame,
+                      Hit& best) {
+  return traverseBvh<8, AnyHit, Avx2Boxes>(tree, ray, slabs, frame, best);
 }
 
-template bool traverseBvh8Avx2<false>(const BvhData<8>&, const Ray&, const BvhSlabs&, Hit&);
-template bool traverseBvh8Avx2<true>(const BvhData<8>&, const Ray&, const BvhSlabs&, Hit&);
+template bool traverseBvh8Avx2<false>(const BvhData<8>&, const Ray&, const BvhSlabs&, const WatertightRay&, Hit&);
+template bool traverseBvh8Avx2<true>(const BvhData<8>&, const Ray&, const BvhSlabs&, const WatertightRay&, Hit&);
 
 }  // namespace portico
 

@@ -142,10 +142,10 @@ inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversa
 
 // Nearest hit (or, with AnyHit, any hit) of the ray in the tree, from the
 // root; best holds what was found. The ray is finite, with tMin < tMax,
-// and slabs hold its constants.
+// and slabs and frame hold its constants.
 template <int Width, bool AnyHit, class Boxes>
-[[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best) {
-  const WatertightRay frame(ray.direction);
+[[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs,
+                                   const WatertightRay& frame, Hit& best) {
   const Boxes boxes(slabs, grid_traversal::PacketRay(frame, ray));
   const BvhNode<Width>* const nodes = tree.nodes.data();
   const grid_traversal::TrianglePacket* const packets = tree.packets.data();
