@@ -148,24 +148,25 @@ inline bool testLeaf8(const grid_traversal::TrianglePacket* packets, uint32_t ch
 
 struct Avx2Boxes {
   __m256 nearScaled[3], farScaled[3], inverse[3];   // origin' * inverse, near and far
-  int nearSide[3];
+  int nearBound[3], farBound[3];                    // float offsets in a node of each axis's near and far bounds
   PacketRay8 packetRay;
   Avx2Boxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay4) : packetRay(packetRay4) {
     for (int axis = 0; axis < 3; ++axis) {
       nearScaled[axis] = _mm256_set1_ps(slabs.nearOrigin[axis] * slabs.inverse[axis]);
       farScaled[axis] = _mm256_set1_ps(slabs.farOrigin[axis] * slabs.inverse[axis]);
       inverse[axis] = _mm256_set1_ps(slabs.inverse[axis]);
-      nearSide[axis] = slabs.nearSide[axis];
+      nearBound[axis] = (2 * axis + slabs.nearSide[axis]) * 8;
+      farBound[axis] = (2 * axis + 1 - slabs.nearSide[axis]) * 8;
     }
   }
   // As SseBoxes::crossed4, eight boxes at once, each slab in one fused step.
   unsigned crossed(const BvhNode<8>& node, float tStart, float tLimit, float* entries) const {
+    const float* const bounds = &node.box[0][0][0];
     __m256 enter = _mm256_set1_ps(tStart), exit = _mm256_set1_ps(tLimit);
+#pragma GCC unroll 3
     for (int axis = 0; axis < 3; ++axis) {
-      const __m256 nearBound = _mm256_load_ps(node.box[axis][nearSide[axis]]);
-      const __m256 farBound = _mm256_load_ps(node.box[axis][1 - nearSide[axis]]);
-      const __m256 tNear = _mm256_fmsub_ps(nearBound, inverse[axis], nearScaled[axis]);
-      const __m256 tFar = _mm256_fmsub_ps(farBound, inverse[axis], farScaled[axis]);
+      const __m256 tNear = _mm256_fmsub_ps(_mm256_load_ps(bounds + nearBound[axis]), inverse[axis], nearScaled[axis]);
+      const __m256 tFar = _mm256_fmsub_ps(_mm256_load_ps(bounds + farBound[axis]), inverse[axis], farScaled[axis]);
       // NaN keeps the second operand, as with SSE.
       enter = _mm256_max_ps(tNear, enter);
       exit = _mm256_min_ps(tFar, exit);

@@ -160,8 +160,23 @@ template <int Width, bool AnyHit, class Boxes>
       float entries[Width];
       unsigned crossed = boxes.crossed(node, ray.tMin, best.t < ray.tMax ? best.t : ray.tMax, entries);
       if (crossed == 0) goto nextStacked;
-      if ((crossed & (crossed - 1)) == 0) {
-        current = node.child[std::countr_zero(crossed)];
+      const int nearest = std::countr_zero(crossed);
+      const unsigned others = crossed & (crossed - 1);
+      if (others == 0) {
+        current = node.child[nearest];
+        continue;
+      }
+      if ((others & (others - 1)) == 0) {
+        // Two: the farther stacked (its cache misses started now), the nearer next.
+        const int second = std::countr_zero(others);
+        const bool secondNearer = entries[second] < entries[nearest];
+        const int nearK = secondNearer ? second : nearest, farK = secondNearer ? nearest : second;
+        const BvhStackEntry far{node.child[farK], entries[farK]};
+        __builtin_prefetch(childAddress(nodes, packets, far.child));
+        __builtin_prefetch(childAddress(nodes, packets, far.child) + 64);
+        __builtin_prefetch(childAddress(nodes, packets, far.child) + 128);
+        stack[pending++] = far;
+        current = node.child[nearK];
         continue;
       }
       // Two or more: sorted farthest first onto the stack; the nearest is
