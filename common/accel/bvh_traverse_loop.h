@@ -175,6 +175,7 @@ template <int Width, bool AnyHit, class Boxes>
         __builtin_prefetch(childAddress(nodes, packets, far.child));
         __builtin_prefetch(childAddress(nodes, packets, far.child) + 64);
         __builtin_prefetch(childAddress(nodes, packets, far.child) + 128);
+        __builtin_prefetch(childAddress(nodes, packets, far.child) + 192);
         stack[pending++] = far;
         current = node.child[nearK];
         continue;
@@ -189,6 +190,7 @@ template <int Width, bool AnyHit, class Boxes>
         __builtin_prefetch(childAddress(nodes, packets, entry.child));
         __builtin_prefetch(childAddress(nodes, packets, entry.child) + 64);
         __builtin_prefetch(childAddress(nodes, packets, entry.child) + 128);
+        __builtin_prefetch(childAddress(nodes, packets, entry.child) + 192);
         BvhStackEntry* slot = stack + pending++;
         while (slot != first && slot[-1].entry < entry.entry) {
           *slot = slot[-1];
