@@ -72,11 +72,7 @@ struct PacketRay8 {
 };
 
 // Bit k set where lane k of the mask is (every lane all ones or zero).
-inline unsigned laneBits8(Int8 mask) {
-  const grid_traversal::PacketLanes::Int4 low = __builtin_shufflevector(mask, mask, 0, 1, 2, 3);
-  const grid_traversal::PacketLanes::Int4 high = __builtin_shufflevector(mask, mask, 4, 5, 6, 7);
-  return grid_traversal::laneBits(low) | grid_traversal::laneBits(high) << 4;
-}
+inline unsigned laneBits8(Int8 mask) { return unsigned(_mm256_movemask_ps(reinterpret_cast<__m256>(mask))); }
 
 struct PacketLanes8 {
   Float8 t, det, V, W;
