@@ -108,8 +108,9 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
   // a zero component.
   const __m128 inverses = _mm_div_ps(_mm_set1_ps(1.0f), _mm_or_ps(direction, _mm_andnot_ps(axes, _mm_set1_ps(1.0f))));
   const __m128 magnitudes = _mm_and_ps(inverses, absolute);
-  const __m128 usable = _mm_or_ps(zero, _mm_and_ps(_mm_cmpge_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::min())),
-                                                   _mm_cmple_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::max()))));
+  const __m128 normal = _mm_and_ps(_mm_cmpge_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::min())),
+                                   _mm_cmple_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::max())));
+  const __m128 usable = _mm_or_ps(zero, normal);
   if (_mm_movemask_ps(usable) != 0xf) return testEveryPacket<AnyHit>(ray, best);
 
   // The margin (traversal_margin.h, the same value), toward the near side
@@ -149,7 +150,8 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
     const __m128 infinite = _mm_set1_ps(kInfinity);
     const __m128 overflow = _mm_andnot_ps(zero, _mm_or_ps(_mm_cmpnlt_ps(_mm_and_ps(nearScaled, absolute), infinite),
                                                           _mm_cmpnlt_ps(_mm_and_ps(farScaled, absolute), infinite)));
-    if (bvhAvx2InUse() && _mm_movemask_ps(overflow) == 0) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, frame, best);
+    if (bvhAvx2InUse() && _mm_movemask_ps(overflow) == 0)
+      return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, frame, best);
   }
   return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, frame, best);
 }
