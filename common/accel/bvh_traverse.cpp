@@ -63,6 +63,15 @@ WideBvh<Width>::WideBvh(const MeshView& mesh, std::string_view spec) {
                  tree_.packets.capacity() * sizeof(grid_traversal::TrianglePacket);
 }
 
+namespace {
+// The largest of lanes 0-2 (lane 3 is zero: values are not negative).
+inline float largestLane(__m128 v) {
+  v = _mm_max_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(2, 3, 0, 1)));
+  v = _mm_max_ps(v, _mm_shuffle_ps(v, v, _MM_SHUFFLE(1, 0, 3, 2)));
+  return _mm_cvtss_f32(v);
+}
+}  // namespace
+
 template <int Width>
 template <bool AnyHit>
 bool WideBvh<Width>::testEveryPacket(const Ray& ray, Hit& best) const {
@@ -80,39 +89,71 @@ bool WideBvh<Width>::testEveryPacket(const Ray& ray, Hit& best) const {
 template <int Width>
 template <bool AnyHit>
 bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
-  if (tree_.nodes.empty() || !hasFiniteOriginAndDirection(ray) || !(ray.tMin < ray.tMax)) return false;
-  const float origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
-  const float direction[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
-  if (direction[0] == 0.0f && direction[1] == 0.0f && direction[2] == 0.0f) return false;
+  if (tree_.nodes.empty() || !(ray.tMin < ray.tMax)) return false;
+  // Per-ray constants, three axes to a register (lane 3 unused: zero
+  // origin, direction 1). Loads of four floats from the ray's origin and
+  // direction (the fourth is the next member) and from the root's corners.
+  const __m128 axes = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+  const __m128 absolute = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+  const __m128 origin = _mm_and_ps(_mm_loadu_ps(&ray.origin.x), axes);
+  const __m128 direction = _mm_and_ps(_mm_loadu_ps(&ray.direction.x), axes);
+  // Finite: x - x is 0, not NaN.
+  if (_mm_movemask_ps(_mm_cmpunord_ps(_mm_sub_ps(origin, origin), _mm_sub_ps(direction, direction))) != 0)
+    return false;
+  const __m128 zero = _mm_cmpeq_ps(direction, _mm_setzero_ps());
+  if (_mm_movemask_ps(zero) == 0xf) return false;   // a zero direction
 
-  // Per-ray constants: reciprocals, near sides, and the margin.
   // The three reciprocals in one division (the same correctly rounded
   // quotients as three scalar ones); each must be normal, or infinite from
   // a zero component.
-  BvhSlabs slabs;
-  const __m128 directions = _mm_setr_ps(direction[0], direction[1], direction[2], 1.0f);
-  const __m128 inverses = _mm_div_ps(_mm_set1_ps(1.0f), directions);
-  const __m128 magnitudes = _mm_andnot_ps(_mm_set1_ps(-0.0f), inverses);
-  const __m128 usable = _mm_or_ps(_mm_cmpeq_ps(directions, _mm_setzero_ps()),
-                                  _mm_and_ps(_mm_cmpge_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::min())),
-                                             _mm_cmple_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::max()))));
+  const __m128 inverses = _mm_div_ps(_mm_set1_ps(1.0f), _mm_or_ps(direction, _mm_andnot_ps(axes, _mm_set1_ps(1.0f))));
+  const __m128 magnitudes = _mm_and_ps(inverses, absolute);
+  const __m128 normal = _mm_and_ps(_mm_cmpge_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::min())),
+                                   _mm_cmple_ps(magnitudes, _mm_set1_ps(std::numeric_limits<float>::max())));
+  const __m128 usable = _mm_or_ps(zero, normal);
   if (_mm_movemask_ps(usable) != 0xf) return testEveryPacket<AnyHit>(ray, best);
-  alignas(16) float inverse[4];
-  _mm_store_ps(inverse, inverses);
-  for (int axis = 0; axis < 3; ++axis) {
-    slabs.inverse[axis] = inverse[axis];
-    slabs.nearSide[axis] = std::signbit(direction[axis]) ? 1 : 0;
-  }
-  const float margin = traversalMargin(tree_.bounds, origin);
-  for (int axis = 0; axis < 3; ++axis) {
-    const float towardNear = slabs.nearSide[axis] ? -margin : margin;   // lowers the near bound's t
-    slabs.nearOrigin[axis] = origin[axis] + towardNear;
-    slabs.farOrigin[axis] = origin[axis] - towardNear;
-  }
+
+  // The margin (traversal_margin.h, the same value), toward the near side
+  // of each slab: origin + margin for the near bounds, - margin for the far.
+  const __m128 low = _mm_loadu_ps(&tree_.bounds.lo.x);                 // lo.x lo.y lo.z hi.x
+  const __m128 highShifted = _mm_loadu_ps(&tree_.bounds.lo.z);         // lo.z hi.x hi.y hi.z
+  const __m128 high = _mm_shuffle_ps(highShifted, highShifted, _MM_SHUFFLE(0, 3, 2, 1));
+  const __m128 reach = _mm_and_ps(_mm_max_ps(_mm_and_ps(_mm_sub_ps(low, origin), absolute),
+                                             _mm_and_ps(_mm_sub_ps(high, origin), absolute)), axes);
+  const float margin = traversalMargin(largestLane(reach), largestLane(_mm_and_ps(origin, absolute)));
+  const __m128 signs = _mm_andnot_ps(absolute, direction);
+  const __m128 towardNear = _mm_xor_ps(_mm_set1_ps(margin), signs);   // lowers the near bound's t
+  BvhSlabs slabs;
+  _mm_storeu_ps(slabs.nearOrigin, _mm_add_ps(origin, towardNear));
+  _mm_storeu_ps(slabs.farOrigin, _mm_sub_ps(origin, towardNear));
+  _mm_storeu_ps(slabs.inverse, inverses);
+  const int negative = _mm_movemask_ps(signs);
+  for (int axis = 0; axis < 3; ++axis) slabs.nearSide[axis] = (negative >> axis) & 1;
+
+  // The watertight test's frame, its quotients in one division beside the
+  // reciprocals': Sz = 1 / d[kz] is a reciprocal already.
+  WatertightRay frame;
+  frame.chooseAxes(ray.direction);
+  const float d[3] = {ray.direction.x, ray.direction.y, ray.direction.z};
+  alignas(16) float shear[4];
+  _mm_store_ps(shear, _mm_div_ps(_mm_setr_ps(d[frame.kx], d[frame.ky], 1.0f, 1.0f),
+                                 _mm_setr_ps(d[frame.kz], d[frame.kz], 1.0f, 1.0f)));
+  frame.Sx = shear[0];
+  frame.Sy = shear[1];
+  frame.Sz = slabs.inverse[frame.kz];
+
   if constexpr (Width == 8) {
-    if (bvhAvx2InUse() && bvhAvx2Suits(slabs)) return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, best);
+    // The AVX2 test's origin' x inverse must be finite on every axis whose
+    // inverse is (see bvh_traverse_avx2.cpp).
+    const __m128 nearScaled = _mm_mul_ps(_mm_loadu_ps(slabs.nearOrigin), inverses);
+    const __m128 farScaled = _mm_mul_ps(_mm_loadu_ps(slabs.farOrigin), inverses);
+    const __m128 infinite = _mm_set1_ps(kInfinity);
+    const __m128 overflow = _mm_andnot_ps(zero, _mm_or_ps(_mm_cmpnlt_ps(_mm_and_ps(nearScaled, absolute), infinite),
+                                                          _mm_cmpnlt_ps(_mm_and_ps(farScaled, absolute), infinite)));
+    if (bvhAvx2InUse() && _mm_movemask_ps(overflow) == 0)
+      return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, frame, best);
   }
-  return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, best);
+  return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, frame, best);
 }
 
 template <int Width>

@@ -15,7 +15,7 @@
 // infinite), which leaves the running entry and exit as they were: the axis
 // is then not used to cull, and the child is visited; an unused slot's
 // empty box is still culled by the other axes (+inf entry, -inf exit), as
-// long as origin' * inverse is finite there (bvhAvx2Suits).
+// long as origin' * inverse is finite there (checked by WideBvh::traverse).
 #include <emmintrin.h>
 #include <immintrin.h>
 
@@ -72,11 +72,7 @@ struct PacketRay8 {
 };
 
 // Bit k set where lane k of the mask is (every lane all ones or zero).
-inline unsigned laneBits8(Int8 mask) {
-  const grid_traversal::PacketLanes::Int4 low = __builtin_shufflevector(mask, mask, 0, 1, 2, 3);
-  const grid_traversal::PacketLanes::Int4 high = __builtin_shufflevector(mask, mask, 4, 5, 6, 7);
-  return grid_traversal::laneBits(low) | grid_traversal::laneBits(high) << 4;
-}
+inline unsigned laneBits8(Int8 mask) { return unsigned(_mm256_movemask_ps(reinterpret_cast<__m256>(mask))); }
 
 struct PacketLanes8 {
   Float8 t, det, V, W;
@@ -148,24 +144,25 @@ inline bool testLeaf8(const grid_traversal::TrianglePacket* packets, uint32_t ch
 
 struct Avx2Boxes {
   __m256 nearScaled[3], farScaled[3], inverse[3];   // origin' * inverse, near and far
-  int nearSide[3];
+  int nearBound[3], farBound[3];                    // float offsets in a node of each axis's near and far bounds
   PacketRay8 packetRay;
   Avx2Boxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay4) : packetRay(packetRay4) {
     for (int axis = 0; axis < 3; ++axis) {
       nearScaled[axis] = _mm256_set1_ps(slabs.nearOrigin[axis] * slabs.inverse[axis]);
       farScaled[axis] = _mm256_set1_ps(slabs.farOrigin[axis] * slabs.inverse[axis]);
       inverse[axis] = _mm256_set1_ps(slabs.inverse[axis]);
-      nearSide[axis] = slabs.nearSide[axis];
+      nearBound[axis] = (2 * axis + slabs.nearSide[axis]) * 8;
+      farBound[axis] = (2 * axis + 1 - slabs.nearSide[axis]) * 8;
     }
   }
   // As SseBoxes::crossed4, eight boxes at once, each slab in one fused step.
   unsigned crossed(const BvhNode<8>& node, float tStart, float tLimit, float* entries) const {
+    const float* const bounds = &node.box[0][0][0];
     __m256 enter = _mm256_set1_ps(tStart), exit = _mm256_set1_ps(tLimit);
+#pragma GCC unroll 3
     for (int axis = 0; axis < 3; ++axis) {
-      const __m256 nearBound = _mm256_load_ps(node.box[axis][nearSide[axis]]);
-      const __m256 farBound = _mm256_load_ps(node.box[axis][1 - nearSide[axis]]);
-      const __m256 tNear = _mm256_fmsub_ps(nearBound, inverse[axis], nearScaled[axis]);
-      const __m256 tFar = _mm256_fmsub_ps(farBound, inverse[axis], farScaled[axis]);
+      const __m256 tNear = _mm256_fmsub_ps(_mm256_load_ps(bounds + nearBound[axis]), inverse[axis], nearScaled[axis]);
+      const __m256 tFar = _mm256_fmsub_ps(_mm256_load_ps(bounds + farBound[axis]), inverse[axis], farScaled[axis]);
       // NaN keeps the second operand, as with SSE.
       enter = _mm256_max_ps(tNear, enter);
       exit = _mm256_min_ps(tFar, exit);
@@ -184,12 +181,13 @@ struct Avx2Boxes {
 }  // namespace
 
 template <bool AnyHit>
-bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best) {
-  return traverseBvh<8, AnyHit, Avx2Boxes>(tree, ray, slabs, best);
+bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, const WatertightRay& frame,
+                      Hit& best) {
+  return traverseBvh<8, AnyHit, Avx2Boxes>(tree, ray, slabs, frame, best);
 }
 
-template bool traverseBvh8Avx2<false>(const BvhData<8>&, const Ray&, const BvhSlabs&, Hit&);
-template bool traverseBvh8Avx2<true>(const BvhData<8>&, const Ray&, const BvhSlabs&, Hit&);
+template bool traverseBvh8Avx2<false>(const BvhData<8>&, const Ray&, const BvhSlabs&, const WatertightRay&, Hit&);
+template bool traverseBvh8Avx2<true>(const BvhData<8>&, const Ray&, const BvhSlabs&, const WatertightRay&, Hit&);
 
 }  // namespace portico
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/accel/bvh_node.h"
+#include "common/accel/triangle_intersect.h"
 #include "common/ray.h"
 
 namespace portico {
@@ -13,8 +14,9 @@ namespace portico {
 // inverse, origin' = origin + margin toward the near side for the near
 // bounds and away from it for the far bounds, the near bound being the low
 // one when the direction is positive.
+// Lane 3 of each array is padding (written by four-lane stores).
 struct BvhSlabs {
-  float nearOrigin[3], farOrigin[3], inverse[3];
+  float nearOrigin[4], farOrigin[4], inverse[4];
   int nearSide[3];   // 0: the low bounds are the near ones; 1: the high ones
 };
 
@@ -25,22 +27,12 @@ bool bvhAvx2InUse();
 // every tree of the process.
 void useBvhAvx2(bool use);
 
-// Whether the AVX2 box test keeps its guarantee for this ray: origin' *
+// The traversal of 8-wide trees with all eight boxes in one AVX2 test
+// (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse() and origin' *
 // inverse is finite on every axis whose inverse is (it overflows only for
 // directions near the smallest normal floats, which then take the SSE test).
-inline bool bvhAvx2Suits(const BvhSlabs& slabs) {
-  for (int axis = 0; axis < 3; ++axis) {
-    if (std::isinf(slabs.inverse[axis])) continue;   // a zero direction component: the axis is NaN, not used
-    if (!std::isfinite(slabs.nearOrigin[axis] * slabs.inverse[axis]) ||
-        !std::isfinite(slabs.farOrigin[axis] * slabs.inverse[axis]))
-      return false;
-  }
-  return true;
-}
-
-// The traversal of 8-wide trees with all eight boxes in one AVX2 test
-// (bvh_traverse_avx2.cpp); call only when bvhAvx2InUse() and bvhAvx2Suits.
 template <bool AnyHit>
-bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best);
+bool traverseBvh8Avx2(const BvhData<8>& tree, const Ray& ray, const BvhSlabs& slabs, const WatertightRay& frame,
+                      Hit& best);
 
 }  // namespace portico

@@ -140,12 +140,24 @@ inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversa
   return reinterpret_cast<const char*>(bvh_child::isLeaf(child) ? leaf : node);
 }
 
+// Starts the cache misses of a child's four lines (a node's whole, a leaf's
+// first packet and more), for when it is popped.
+template <int Width>
+inline void prefetchChild(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets, uint32_t child) {
+  const char* const address = childAddress(nodes, packets, child);
+  __builtin_prefetch(address);
+  __builtin_prefetch(address + 64);
+  __builtin_prefetch(address + 128);
+  __builtin_prefetch(address + 192);
+}
+
 // Nearest hit (or, with AnyHit, any hit) of the ray in the tree, from the
-// root; best holds what was found. The ray is finite, with tMin < tMax,
-// and slabs hold its constants.
+// root; result holds what was found. The ray is finite, with tMin < tMax,
+// and slabs and frame hold its constants.
 template <int Width, bool AnyHit, class Boxes>
-[[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs, Hit& best) {
-  const WatertightRay frame(ray.direction);
+[[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs,
+                                   const WatertightRay& frame, Hit& result) {
+  Hit best = result;   // a local copy: the stack's stores cannot alias it, so best.t stays in a register
   const Boxes boxes(slabs, grid_traversal::PacketRay(frame, ray));
   const BvhNode<Width>* const nodes = tree.nodes.data();
   const grid_traversal::TrianglePacket* const packets = tree.packets.data();
@@ -160,20 +172,31 @@ template <int Width, bool AnyHit, class Boxes>
       float entries[Width];
       unsigned crossed = boxes.crossed(node, ray.tMin, best.t < ray.tMax ? best.t : ray.tMax, entries);
       if (crossed == 0) goto nextStacked;
-      if ((crossed & (crossed - 1)) == 0) {
-        current = node.child[std::countr_zero(crossed)];
+      const int nearest = std::countr_zero(crossed);
+      const unsigned others = crossed & (crossed - 1);
+      if (others == 0) {
+        current = node.child[nearest];
         continue;
       }
-      // Two or more: sorted farthest first onto the stack; the nearest is
+      if ((others & (others - 1)) == 0) {
+        // Two: the farther stacked (its cache misses started now), the nearer next.
+        const int second = std::countr_zero(others);
+        const bool secondNearer = entries[second] < entries[nearest];
+        const int nearK = secondNearer ? second : nearest, farK = secondNearer ? nearest : second;
+        const BvhStackEntry far{node.child[farK], entries[farK]};
+        prefetchChild(nodes, packets, far.child);
+        stack[pending++] = far;
+        current = node.child[nearK];
+        continue;
+      }
+      // Three or more: sorted farthest first onto the stack; the nearest is
       // next. Each is loaded soon (the nearest next, the others when
       // popped): start their cache misses now, side by side.
       BvhStackEntry* const first = stack + pending;
       for (; crossed != 0; crossed &= crossed - 1) {
         const int k = std::countr_zero(crossed);
         const BvhStackEntry entry{node.child[k], entries[k]};
-        __builtin_prefetch(childAddress(nodes, packets, entry.child));
-        __builtin_prefetch(childAddress(nodes, packets, entry.child) + 64);
-        __builtin_prefetch(childAddress(nodes, packets, entry.child) + 128);
+        prefetchChild(nodes, packets, entry.child);
         BvhStackEntry* slot = stack + pending++;
         while (slot != first && slot[-1].entry < entry.entry) {
           *slot = slot[-1];
@@ -184,12 +207,18 @@ template <int Width, bool AnyHit, class Boxes>
       current = stack[--pending].child;
     }
 
-    if (boxes.template testLeaf<AnyHit>(packets, current, frame, ray, best) && AnyHit) return true;
+    if (boxes.template testLeaf<AnyHit>(packets, current, frame, ray, best) && AnyHit) {
+      result = best;
+      return true;
+    }
 
   nextStacked:
     // The next stacked child that may hold a hit at best.t or nearer.
     for (;;) {
-      if (pending == 0) return best.found();
+      if (pending == 0) {
+        result = best;
+        return best.found();
+      }
       const BvhStackEntry& next = stack[--pending];
       if (!AnyHit && best.t < next.entry) continue;
       current = next.child;

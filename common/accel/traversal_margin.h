@@ -11,10 +11,16 @@ namespace portico {
 
 // 2^-16 (256 float ulps) of the reach R, the largest distance per axis from
 // the origin to the root box, plus 2^-20 (16 ulps) of the origin's largest
-// coordinate, for the rounding of origin +- margin.
-inline float traversalMargin(const Bounds3& root, const float origin[3]) {
+// coordinate, for the rounding of origin +- margin. This form takes R and
+// the largest coordinate's magnitude.
+inline float traversalMargin(float reach, float magnitude) {
   constexpr float kMarginScale = 1.0f / 65536.0f;
   constexpr float kOriginMarginScale = 1.0f / 1048576.0f;
+  return reach * kMarginScale + magnitude * kOriginMarginScale;
+}
+
+// The margin from the root box and the origin: reach and magnitude found here.
+inline float traversalMargin(const Bounds3& root, const float origin[3]) {
   float reach = 0.0f, magnitude = 0.0f;
   for (int axis = 0; axis < 3; ++axis) {
     const float toLo = std::fabs(root.lo[axis] - origin[axis]), toHi = std::fabs(root.hi[axis] - origin[axis]);
@@ -23,7 +29,7 @@ inline float traversalMargin(const Bounds3& root, const float origin[3]) {
     const float coordinate = std::fabs(origin[axis]);
     magnitude = magnitude > coordinate ? magnitude : coordinate;
   }
-  return reach * kMarginScale + magnitude * kOriginMarginScale;
+  return traversalMargin(reach, magnitude);
 }
 
 }  // namespace portico

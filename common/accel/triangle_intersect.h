@@ -38,21 +38,28 @@ struct WatertightRay {
 
   WatertightRay() = default;
   explicit WatertightRay(const Vec3& direction) {
-    const float ax = std::fabs(direction.x), ay = std::fabs(direction.y),
-                az = std::fabs(direction.z);
-    // Ties go to the lower axis, so the choice is a pure function of the direction.
-    kz = ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
-    kx = kz == 2 ? 0 : kz + 1;
-    ky = kx == 2 ? 0 : kx + 1;
+    chooseAxes(direction);
     const float d[3] = {direction.x, direction.y, direction.z};
-    if (d[kz] < 0.0f) {
-      const int swap = kx;
-      kx = ky;
-      ky = swap;
-    }
     Sx = d[kx] / d[kz];
     Sy = d[ky] / d[kz];
     Sz = 1.0f / d[kz];
+  }
+
+  // kx, ky and kz alone, for callers that compute the three quotients
+  // themselves (the same correctly rounded divisions). Without branches:
+  // random directions would mispredict them.
+  void chooseAxes(const Vec3& direction) {
+    const float ax = std::fabs(direction.x), ay = std::fabs(direction.y),
+                az = std::fabs(direction.z);
+    // Ties go to the lower axis, so the choice is a pure function of the direction.
+    const int xLargest = int(ax >= ay) & int(ax >= az);
+    const int yLargest = (1 - xLargest) & int(ay >= az);
+    kz = 2 - 2 * xLargest - yLargest;
+    const int next = kz == 2 ? 0 : kz + 1, after = next == 2 ? 0 : next + 1;
+    const float d[3] = {direction.x, direction.y, direction.z};
+    const bool negative = d[kz] < 0.0f;
+    kx = negative ? after : next;
+    ky = negative ? next : after;
   }
 };
 
