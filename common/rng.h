@@ -24,8 +24,8 @@ constexpr uint32_t PixelY = 7;
 constexpr uint32_t PixelShuffle = 8;   // keyed by pixel (not path) and step
 // Reflect or pass at a glass pane, keyed by the ray's state (glassKey).
 constexpr uint32_t GlassChoice = 9;
-// Light samples of a shading point use LightSampleBase + 3 * i + {0,1,2}.
-constexpr uint32_t LightSampleBase = 16;
+// The key of a pixel's pattern (pixel_pattern.h).
+constexpr uint32_t PixelPattern = 10;
 }  // namespace dim
 
 // SplitMix64 finaliser: a bijective 64-bit mixer with full avalanche.

@@ -162,6 +162,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   const int64_t camera = get(counters, "rays.camera");
   const int64_t crossings = get(counters, "rays.crossings");
   stats["rays"] = {{"camera", camera},
+                   {"emission", get(counters, "rays.emission")},
                    {"shadow", get(counters, "rays.shadow")},
                    {"gather", get(counters, "rays.gather")},
                    {"shadow_blocked", get(counters, "rays.shadow_blocked")},

@@ -82,7 +82,11 @@ struct JobSettings {
   uint32_t gather = 4;               // final-gather rays per camera hit (0: estimate at the hit)
   uint64_t seed = 1;
   uint32_t width = 0, height = 0;    // 0: the camera's
-  uint32_t lightSamples = 2;         // shadow rays per camera hit
+  // Shadow rays per camera hit. A pixel's light samples form one
+  // stratified pattern (pixel_pattern.h): 16 spp of 1 cover a lamp as well
+  // as 16 of 2 (the same block RMSE on both reference scenes), for ~10 %
+  // less time.
+  uint32_t lightSamples = 1;
   int lightHops = kAutomaticLightHops;   // sample lights of cells within this many portals (-1: all)
   // Photons per density estimate: 128 rather than 64 lowers the reference
   // scenes' block RMSE (cornell_closed 0.91 -> 0.75 %, two_rooms 2.09 ->

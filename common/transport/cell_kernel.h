@@ -19,6 +19,7 @@
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
 #include "common/transport/outdoor_passage.h"
+#include "common/transport/pixel_samples.h"
 #include "common/transport/indirect_light.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/ray_state.h"
@@ -82,6 +83,31 @@ class CellKernel {
   // A ray towards the sky left the building with nothing in its way: a
   // shadow ray adds its light, a probe starts its photon.
   void reachSky(const RayState& ray, KernelOutputs& out);
+  // A pixel's light is emitted light seen directly plus light reflected
+  // towards the camera, and each is estimated with its own camera rays:
+  // emission rays (emissionSamplesPerPixel a pixel) add only what they see
+  // emitted (a lamp, the sky), the shaded samples (spp) only reflected
+  // light. Emission rays cost one traversal and no shading, so many of
+  // them cover the edges of a bright lamp finely, where the shaded samples'
+  // few positions would leave its pixels' coverage noisy.
+  uint32_t emissionSamplesPerPixel() const;
+  void traceEmissionRays(uint32_t pixel, uint32_t count, std::vector<PixelSample>& samples,
+                         std::vector<uint32_t>& scratch, KernelOutputs& out);
+  // Emission rays carry kEmissionPath in their path id (shaded samples'
+  // ids are pixel * spp + sample, far below it), so a neighbour cell that
+  // traces one after a portal knows it.
+  static constexpr uint64_t kEmissionPath = 1ull << 63;
+  static constexpr uint64_t kEmissionSeedSalt = 0x2545f4914f6cdd1dull;
+  static bool isEmissionRay(const RayState& ray) {
+    return ray.kind == RayKind::Camera && (ray.pathId & kEmissionPath) != 0;
+  }
+  void addEmission(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
+  // A camera ray traced on from just before a portal (tMinBeforePortal)
+  // can hit a wall a hair beyond the cell's box; a gather or shadow ray
+  // starting there, outside the box, would leave the cell without meeting
+  // the portal. Such an origin is moved a hair inside (never a point
+  // already inside).
+  Vec3 insideCell(const Vec3& point) const;
   void traceCameraRay(const RayState& ray, KernelOutputs& out);
   // Traces `ray` through the glass panes in its way (at most
   // kMaxGlassEvents): a shadow ray keeps its line, weighed by each pane's

@@ -37,7 +37,8 @@ struct TraceCounters {
   int64_t photonsEscaped = 0;     // left a cell where no portal was
   int64_t photonCrossings = 0;
   int64_t photonCopies = 0;       // deposits copied to a neighbour near a portal
-  int64_t cameraRays = 0;
+  int64_t cameraRays = 0;         // shaded camera samples
+  int64_t emissionRays = 0;       // camera rays that add only emitted light (cell_kernel.h)
   int64_t shadowRays = 0;
   int64_t gatherRays = 0;
   int64_t shadowBlocked = 0;
@@ -54,7 +55,8 @@ struct TraceCounters {
     return {{"photons.emitted", photonsEmitted},   {"photons.deposits", photonDeposits},
             {"photons.absorbed", photonsAbsorbed}, {"photons.escaped", photonsEscaped},
             {"photons.crossings", photonCrossings}, {"photons.portal_copies", photonCopies},
-            {"rays.camera", cameraRays},           {"rays.gather", gatherRays},
+            {"rays.camera", cameraRays},           {"rays.emission", emissionRays},
+            {"rays.gather", gatherRays},
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},

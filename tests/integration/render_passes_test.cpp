@@ -46,7 +46,7 @@ class RenderPasses : public ::testing::Test {
 TEST_F(RenderPasses, ALooserTargetTakesFewerPassesAndTheMeasuredErrorIsWithinOneAndAHalfTimesTheTarget) {
   const LinearImage reference = readImage((kCornell / "reference.exr").string());
   std::vector<int> passesTaken;
-  for (const double target : {0.04, 0.02}) {
+  for (const double target : {0.03, 0.015}) {
     const std::string name = "target-" + std::to_string(target);
     ASSERT_EQ(render(name, 2, {"--target-error", std::to_string(target)}), 0) << readFile(dir_ / (name + ".log"));
     const auto stats = passes(name);
