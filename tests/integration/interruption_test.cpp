@@ -20,7 +20,7 @@ class Interruption : public DemoStoreSuite<Interruption> {
  protected:
   // A job whose render leases last tens of seconds (64 spp, 1024 gather rays
   // per camera hit: a camera batch is 16 M gather rays); returns once a
-  // worker has traced in its render pass for half a second (0: never got there).
+  // worker has traced one render lease for half a second (0: never got there).
   static uint64_t submitLongRender(LocalCluster& cluster, const fs::path& dir) {
     const uint64_t job = cluster.submit(store_, dir / "image.exr", 2000, 64, [](wire::JobSpec::Builder spec) {
       spec.setGather(1024);
@@ -33,8 +33,24 @@ class Interruption : public DemoStoreSuite<Interruption> {
         },
         std::chrono::seconds(60));
     if (!rendering) return 0;
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    return job;
+    // The render's first leases can be short (the emitted light's camera
+    // rays, cells few pixels see): wait until one has run half a second,
+    // i.e. no lease has come back for that long while the worker holds one.
+    int64_t completed = -1;
+    auto since = std::chrono::steady_clock::now();
+    const bool longLease = waitUntil(
+        [&] {
+          const auto status = cluster.status(job);
+          const int64_t now = status.value("leases", int64_t(0));
+          const auto t = std::chrono::steady_clock::now();
+          if (now != completed || status["workers"].empty() || status["workers"][0].value("leases", 0) == 0) {
+            completed = now;
+            since = t;
+          }
+          return t - since >= std::chrono::milliseconds(500);
+        },
+        std::chrono::seconds(60));
+    return longLease ? job : 0;
   }
 };
 
