@@ -8,6 +8,7 @@
 #include <map>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "coordinator/cell_cache_model.h"
 
@@ -25,6 +26,9 @@ struct WorkerInfo {
     int64_t sentMs = 0;
     int64_t work = 0;
     uint32_t moreCells = 0;
+    // Each more cell and the work taken from its queue: logged with the
+    // lease (LeaseLogEntry) for the cluster model; never read to schedule.
+    std::vector<std::pair<uint32_t, int64_t>> moreCellWork;
   };
   std::map<uint64_t, LeaseInFlight> leases;
   // A worker holds up to two leases: the next one is on its way (or already

@@ -160,6 +160,12 @@ void addCluster(CLI::App& bench, CommandTable& table) {
                    "the records' tracing work (photons, rays) times this, their loads as recorded")
       ->capture_default_str()
       ->check(CLI::Range(1e-3, 1e6));
+  command
+      ->add_option("--lease-scale", o->leaseScale,
+                   "each lease's work times this (the coordinator's lease seconds and --lease-rays): fewer, longer "
+                   "leases")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-2, 1e4));
   command->add_option("--csv", o->csv, "write one row per prediction");
   table.add(command, [o] { return runBenchCluster(*o); });
 }
