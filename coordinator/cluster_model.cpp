@@ -133,10 +133,18 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase, double workScale) 
   double loadSeconds = 0, triangles = 0, own = 0, cpu = 0;
   // The record's progress (its share of the phase's work done, the lease
   // log being in the order Results came) when each cell's latest lease came
-  // back.
-  int64_t phaseWork = 0, doneWork = 0;
+  // back, and when each lease was sent.
+  std::vector<std::pair<int64_t, int64_t>> doneAt;   // (result ms, work done then)
   for (const LeaseLogEntry& lease : record.leases)
-    if (lease.phase == phase && lease.work > 0) phaseWork += lease.work;
+    if (lease.phase == phase && lease.work > 0)
+      doneAt.emplace_back(lease.resultMs, (doneAt.empty() ? 0 : doneAt.back().second) + lease.work);
+  const double phaseWork = doneAt.empty() ? 1.0 : double(doneAt.back().second);
+  const auto progressAt = [&](int64_t ms) {
+    const auto it =
+        std::upper_bound(doneAt.begin(), doneAt.end(), std::make_pair(ms, std::numeric_limits<int64_t>::max()));
+    return it == doneAt.begin() ? 0.0 : double(std::prev(it)->second) / phaseWork;
+  };
+  int64_t doneWork = 0;
   std::map<uint32_t, double> backAt;
   for (const LeaseLogEntry& lease : record.leases) {
     if (lease.phase != phase || lease.work <= 0) continue;
@@ -153,8 +161,14 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase, double workScale) 
     for (const auto& [cell, work] : cellWork(lease, costs.cellsLogged)) {
       const double share = double(work) / double(lease.work);
       const int64_t scaled = std::max<int64_t>(1, std::llround(double(work) * workScale));
+      // A cell's first piece is queued from the start; a later one once
+      // the cell's previous lease came back, and no sooner than the record
+      // leased it: photons come back to a cell through the others.
+      const auto back = backAt.find(cell);
+      const double releaseAt =
+          !costs.cellsLogged || back == backAt.end() ? 0.0 : std::max(back->second, progressAt(lease.sentMs));
       if (work > 0 || cell == lease.cell)
-        costs.pieces[cell].push_back({scaled, costs.cellsLogged ? 0.0 : load, costs.cellsLogged ? backAt[cell] : 0.0});
+        costs.pieces[cell].push_back({scaled, costs.cellsLogged ? 0.0 : load, releaseAt});
       Measured& m = measured[cell];
       m.seconds += trace * share;
       m.cpuSeconds += std::min(time.cpuSeconds, time.seconds) * share;
@@ -164,7 +178,7 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase, double workScale) 
         m.loadTriangles += double(lease.trianglesLoaded);
       }
     }
-    for (const auto& [cell, work] : cellWork(lease, costs.cellsLogged)) backAt[cell] = double(doneWork) / double(phaseWork);
+    for (const auto& [cell, work] : cellWork(lease, costs.cellsLogged)) backAt[cell] = double(doneWork) / phaseWork;
     loadSeconds += load;
     triangles += double(lease.trianglesLoaded);
     own += time.seconds;
@@ -481,7 +495,12 @@ class PhaseSimulation {
       traceCpu += seconds * (share != costs_.cpuShare.end() ? share->second : costs_.phaseCpuShare);
     }
     lease.cpuSeconds = traceCpu + lease.loadSeconds * costs_.phaseCpuShare;
-    lease.blockedSeconds = std::max(0.0, traceSeconds + lease.loadSeconds - lease.cpuSeconds) + lease.fetchSeconds;
+    lease.blockedSeconds = std::max(0.0, traceSeconds + lease.loadSeconds - lease.cpuSeconds);
+    // The wait for photons is mostly the worker's own: the reply received
+    // and decoded on its main thread, the tracing thread woken: it runs on
+    // the cores as CPU, slower when they are shared (with two workers and
+    // the coordinator on two cores the record's gaps double).
+    lease.cpuSeconds += lease.fetchSeconds;
     prediction_.workerBusySeconds += traceSeconds + lease.loadSeconds;
     return lease;
   }
@@ -492,7 +511,9 @@ class PhaseSimulation {
   uint64_t cellTriangles(uint32_t cell) const {
     return cell < record_.cells.size() ? record_.cells[cell].triangleCount : 0;
   }
-  uint64_t cellFileBytes(uint32_t cell) const { return cell < record_.cells.size() ? record_.cells[cell].byteCount : 0; }
+  uint64_t cellFileBytes(uint32_t cell) const {
+    return cell < record_.cells.size() ? record_.cells[cell].byteCount : 0;
+  }
 
   // The worker's cache as worker/cell_cache.cpp runs it: a cell it does not
   // hold is loaded, at the record's seconds per triangle for that cell,

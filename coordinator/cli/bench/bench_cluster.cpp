@@ -57,7 +57,8 @@ double cachedBytesPerFileByte(const SceneStore& store, const std::string& spec) 
   if (cells.empty()) return 3;
   std::vector<uint32_t> bySize(cells.size());
   std::iota(bySize.begin(), bySize.end(), 0u);
-  std::sort(bySize.begin(), bySize.end(), [&](uint32_t a, uint32_t b) { return cells[a].byteCount < cells[b].byteCount; });
+  std::sort(bySize.begin(), bySize.end(),
+            [&](uint32_t a, uint32_t b) { return cells[a].byteCount < cells[b].byteCount; });
   constexpr size_t kSamples = 8;
   std::set<uint32_t> sample;
   for (size_t k = 0; k < kSamples; ++k) sample.insert(bySize[(bySize.size() - 1) * k / (kSamples - 1)]);
@@ -247,7 +248,8 @@ int runBenchCluster(const BenchClusterOptions& options) {
   }
   // A prediction and, for a measured run (`measured`), its error in all and
   // in each phase.
-  const auto row = [&](const MeasuredJob& job, size_t workers, const MeasuredJob* measured, const ClusterPrediction& p) {
+  const auto row = [&](const MeasuredJob& job, size_t workers, const MeasuredJob* measured,
+                       const ClusterPrediction& p) {
     if (scaled) measured = nullptr;
     const auto phase = [&](double predicted, double seconds) {
       return measured && seconds > 0 ? fmt::format("{:.1f} {:+.0f}%", predicted, percent(predicted, seconds))
@@ -255,7 +257,8 @@ int runBenchCluster(const BenchClusterOptions& options) {
     };
     const double total = measured ? measured->photonSeconds + measured->renderSeconds : 0;
     std::cout << fmt::format("{:>7} {:>10} {:>10} {:>7} {:>13} {:>13} {:>8} {:>11} {:>6.0f}% {:>6.0f}% {:>8.1f}\n",
-                             workers, total > 0 ? fmt::format("{:.1f}", total) : "-", fmt::format("{:.1f}", p.seconds()),
+                             workers, total > 0 ? fmt::format("{:.1f}", total) : "-",
+                             fmt::format("{:.1f}", p.seconds()),
                              total > 0 ? fmt::format("{:+.0f}%", percent(p.seconds(), total)) : "-",
                              phase(p.phases[0].seconds, measured ? measured->photonSeconds : 0),
                              phase(p.phases[1].seconds, measured ? measured->renderSeconds : 0),
@@ -297,7 +300,8 @@ int runBenchCluster(const BenchClusterOptions& options) {
                                       : std::string(", a machine per worker"),
                            scaled ? fmt::format(", its tracing work x{}", options.workScale) : std::string())
             << header;
-  for (size_t workers : counts) row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front()));
+  for (size_t workers : counts)
+    row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front()));
   return 0;
 }
 
