@@ -627,6 +627,7 @@ ClusterPrediction simulateCluster(const ClusterRecord& record, const ClusterMode
     at += prediction.phases[phase].seconds;
   }
   prediction.chooseCellMicros = chooseCalls ? chooseSeconds * 1e6 / double(chooseCalls) : 0;
+  prediction.chooseCellCalls = chooseCalls;
   return prediction;
 }
 

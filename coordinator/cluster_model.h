@@ -76,7 +76,8 @@ struct ClusterPrediction {
   // the bottleneck (workers wait for leases).
   double coordinatorUtilization() const;
   double workerUtilization(size_t workers) const;
-  double chooseCellMicros = 0;         // the real chooseCell's mean time per lease here
+  double chooseCellMicros = 0;         // the real chooseCell's mean time per call here
+  int64_t chooseCellCalls = 0;         // a call per lease, and one per worker it found nothing for
 };
 
 // Each phase starts with all its work queued (the lease log's work per

@@ -244,7 +244,7 @@ int runBenchCluster(const BenchClusterOptions& options) {
     csv.open(options.csv);
     if (!csv) throw std::runtime_error(fmt::format("{}: cannot be written", options.csv));
     csv << "record,workers,measured_s,predicted_s,photons_s,render_s,leases,loads,coordinator_utilization,"
-           "worker_utilization,choose_cell_us,measured_photons_s,measured_render_s\n";
+           "worker_utilization,choose_cell_us,measured_photons_s,measured_render_s,choose_cell_calls\n";
   }
   // A prediction and, for a measured run (`measured`), its error in all and
   // in each phase.
@@ -267,12 +267,12 @@ int runBenchCluster(const BenchClusterOptions& options) {
                              100 * p.coordinatorUtilization(), 100 * p.workerUtilization(workers), p.chooseCellMicros);
     const auto optional = [](double seconds) { return seconds > 0 ? fmt::format("{:.3f}", seconds) : std::string(); };
     if (csv.is_open())
-      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{:.4f},{:.2f},{},{}\n", job.name, workers,
+      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{:.4f},{:.2f},{},{},{}\n", job.name, workers,
                          optional(total), p.seconds(), p.phases[0].seconds, p.phases[1].seconds,
                          p.phases[0].leases + p.phases[1].leases, p.phases[0].loads + p.phases[1].loads,
                          p.coordinatorUtilization(), p.workerUtilization(workers), p.chooseCellMicros,
                          optional(measured ? measured->photonSeconds : 0),
-                         optional(measured ? measured->renderSeconds : 0));
+                         optional(measured ? measured->renderSeconds : 0), p.chooseCellCalls);
   };
   const std::string header = fmt::format("{:>7} {:>10} {:>10} {:>7} {:>13} {:>13} {:>8} {:>11} {:>7} {:>7} {:>8}\n",
                                          "workers", "measured", "predicted", "error", "photons", "render", "leases",
