@@ -324,7 +324,7 @@ class PhaseSimulation {
  public:
   PhaseSimulation(const ClusterRecord& record, const ClusterModelOptions& options, int phase,
                   WorkerRegistry& registry, std::vector<ModelWorker>& workers, double startAt)
-      : record_(record), options_(options), phase_(phase), costs_(phaseCosts(record, phase, options.workScale)),
+      : record_(record), options_(options), phase_(phase), costs_(phaseCosts(record, phase, phase == 0 ? options.workScale : 1.0)),
         queue_(costs_.pieces, phase), registry_(registry), workers_(workers), cores_(options.hostCores),
         now_(startAt) {}
 
@@ -468,7 +468,7 @@ class PhaseSimulation {
     const double cost = perLease() / 2 + chooseSeconds;
     prediction_.coordinatorBusySeconds += cost;
     const uint64_t lease = (*nextLease_)++;
-    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, uint32_t(cells.size() - 1)});
+    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, uint32_t(cells.size() - 1), {}});
     for (const auto& [cell, piece] : cells) info.cells.use(kModelJob, cell, cachedBytesOf(record_.cells, cell));
     ModelLease modelLease = leaseOf(w, lease, cells);
     modelLease.work = work;

@@ -49,8 +49,9 @@ struct ClusterModelOptions {
   // 0: the coordinator and each worker on a machine of its own. C > 0:
   // all of them on one machine of C cores (processor sharing).
   double hostCores = 0;
-  // The record's tracing work (photons, rays) times this; its loads as
-  // recorded: a job of F times the photons on the same building.
+  // The photon pass's tracing work times this, its loads as the caches
+  // make them, the render as recorded: a job of F times the photons on the
+  // same building, rendering the same image.
   double workScale = 1;
   // Each lease's work times this (WorkerInfo::kLeaseSeconds and the
   // coordinator's --lease-rays with it): fewer, longer leases.

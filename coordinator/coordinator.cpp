@@ -539,7 +539,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
-  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, uint32_t(moreCells.size())};
+  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, uint32_t(moreCells.size()), {}};
   for (const auto& [cell, extra] : moreCells) {
     int64_t work = 0;
     for (const QueuedBatch& batch : extra) work += batch.work;

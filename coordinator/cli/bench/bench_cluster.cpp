@@ -298,7 +298,7 @@ int runBenchCluster(const BenchClusterOptions& options) {
   std::cout << fmt::format("predicted from {}{}{}:\n", jobs.front().name,
                            cores != 0 ? fmt::format(", all on {:.2f} cores", cores < 0 ? jobs.front().coresHad : cores)
                                       : std::string(", a machine per worker"),
-                           scaled ? fmt::format(", its tracing work x{}", options.workScale) : std::string())
+                           scaled ? fmt::format(", its photon pass's tracing work x{}", options.workScale) : std::string())
             << header;
   for (size_t workers : counts)
     row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front()));

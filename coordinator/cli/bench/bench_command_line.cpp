@@ -157,7 +157,7 @@ void addCluster(CLI::App& bench, CommandTable& table) {
       ->capture_default_str();
   command
       ->add_option("--work-scale", o->workScale,
-                   "the records' tracing work (photons, rays) times this, their loads as recorded")
+                   "the records' photon-pass tracing work times this (F times the photons), the render as recorded")
       ->capture_default_str()
       ->check(CLI::Range(1e-3, 1e6));
   command

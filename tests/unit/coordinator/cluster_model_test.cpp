@@ -148,7 +148,7 @@ TEST(ClusterModel, WorkersSharingTheCoresOfOneMachineShareItsSpeed) {
   EXPECT_NEAR(simulateCluster(record, options).seconds(), two, 0.1 * two);
 }
 
-TEST(ClusterModel, AWorkScaleMultipliesTheTracingAndKeepsTheLoads) {
+TEST(ClusterModel, AWorkScaleMultipliesThePhotonPassTracingAndKeepsItsLoadsAndTheRender) {
   const ClusterRecord record = uniformRecord(64, 4, 1e-4, 0.0);
   ClusterModelOptions options;
   options.workers = 2;
@@ -158,11 +158,12 @@ TEST(ClusterModel, AWorkScaleMultipliesTheTracingAndKeepsTheLoads) {
   options.workScale = 2;
   const ClusterPrediction doubled = simulateCluster(record, options);
   // Photon leases: 4 x 49 ms of tracing and one 1 ms load per cell, the
-  // tracing doubled; render: 20 ms and a load.
+  // tracing doubled; render (20 ms and a load per cell): the same image.
   const double photonLoads = 64 * 0.001;
   EXPECT_NEAR(doubled.phases[0].workerBusySeconds - photonLoads, 2 * (base.phases[0].workerBusySeconds - photonLoads),
               0.02 * base.phases[0].workerBusySeconds);
-  EXPECT_NEAR(doubled.seconds(), 2 * base.seconds(), 0.1 * base.seconds());
+  EXPECT_NEAR(doubled.phases[0].seconds, 2 * base.phases[0].seconds, 0.1 * base.phases[0].seconds);
+  EXPECT_DOUBLE_EQ(doubled.phases[1].workerBusySeconds, base.phases[1].workerBusySeconds);
 }
 
 TEST(ClusterModel, OneWorkerTakesItsLeasesTimeAndMoreWorkersShareIt) {
