@@ -1,7 +1,8 @@
 #include "coordinator/cluster_model.h"
 
+#include <time.h>
+
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <deque>
 #include <limits>
@@ -317,6 +318,14 @@ struct TimedEvent {
 
 int64_t toMs(double seconds) { return std::llround(seconds * 1000.0); }
 
+// chooseCell is timed in this thread's CPU, not wall time: what it costs a
+// coordinator, whatever else shares this machine's cores with the model.
+double threadCpuSeconds() {
+  timespec now{};
+  ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
+  return double(now.tv_sec) + double(now.tv_nsec) * 1e-9;
+}
+
 // Thread ids on the shared cores: the coordinator, then the workers.
 constexpr size_t kCoordinatorThread = 0;
 
@@ -447,9 +456,9 @@ class PhaseSimulation {
   // coordinator has spent its CPU on it.
   bool assign(size_t w, WorkerInfo& info) {
     const auto candidates = queue_.candidates(kLeaseCandidates);
-    const auto started = std::chrono::steady_clock::now();
+    const double started = threadCpuSeconds();
     const PendingCell* chosen = chooseCell(candidates, record_.cells, info, registry_);
-    const double chooseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    const double chooseSeconds = threadCpuSeconds() - started;
     chooseSeconds_ += chooseSeconds;
     ++chooseCalls_;
     if (!chosen) return false;

@@ -10,7 +10,7 @@
 // eviction, the bytes a loaded cell takes there), which decides every
 // lease's loads, at the record's measured load seconds per triangle of each
 // cell; the coordinator, one thread that spends its measured CPU per lease
-// plus what chooseCell costs it at N workers, timed here; and the cores
+// plus what chooseCell costs it at N workers, timed here (CPU); and the cores
 // they share (SharedCores). docs/large-buildings.md, "Cluster model".
 #pragma once
 
