@@ -81,11 +81,12 @@ struct ClusterPrediction {
   int64_t chooseCellCalls = 0;         // a call per lease, and one per worker it found nothing for
 };
 
-// Each phase starts with all its work queued (the lease log's work per
-// cell, in pieces of the recorded leases' sizes); the render phase after
-// the last photon lease and the recorded phase change, with its own
-// accelerators: cells held from the photon pass are loaded again (the
-// worker's cache keys them by structure).
+// Each phase queues the lease log's work per cell, in pieces of the
+// recorded leases' sizes: a cell's first piece from the start, its later
+// ones as the phase's progress reaches where the record had them queued;
+// the render phase after the last photon lease and the recorded phase
+// change, with its own accelerators: cells held from the photon pass are
+// loaded again (the worker's cache keys them by structure).
 ClusterPrediction simulateCluster(const ClusterRecord& record, const ClusterModelOptions& options);
 
 }  // namespace portico
