@@ -64,7 +64,9 @@ bool scannedMayJoin(const PendingCell& c, const PendingCell& chosen, const Worke
   return worker.holds(c.job, c.cell) || !scanHolders(worker, workers, c.job, c.cell, 0.0).any;
 }
 
-constexpr uint32_t kCells = 400;
+// Enough cells that most are held by one worker or none, where a stale
+// holder would change a choice.
+constexpr uint32_t kCells = 4000;
 constexpr uint64_t kJobs = 2;
 
 struct RandomCluster {
