@@ -10,7 +10,9 @@ double speedOf(const WorkerInfo& worker) {
 }
 
 // Whether another worker holds the cell, and whether one of those holders
-// has less than `seconds` of leased work still to trace.
+// has less than `seconds` of leased work still to trace. Only the holders
+// are visited (the registry's index), so a choice costs O(candidates x
+// holders), not O(candidates x workers).
 struct Holders {
   bool any = false;
   bool freeWithin = false;
@@ -18,13 +20,13 @@ struct Holders {
 Holders holdersOf(const WorkerInfo& worker, const WorkerRegistry& workers, uint64_t job, uint32_t cell,
                   double seconds) {
   Holders holders;
-  for (const auto& [identity, other] : workers) {
-    if (&other == &worker || !other.holds(job, cell)) continue;
+  for (const WorkerInfo* other : workers.holdersOf(job, cell)) {
+    if (other == &worker) continue;
     holders.any = true;
-    if (!other.ready) continue;
+    if (!other->ready) continue;
     int64_t queued = 0;
-    for (const auto& [id, lease] : other.leases) queued += lease.work;
-    if (double(queued) / speedOf(other) < seconds) holders.freeWithin = true;
+    for (const auto& [id, lease] : other->leases) queued += lease.work;
+    if (double(queued) / speedOf(*other) < seconds) holders.freeWithin = true;
   }
   return holders;
 }

@@ -539,7 +539,13 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
-  worker.leases.emplace(lease, WorkerInfo::LeaseInFlight{wallMs(), leaseWork, uint32_t(moreCells.size())});
+  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, uint32_t(moreCells.size()), {}};
+  for (const auto& [cell, extra] : moreCells) {
+    int64_t work = 0;
+    for (const QueuedBatch& batch : extra) work += batch.work;
+    inFlight.moreCellWork.emplace_back(cell, work);
+  }
+  worker.leases.emplace(lease, std::move(inFlight));
   if (inRound_) roundLeases_.emplace_back(worker.identity, lease);
   for (const auto& [cell, unused] : moreCells) worker.cells.use(chosen->job, cell, cachedBytes(cell));
   worker.cells.use(chosen->job, chosen->cell, cachedBytes(chosen->cell));
@@ -675,6 +681,8 @@ void Coordinator::recordResultCounters(const std::string& identity, const LeaseR
     entry.sentMs = sent->second.sentMs;
     entry.work = sent->second.work;
     entry.moreCells = sent->second.moreCells;
+    entry.moreCellWork = std::move(sent->second.moreCellWork);
+    entry.moreCellsLogged = true;
     arrivedLeases_.erase(sent);
   }
   store_.logLease(entry);

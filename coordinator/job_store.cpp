@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <stdexcept>
@@ -309,6 +310,26 @@ constexpr const char* kSchemaVersion9 = R"sql(
       ALTER TABLE lease_log ADD COLUMN cpu_us INTEGER;
       ALTER TABLE lease_log ADD COLUMN run_queue_us INTEGER;
     )sql";
+// Version 10: each lease's more cells and their work, "cell:work ..." (NULL
+// in rows logged before), so that the cluster model knows every cell a
+// lease touched.
+constexpr const char* kSchemaVersion10 = "ALTER TABLE lease_log ADD COLUMN more_cell_work TEXT";
+
+// LeaseLogEntry::moreCellWork as its column holds it, and back.
+std::string moreCellWorkText(const std::vector<std::pair<uint32_t, int64_t>>& cells) {
+  std::string text;
+  for (const auto& [cell, work] : cells) text += fmt::format("{}{}:{}", text.empty() ? "" : " ", cell, work);
+  return text;
+}
+std::vector<std::pair<uint32_t, int64_t>> moreCellWorkOf(const std::string& text) {
+  std::vector<std::pair<uint32_t, int64_t>> cells;
+  unsigned long cell = 0;
+  long long work = 0;
+  int used = 0;
+  for (const char* at = text.c_str(); std::sscanf(at, " %lu:%lld%n", &cell, &work, &used) == 2; at += used)
+    cells.emplace_back(uint32_t(cell), int64_t(work));
+  return cells;
+}
 }  // namespace
 
 void JobStore::migrate() {
@@ -337,6 +358,7 @@ void JobStore::migrate() {
   step(7, [&] { db_.exec(kSchemaVersion7); });
   step(8, [&] { db_.exec(kSchemaVersion8); });
   step(9, [&] { db_.exec(kSchemaVersion9); });
+  step(10, [&] { db_.exec(kSchemaVersion10); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -812,8 +834,8 @@ void JobStore::raiseCounter(uint64_t job, std::string_view name, int64_t value) 
 void JobStore::logLease(const LeaseLogEntry& e) {
   auto& s = db_.prepare(
       "INSERT INTO lease_log(job, lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, "
-      "load_us, cells_loaded, triangles_loaded, cpu_us, run_queue_us) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, "
-      "?, ?)");
+      "load_us, cells_loaded, triangles_loaded, cpu_us, run_queue_us, more_cell_work) VALUES (?, ?, ?, ?, ?, ?, ?, ?, "
+      "?, ?, ?, ?, ?, ?, ?, ?)");
   s.bind(1, int64_t(e.job)).bind(2, int64_t(e.lease)).bind(3, int64_t(e.phase)).bind(4, int64_t(e.cell));
   s.bind(5, int64_t(e.moreCells)).bind(6, e.work).bind(7, e.worker).bind(8, e.sentMs).bind(9, e.resultMs);
   s.bind(10, e.leaseMicros).bind(11, e.loadMicros).bind(12, e.cellsLoaded).bind(13, e.trianglesLoaded);
@@ -822,13 +844,16 @@ void JobStore::logLease(const LeaseLogEntry& e) {
   else s.bindNull(14);
   if (e.runQueueMicros >= 0) s.bind(15, e.runQueueMicros);
   else s.bindNull(15);
+  if (e.moreCellsLogged) s.bind(16, moreCellWorkText(e.moreCellWork));
+  else s.bindNull(16);
   s.run();
 }
 
 std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
   auto& s = db_.prepare(
       "SELECT lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, load_us, cells_loaded, "
-      "triangles_loaded, IFNULL(cpu_us, -1), IFNULL(run_queue_us, -1) FROM lease_log WHERE job = ? "
+      "triangles_loaded, IFNULL(cpu_us, -1), IFNULL(run_queue_us, -1), more_cell_work IS NOT NULL, "
+      "IFNULL(more_cell_work, '') FROM lease_log WHERE job = ? "
       "ORDER BY result_ms, lease");
   s.bind(1, int64_t(job));
   std::vector<LeaseLogEntry> log;
@@ -849,6 +874,8 @@ std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
     e.trianglesLoaded = s.columnInt(11);
     e.cpuMicros = s.columnInt(12);
     e.runQueueMicros = s.columnInt(13);
+    e.moreCellsLogged = s.columnInt(14) != 0;
+    e.moreCellWork = moreCellWorkOf(s.columnText(15));
     log.push_back(std::move(e));
   }
   s.reset();

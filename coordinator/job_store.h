@@ -89,11 +89,15 @@ struct LeaseLogEntry {
   int64_t leaseMicros = 0, loadMicros = 0;
   int64_t cellsLoaded = 0, trianglesLoaded = 0;
   int64_t cpuMicros = -1, runQueueMicros = -1;
+  // Which more cells, with the work of each (schema 10); false in rows
+  // logged before, which count them only.
+  bool moreCellsLogged = false;
+  std::vector<std::pair<uint32_t, int64_t>> moreCellWork;
 };
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 9;
+  static constexpr int kSchemaVersion = 10;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;

@@ -8,6 +8,7 @@
 #include <map>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "coordinator/cell_cache_model.h"
 
@@ -25,6 +26,9 @@ struct WorkerInfo {
     int64_t sentMs = 0;
     int64_t work = 0;
     uint32_t moreCells = 0;
+    // Each more cell and the work taken from its queue: logged with the
+    // lease (LeaseLogEntry) for the cluster model; never read to schedule.
+    std::vector<std::pair<uint32_t, int64_t>> moreCellWork;
   };
   std::map<uint64_t, LeaseInFlight> leases;
   // A worker holds up to two leases: the next one is on its way (or already
@@ -105,6 +109,46 @@ struct WorkerInfo {
   }
 };
 
-using WorkerRegistry = std::map<std::string, WorkerInfo>;
+// The workers by identity, and which of them hold each cell: each worker's
+// model keeps the index as it takes cells in and evicts them, and leaves it
+// when the worker is erased (CellHolders).
+class WorkerRegistry {
+ public:
+  using Map = std::map<std::string, WorkerInfo>;
+  using iterator = Map::iterator;
+  using const_iterator = Map::const_iterator;
+
+  WorkerRegistry() = default;
+  WorkerRegistry(const WorkerRegistry&) = delete;   // its workers' models point at its index
+  WorkerRegistry& operator=(const WorkerRegistry&) = delete;
+
+  // The worker of that identity, added if it is new.
+  WorkerInfo& operator[](const std::string& identity) {
+    const auto [it, added] = workers_.try_emplace(identity);
+    if (added) it->second.cells.attach(&holders_, &it->second);
+    return it->second;
+  }
+  WorkerInfo& at(const std::string& identity) { return workers_.at(identity); }
+  const WorkerInfo& at(const std::string& identity) const { return workers_.at(identity); }
+  iterator find(const std::string& identity) { return workers_.find(identity); }
+  const_iterator find(const std::string& identity) const { return workers_.find(identity); }
+  size_t count(const std::string& identity) const { return workers_.count(identity); }
+  iterator erase(iterator it) { return workers_.erase(it); }
+  iterator begin() { return workers_.begin(); }
+  iterator end() { return workers_.end(); }
+  const_iterator begin() const { return workers_.begin(); }
+  const_iterator end() const { return workers_.end(); }
+  size_t size() const { return workers_.size(); }
+  bool empty() const { return workers_.empty(); }
+
+  // The workers whose models hold the cell, in no particular order.
+  const CellHolders::Workers& holdersOf(uint64_t job, uint32_t cell) const {
+    return holders_.of(CellCacheModel::key(job, cell));
+  }
+
+ private:
+  CellHolders holders_;   // declared first: the workers' models leave it as they go
+  Map workers_;
+};
 
 }  // namespace portico

@@ -5,10 +5,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numeric>
 #include <set>
 #include <stdexcept>
 
+#include "common/accel/accelerator.h"
+#include "common/net/job_spec_wire.h"
 #include "common/net/message.h"
+#include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/scene_store.h"
 #include "common/util/size_parse.h"
 #include "common/util/temporary_directory.h"
@@ -31,7 +35,43 @@ struct MeasuredJob {
   // The cores its threads had: its workers' CPU in leases and the
   // coordinator's, over its time (0: CPU not recorded).
   double coresHad = 0;
+  // What a loaded cell takes in a worker's cache per byte of its file, with
+  // the photon pass's structure and the render's.
+  double cachedBytesPerFileByte[2] = {3, 3};
 };
+
+// The structures a job's leases built: the photon pass's, and the render's
+// ("" is bvh with the grid, else the photon pass's; `auto` taken as the grid).
+std::pair<std::string, std::string> structuresOf(const JobSettings& settings) {
+  const std::string photons = settings.accel == "auto" ? "grid" : settings.accel;
+  std::string render = settings.renderAccel.empty() ? (photons == "grid" ? "bvh" : photons) : settings.renderAccel;
+  if (render == "auto") render = "bvh";
+  return {photons, render};
+}
+
+// A loaded cell's bytes in a worker's cache (LoadedCell::bytes: its mapped
+// geometry and its accelerator) per byte of its file, measured on a few of
+// the store's cells, from the smallest to the largest.
+double cachedBytesPerFileByte(const SceneStore& store, const std::string& spec) {
+  const auto& cells = store.cells();
+  if (cells.empty()) return 3;
+  std::vector<uint32_t> bySize(cells.size());
+  std::iota(bySize.begin(), bySize.end(), 0u);
+  std::sort(bySize.begin(), bySize.end(),
+            [&](uint32_t a, uint32_t b) { return cells[a].byteCount < cells[b].byteCount; });
+  constexpr size_t kSamples = 8;
+  std::set<uint32_t> sample;
+  for (size_t k = 0; k < kSamples; ++k) sample.insert(bySize[(bySize.size() - 1) * k / (kSamples - 1)]);
+  const AcceleratorSpec parsed = parseAcceleratorSpec(spec);
+  double cached = 0, file = 0;
+  for (uint32_t id : sample) {
+    const auto geometry = CellGeometry::load(store.cellPath(id), id, store.materials().size());
+    const auto accelerator = buildAccelerator(parsed, geometry->mesh());
+    cached += double(geometry->bytes() + accelerator->stats().bytes);
+    file += double(cells[id].byteCount);
+  }
+  return file > 0 ? cached / file : 3;
+}
 
 // The coordinator's time between the photon pass's last Result and the
 // render's first lease (0 where the log cannot tell).
@@ -43,6 +83,19 @@ double phaseChangeSeconds(const std::vector<LeaseLogEntry>& leases) {
   }
   if (lastPhotonResult == 0 || firstRenderSent == 0) return 0;
   return double(std::max<int64_t>(0, firstRenderSent - lastPhotonResult)) * 1e-3;
+}
+
+// The photon pass's time before its first lease: its measured time less the
+// span of its leases (0 where the log cannot tell).
+double phaseStartSeconds(const std::vector<LeaseLogEntry>& leases, double photonSeconds) {
+  int64_t first = 0, last = 0;
+  for (const LeaseLogEntry& lease : leases) {
+    if (lease.phase != 0 || lease.sentMs <= 0) continue;
+    first = first == 0 ? lease.sentMs : std::min(first, lease.sentMs);
+    last = std::max(last, lease.resultMs);
+  }
+  if (first == 0 || last <= first) return 0;
+  return std::max(0.0, photonSeconds - double(last - first) * 1e-3);
 }
 
 // The coordinator holds its jobs.db exclusively: the model reads a copy of
@@ -72,7 +125,11 @@ MeasuredJob readJob(const std::string& argument) {
   const auto spec = reader.root<wire::JobSpec>();
   MeasuredJob measured;
   measured.name = fmt::format("{}:{}", path, job->id);
-  measured.record.cells = SceneStore::open(spec.getStore().cStr()).cells();
+  const SceneStore scene = SceneStore::open(spec.getStore().cStr());
+  measured.record.cells = scene.cells();
+  const auto [photonStructure, renderStructure] = structuresOf(jobSettingsFromWire(spec));
+  measured.cachedBytesPerFileByte[0] = cachedBytesPerFileByte(scene, photonStructure);
+  measured.cachedBytesPerFileByte[1] = cachedBytesPerFileByte(scene, renderStructure);
   measured.record.leases = store.leaseLog(job->id);
   if (measured.record.leases.empty())
     throw std::invalid_argument(fmt::format("{}: job {} has no lease log (run by an older coordinator)", path, job->id));
@@ -92,6 +149,7 @@ MeasuredJob readJob(const std::string& argument) {
   measured.photonSeconds = double(counter("time.photons_ms")) * 1e-3;
   measured.renderSeconds = double(counter("time.render_ms")) * 1e-3;
   measured.record.phaseChangeSeconds = phaseChangeSeconds(measured.record.leases);
+  measured.record.phaseStartSeconds = phaseStartSeconds(measured.record.leases, measured.photonSeconds);
   double cpu = 0;
   for (const LeaseLogEntry& lease : measured.record.leases) cpu += double(std::max<int64_t>(0, lease.cpuMicros)) * 1e-6;
   const double seconds = measured.photonSeconds + measured.renderSeconds;
@@ -159,6 +217,9 @@ ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchC
                                             environment.name));
   model.hostCores = cores < 0 ? environment.coresHad : cores;
   model.workScale = options.workScale;
+  model.leaseScale = options.leaseScale;
+  model.cachedBytesPerFileByte[0] = job.cachedBytesPerFileByte[0];
+  model.cachedBytesPerFileByte[1] = job.cachedBytesPerFileByte[1];
   return model;
 }
 
@@ -183,46 +244,64 @@ int runBenchCluster(const BenchClusterOptions& options) {
     csv.open(options.csv);
     if (!csv) throw std::runtime_error(fmt::format("{}: cannot be written", options.csv));
     csv << "record,workers,measured_s,predicted_s,photons_s,render_s,leases,loads,coordinator_utilization,"
-           "worker_utilization,choose_cell_us\n";
+           "worker_utilization,choose_cell_us,measured_photons_s,measured_render_s,choose_cell_calls\n";
   }
-  const auto row = [&](const MeasuredJob& job, size_t workers, double measured, const ClusterPrediction& p) {
-    if (scaled) measured = 0;
-    std::cout << fmt::format("{:>7} {:>10} {:>10} {:>7} {:>9.1f} {:>9.1f} {:>8} {:>7} {:>6.0f}% {:>6.0f}% {:>8.1f}\n",
-                             workers, measured > 0 ? fmt::format("{:.1f}", measured) : "-",
+  // A prediction and, for a measured run (`measured`), its error in all and
+  // in each phase.
+  const auto row = [&](const MeasuredJob& job, size_t workers, const MeasuredJob* measured,
+                       const ClusterPrediction& p) {
+    if (scaled) measured = nullptr;
+    const auto phase = [&](double predicted, double seconds) {
+      return measured && seconds > 0 ? fmt::format("{:.1f} {:+.0f}%", predicted, percent(predicted, seconds))
+                                     : fmt::format("{:.1f}", predicted);
+    };
+    const double total = measured ? measured->photonSeconds + measured->renderSeconds : 0;
+    std::cout << fmt::format("{:>7} {:>10} {:>10} {:>7} {:>13} {:>13} {:>8} {:>11} {:>6.0f}% {:>6.0f}% {:>8.1f}\n",
+                             workers, total > 0 ? fmt::format("{:.1f}", total) : "-",
                              fmt::format("{:.1f}", p.seconds()),
-                             measured > 0 ? fmt::format("{:+.0f}%", percent(p.seconds(), measured)) : "-",
-                             p.phases[0].seconds, p.phases[1].seconds, p.phases[0].leases + p.phases[1].leases,
-                             p.phases[0].loads + p.phases[1].loads, 100 * p.coordinatorUtilization(),
-                             100 * p.workerUtilization(workers), p.chooseCellMicros);
+                             total > 0 ? fmt::format("{:+.0f}%", percent(p.seconds(), total)) : "-",
+                             phase(p.phases[0].seconds, measured ? measured->photonSeconds : 0),
+                             phase(p.phases[1].seconds, measured ? measured->renderSeconds : 0),
+                             p.phases[0].leases + p.phases[1].leases,
+                             fmt::format("{} + {}", p.phases[0].loads, p.phases[1].loads),
+                             100 * p.coordinatorUtilization(), 100 * p.workerUtilization(workers), p.chooseCellMicros);
+    const auto optional = [](double seconds) { return seconds > 0 ? fmt::format("{:.3f}", seconds) : std::string(); };
     if (csv.is_open())
-      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{:.4f},{:.2f}\n", job.name, workers,
-                         measured > 0 ? fmt::format("{:.3f}", measured) : "", p.seconds(), p.phases[0].seconds,
-                         p.phases[1].seconds, p.phases[0].leases + p.phases[1].leases,
-                         p.phases[0].loads + p.phases[1].loads, p.coordinatorUtilization(),
-                         p.workerUtilization(workers), p.chooseCellMicros);
+      csv << fmt::format("{},{},{},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{:.4f},{:.2f},{},{},{}\n", job.name, workers,
+                         optional(total), p.seconds(), p.phases[0].seconds, p.phases[1].seconds,
+                         p.phases[0].leases + p.phases[1].leases, p.phases[0].loads + p.phases[1].loads,
+                         p.coordinatorUtilization(), p.workerUtilization(workers), p.chooseCellMicros,
+                         optional(measured ? measured->photonSeconds : 0),
+                         optional(measured ? measured->renderSeconds : 0), p.chooseCellCalls);
   };
-  const std::string header = fmt::format("{:>7} {:>10} {:>10} {:>7} {:>9} {:>9} {:>8} {:>7} {:>7} {:>7} {:>8}\n",
+  const std::string header = fmt::format("{:>7} {:>10} {:>10} {:>7} {:>13} {:>13} {:>8} {:>11} {:>7} {:>7} {:>8}\n",
                                          "workers", "measured", "predicted", "error", "photons", "render", "leases",
                                          "loads", "coord", "work", "choose");
   for (const MeasuredJob& job : jobs) {
+    const bool named = std::any_of(job.record.leases.begin(), job.record.leases.end(),
+                                   [](const LeaseLogEntry& lease) { return lease.moreCellsLogged; });
     std::cout << fmt::format("{}: {} leases by {} workers, coordinator {:.2f} ms CPU per lease; {}; the job had "
-                             "{:.2f} cores\n",
+                             "{:.2f} cores; a cached cell takes {:.2f} (photons) and {:.2f} (render) bytes per file "
+                             "byte; {}\n",
                              job.name, job.record.leases.size(), job.workers,
                              job.record.coordinatorSecondsPerLease * 1e3, workerTimeSummary(job.record.leases),
-                             job.coresHad)
+                             job.coresHad, job.cachedBytesPerFileByte[0], job.cachedBytesPerFileByte[1],
+                             named ? "each worker's cache simulated"
+                                   : "its loads replayed as recorded (its leases' more cells are not named)")
               << header;
-    row(job, job.workers, job.photonSeconds + job.renderSeconds, predict(job, job.workers, options, job));
+    row(job, job.workers, &job, predict(job, job.workers, options, job));
     // The other measured runs, predicted from this one's record.
     for (const MeasuredJob& other : jobs)
       if (&other != &job && other.workers != job.workers)
-        row(job, other.workers, other.photonSeconds + other.renderSeconds, predict(job, other.workers, options, other));
+        row(job, other.workers, &other, predict(job, other.workers, options, other));
   }
   std::cout << fmt::format("predicted from {}{}{}:\n", jobs.front().name,
                            cores != 0 ? fmt::format(", all on {:.2f} cores", cores < 0 ? jobs.front().coresHad : cores)
                                       : std::string(", a machine per worker"),
-                           scaled ? fmt::format(", its tracing work x{}", options.workScale) : std::string())
+                           scaled ? fmt::format(", its photon pass's tracing work x{}", options.workScale) : std::string())
             << header;
-  for (size_t workers : counts) row(jobs.front(), workers, 0, predict(jobs.front(), workers, options, jobs.front()));
+  for (size_t workers : counts)
+    row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front()));
   return 0;
 }
 

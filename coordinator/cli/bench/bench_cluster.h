@@ -19,6 +19,7 @@ struct BenchClusterOptions {
   // threads had in the run predicted (its CPU over its time).
   std::string hostCores = "0";
   double workScale = 1;            // the records' tracing work times this
+  double leaseScale = 1;           // each lease's work times this (ClusterModelOptions::leaseScale)
   std::string csv;
 };
 

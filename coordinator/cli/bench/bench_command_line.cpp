@@ -157,9 +157,15 @@ void addCluster(CLI::App& bench, CommandTable& table) {
       ->capture_default_str();
   command
       ->add_option("--work-scale", o->workScale,
-                   "the records' tracing work (photons, rays) times this, their loads as recorded")
+                   "the records' photon-pass tracing work times this (F times the photons), the render as recorded")
       ->capture_default_str()
       ->check(CLI::Range(1e-3, 1e6));
+  command
+      ->add_option("--lease-scale", o->leaseScale,
+                   "each lease's work times this (the coordinator's lease seconds and --lease-rays): fewer, longer "
+                   "leases")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-2, 1e4));
   command->add_option("--csv", o->csv, "write one row per prediction");
   table.add(command, [o] { return runBenchCluster(*o); });
 }

@@ -38,6 +38,72 @@ ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinato
   return record;
 }
 
+// A record that names its leases' cells (schema 10): `rounds` photon leases
+// per cell, taken round after round over the cells (photons wander back to
+// each cell after the others), 10 000 work in 50 ms each, the first of each
+// cell loading it (10 000 triangles in 20 ms); then a render lease per cell.
+ClusterRecord roundsRecord(uint32_t cells, int rounds) {
+  ClusterRecord record;
+  for (uint32_t c = 0; c < cells; ++c) {
+    CellInfo info;
+    info.id = c;
+    info.triangleCount = 10000;
+    info.byteCount = 400000;
+    record.cells.push_back(info);
+  }
+  const auto lease = [&](int phase, uint32_t cell, bool loads, int64_t resultMs) {
+    LeaseLogEntry entry;
+    entry.job = 1;
+    entry.phase = phase;
+    entry.cell = cell;
+    entry.work = 10000;
+    entry.worker = "w";
+    entry.sentMs = resultMs - 50;
+    entry.resultMs = resultMs;
+    entry.leaseMicros = loads ? 70000 : 50000;
+    entry.loadMicros = loads ? 20000 : 0;
+    entry.cellsLoaded = loads ? 1 : 0;
+    entry.trianglesLoaded = loads ? 10000 : 0;
+    entry.moreCellsLogged = true;
+    record.leases.push_back(entry);
+  };
+  int64_t at = 0;
+  for (int k = 0; k < rounds; ++k)
+    for (uint32_t c = 0; c < cells; ++c) lease(0, c, k == 0, at += 50);
+  for (uint32_t c = 0; c < cells; ++c) lease(1, c, true, at += 50);
+  record.coordinatorSecondsPerLease = 1e-4;
+  return record;
+}
+
+TEST(ClusterModel, AWorkerWhoseCacheCannotHoldTheCellsReloadsThemOneThatCanDoesNot) {
+  const uint32_t cells = 32;
+  const int rounds = 4;
+  const ClusterRecord record = roundsRecord(cells, rounds);
+  ClusterModelOptions options;
+  options.workers = 1;
+  options.workerMemoryBytes = uint64_t(1) << 30;   // every cell, in both structures
+  const ClusterPrediction holdsAll = simulateCluster(record, options);
+  EXPECT_TRUE(holdsAll.phases[0].simulatedCaches);
+  EXPECT_EQ(holdsAll.phases[0].loads, cells);   // each cell once: its later rounds find it
+  EXPECT_EQ(holdsAll.phases[1].loads, cells);   // the render's structure is another
+  // Room for about eight of the 32 cells (1.2 MB each, 1.8 MB made room
+  // for) beside the worker's own 23 MiB: each round finds its cell dropped.
+  options.workerMemoryBytes = (uint64_t(23) << 20) + 10'000'000;
+  const ClusterPrediction small = simulateCluster(record, options);
+  EXPECT_EQ(small.phases[0].loads, int64_t(cells) * rounds);
+  // Each reload costs what the record's loads of that cell took: 20 ms.
+  const double reloads = double(small.phases[0].loads - holdsAll.phases[0].loads);
+  EXPECT_NEAR(small.phases[0].seconds - holdsAll.phases[0].seconds, reloads * 0.020, 0.1 * reloads * 0.020);
+  // Two such workers hold twice the cells, and reload less than one does.
+  options.workers = 2;
+  options.workerMemoryBytes = (uint64_t(23) << 20) + 25'000'000;
+  const ClusterPrediction twoWorkers = simulateCluster(record, options);
+  options.workers = 1;
+  options.workerMemoryBytes = (uint64_t(23) << 20) + 25'000'000;
+  const ClusterPrediction oneWorker = simulateCluster(record, options);
+  EXPECT_LT(twoWorkers.phases[0].loads, oneWorker.phases[0].loads);
+}
+
 TEST(SharedCores, ThreadsBeyondTheCoresShareThemEqually) {
   SharedCores two(2);
   two.start(0, 1.0);
@@ -82,7 +148,7 @@ TEST(ClusterModel, WorkersSharingTheCoresOfOneMachineShareItsSpeed) {
   EXPECT_NEAR(simulateCluster(record, options).seconds(), two, 0.1 * two);
 }
 
-TEST(ClusterModel, AWorkScaleMultipliesTheTracingAndKeepsTheLoads) {
+TEST(ClusterModel, AWorkScaleMultipliesThePhotonPassTracingAndKeepsItsLoadsAndTheRender) {
   const ClusterRecord record = uniformRecord(64, 4, 1e-4, 0.0);
   ClusterModelOptions options;
   options.workers = 2;
@@ -92,11 +158,12 @@ TEST(ClusterModel, AWorkScaleMultipliesTheTracingAndKeepsTheLoads) {
   options.workScale = 2;
   const ClusterPrediction doubled = simulateCluster(record, options);
   // Photon leases: 4 x 49 ms of tracing and one 1 ms load per cell, the
-  // tracing doubled; render: 20 ms and a load.
+  // tracing doubled; render (20 ms and a load per cell): the same image.
   const double photonLoads = 64 * 0.001;
   EXPECT_NEAR(doubled.phases[0].workerBusySeconds - photonLoads, 2 * (base.phases[0].workerBusySeconds - photonLoads),
               0.02 * base.phases[0].workerBusySeconds);
-  EXPECT_NEAR(doubled.seconds(), 2 * base.seconds(), 0.1 * base.seconds());
+  EXPECT_NEAR(doubled.phases[0].seconds, 2 * base.phases[0].seconds, 0.1 * base.phases[0].seconds);
+  EXPECT_DOUBLE_EQ(doubled.phases[1].workerBusySeconds, base.phases[1].workerBusySeconds);
 }
 
 TEST(ClusterModel, OneWorkerTakesItsLeasesTimeAndMoreWorkersShareIt) {

@@ -402,8 +402,8 @@ TEST_F(JobStoreTest, RaisedCountersKeepTheirPeakAndTheLeaseLogKeepsEachLease) {
   store.raiseCounter(job, "memory.peak", 200);
   store.raiseCounter(job, "memory.peak", 500);
   EXPECT_EQ(store.counters(job).at("memory.peak"), 500);
-  LeaseLogEntry first{job, 7, 0, 3, 2, 1500, "w0", 10, 40, 25000, 4000, 1, 20000, 21000, 3000};
-  LeaseLogEntry second{job, 8, 1, 5, 0, 900, "w1", 20, 30, 9000, 0, 0, 0};   // CPU not recorded
+  LeaseLogEntry first{job, 7, 0, 3, 2, 1500, "w0", 10, 40, 25000, 4000, 1, 20000, 21000, 3000, true, {{11, 200}, {4, 50}}};
+  LeaseLogEntry second{job, 8, 1, 5, 0, 900, "w1", 20, 30, 9000, 0, 0, 0};   // CPU, more cells not recorded
   store.logLease(second);
   store.logLease(first);
   const auto log = store.leaseLog(job);
@@ -418,8 +418,11 @@ TEST_F(JobStoreTest, RaisedCountersKeepTheirPeakAndTheLeaseLogKeepsEachLease) {
   EXPECT_EQ(log[1].trianglesLoaded, 20000);
   EXPECT_EQ(log[1].cpuMicros, 21000);
   EXPECT_EQ(log[1].runQueueMicros, 3000);
+  EXPECT_TRUE(log[1].moreCellsLogged);
+  EXPECT_EQ(log[1].moreCellWork, (std::vector<std::pair<uint32_t, int64_t>>{{11, 200}, {4, 50}}));
   EXPECT_EQ(log[0].cpuMicros, -1);
   EXPECT_EQ(log[0].runQueueMicros, -1);
+  EXPECT_FALSE(log[0].moreCellsLogged);
   EXPECT_TRUE(store.leaseLog(job + 1).empty());
 }
 
@@ -427,7 +430,9 @@ TEST_F(JobStoreTest, ALeaseLogOfSchemaEightReadsWithItsCpuUnrecorded) {
   {
     JobStore store(path_.string());
     store.createJob("spec", 1);
-    store.database().exec("ALTER TABLE lease_log DROP COLUMN cpu_us; ALTER TABLE lease_log DROP COLUMN run_queue_us");
+    store.database().exec(
+        "ALTER TABLE lease_log DROP COLUMN cpu_us; ALTER TABLE lease_log DROP COLUMN run_queue_us; "
+        "ALTER TABLE lease_log DROP COLUMN more_cell_work");
     store.database().exec(
         "INSERT INTO lease_log(job, lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, "
         "load_us, cells_loaded, triangles_loaded) VALUES (1, 4, 0, 2, 0, 800, 'w0', 5, 9, 4000, 0, 0, 0)");
@@ -440,6 +445,7 @@ TEST_F(JobStoreTest, ALeaseLogOfSchemaEightReadsWithItsCpuUnrecorded) {
   EXPECT_EQ(log[0].leaseMicros, 4000);
   EXPECT_EQ(log[0].cpuMicros, -1);
   EXPECT_EQ(log[0].runQueueMicros, -1);
+  EXPECT_FALSE(log[0].moreCellsLogged);   // counted, not named
 }
 
 }  // namespace
