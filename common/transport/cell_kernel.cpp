@@ -149,8 +149,18 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
   }
 }
 
+bool CellKernel::cellHasEmitters() const {
+  const CellGeometry& cell = tracer_.cell();
+  for (uint32_t primitive = 0; primitive < cell.mesh().triangleCount; ++primitive)
+    if (scene_.materials()[cell.material(primitive)].emissive()) return true;
+  return false;
+}
+
 uint32_t CellKernel::emissionSamplesPerPixel() const {
   if (parameters_.aov != JobSettings::Aov::Radiance) return 0;
+  // They see only what is emitted inside this cell (or the sky out of it):
+  // with no emitter here and no daylight they would all add zero.
+  if (!daylight_ && !cellHasEmitters()) return 0;
   // 64 (an 8 x 8 multi-jittered pattern) take a lamp's edge in cornell_closed
   // from +-2.6 % to under 1 % of its 16 x 16 block at 16 spp, for ~5 % more
   // time; 16 leave it at +-2.9 % (docs/image-quality.md).
@@ -356,8 +366,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
     switch (event.kind) {
       case CellEvent::Kind::Leave:
         ++out.counters.raysEscaped;
-        // Out of the building: the sky shows, and the sun's disc.
-        if (daylight_ && isEmissionRay(current)) {
+        // Out of the building: the sky shows, and the sun's disc (its
+        // share: seenByThisRay).
+        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current)) {
           const SkyModel& sky = daylight_->sky();
           Vec3 radiance = sky.radiance(current.direction);
           if (sky.hasSun() && insideSunDisc(current.direction, sky.sunDirection()))
@@ -367,6 +378,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
+        // Light emitted beyond the camera's cell is the shaded samples'
+        // share (emissionSeenByThisRay): an emission ray ends here.
+        if (isEmissionRay(current)) return;
         // A camera ray never bounces: its depth counts the portals it crossed.
         ++current.depth;
         cross(current, event, out);
@@ -392,6 +406,8 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           addEmission(current, event, out);
           return;
         }
+        if (parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current))
+          addEmission(current, event, out);
         if (parameters_.aov == JobSettings::Aov::Cells)
           addToFilm(current.pixel, current.weight * cellColour(tracer_.cell().id()), out);
         else if (parameters_.aov == JobSettings::Aov::Portals)
@@ -409,7 +425,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   bool front;
   const Vec3 normal = hitNormalFacing(mesh, hit.primitive, ray.direction, front);
   const Vec3 point = interiorHitPoint(mesh, hit.primitive, hit.u, hit.v);
-  // Emission shows in the pixel's emission rays (isEmissionRay), not here.
+  // Emission is added where the ray met it (traceCameraRay), not here.
   const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, hit.primitive, point);
   if (!(maxComponent(albedo) > 0)) return;
   const Vec3 brdf = albedo * (1.0f / kPi);

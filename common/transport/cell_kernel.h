@@ -84,20 +84,27 @@ class CellKernel {
   // shadow ray adds its light, a probe starts its photon.
   void reachSky(const RayState& ray, KernelOutputs& out);
   // A pixel's light is emitted light seen directly plus light reflected
-  // towards the camera, and each is estimated with its own camera rays:
-  // emission rays (emissionSamplesPerPixel a pixel) add only what they see
-  // emitted (a lamp, the sky), the shaded samples (spp) only reflected
-  // light. Emission rays cost one traversal and no shading, so many of
-  // them cover the edges of a bright lamp finely, where the shaded samples'
-  // few positions would leave its pixels' coverage noisy.
+  // towards the camera. Emitted light met inside the camera's own cell (a
+  // lamp, the sky out of it) is estimated by emission rays of its own
+  // (emissionSamplesPerPixel a pixel), which add only that; the shaded
+  // samples (spp) add reflected light and the emitted light met beyond a
+  // portal. Emission rays cost one traversal of one cell and no shading,
+  // so many of them cover the edges of a bright lamp finely, where the
+  // shaded samples' few positions would leave its pixels' coverage noisy;
+  // ending them at the cell's portals keeps them cheap where most camera
+  // rays cross many cells (an overview of a building).
   uint32_t emissionSamplesPerPixel() const;
+  bool cellHasEmitters() const;
   void traceEmissionRays(uint32_t pixel, uint32_t count, std::vector<PixelSample>& samples,
                          std::vector<uint32_t>& scratch, KernelOutputs& out);
   // Emission rays carry kEmissionPath in their path id (shaded samples'
-  // ids are pixel * spp + sample, far below it), so a neighbour cell that
-  // traces one after a portal knows it.
+  // ids are pixel * spp + sample, far below it).
   static constexpr uint64_t kEmissionPath = 1ull << 63;
   static constexpr uint64_t kEmissionSeedSalt = 0x2545f4914f6cdd1dull;
+  // Whether this camera ray adds the emitted light it meets: the two
+  // estimates split the emitted light by where it is met, so each adds
+  // its own share and none is counted twice.
+  static bool emissionSeenByThisRay(const RayState& ray) { return isEmissionRay(ray) || ray.depth > 0; }
   static bool isEmissionRay(const RayState& ray) {
     return ray.kind == RayKind::Camera && (ray.pathId & kEmissionPath) != 0;
   }
