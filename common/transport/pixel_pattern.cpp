@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "common/rng.h"
+#include "common/transport/multi_jitter.h"
 
 namespace portico {
 
@@ -50,11 +51,8 @@ float jitter(uint64_t key, uint32_t point, uint32_t axis) {
 PixelPattern::PixelPattern(uint64_t seed, uint32_t pixel, PatternUse use, uint32_t count)
     : key_(randomBits(seed, RandomStream::Camera, pixel, static_cast<uint32_t>(use), dim::PixelPattern)),
       count_(count),
-      columns_(1) {
-  for (uint32_t d = 1; d * d <= count; ++d)
-    if (count % d == 0) columns_ = d;
-  rows_ = count / columns_;
-}
+      columns_(jitterGrid(count).columns),
+      rows_(jitterGrid(count).rows) {}
 
 PatternPoint PixelPattern::point(uint32_t index) const {
   const uint32_t key = static_cast<uint32_t>(key_ >> 32);
@@ -66,9 +64,8 @@ PatternPoint PixelPattern::point(uint32_t index) const {
   // count fine columns and fine rows is taken once (as pixel_samples.h).
   const uint32_t columnShift = permute(i, columns_, key * 0xa511e9b3u);
   const uint32_t rowShift = permute(j, rows_, key * 0x63d83595u);
-  const float x = (float(i) + (float(rowShift) + jitter(key_, s, 0)) / float(rows_)) / float(columns_);
-  const float y = (float(j) + (float(columnShift) + jitter(key_, s, 1)) / float(columns_)) / float(rows_);
-  return {std::min(x, kBelowOne), std::min(y, kBelowOne)};
+  return {multiJittered(i, columns_, rowShift, rows_, jitter(key_, s, 0)),
+          multiJittered(j, rows_, columnShift, columns_, jitter(key_, s, 1))};
 }
 
 float PixelPattern::value(uint32_t index) const {

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "common/rng.h"
+#include "common/transport/multi_jitter.h"
 
 namespace portico {
 
@@ -20,10 +21,8 @@ void shuffle(uint64_t seed, uint32_t pixel, uint32_t salt, uint32_t count, uint3
 
 void pixelSamples(uint64_t seed, uint32_t pixel, uint32_t spp, std::vector<PixelSample>& samples,
                   std::vector<uint32_t>& scratch) {
-  uint32_t m = 1;
-  for (uint32_t d = 1; d * d <= spp; ++d)
-    if (spp % d == 0) m = d;
-  const uint32_t n = spp / m;
+  const JitterGrid grid = jitterGrid(spp);
+  const uint32_t m = grid.columns, n = grid.rows;
   scratch.resize(m + n);
   uint32_t* const columnShift = scratch.data();      // sx: one per grid column, shared by every row
   uint32_t* const rowShift = scratch.data() + m;     // sy: one per grid row, shared by every column
@@ -39,8 +38,8 @@ void pixelSamples(uint64_t seed, uint32_t pixel, uint32_t spp, std::vector<Pixel
     // of n and the fine row columnShift[i] of m: over a grid column the
     // rows' shifts are a permutation, so the spp fine columns are each
     // taken once (and the fine rows likewise).
-    samples[s].x = std::min((float(i) + (float(rowShift[j]) + jitterX) / float(n)) / float(m), 0x1.fffffep-1f);
-    samples[s].y = std::min((float(j) + (float(columnShift[i]) + jitterY) / float(m)) / float(n), 0x1.fffffep-1f);
+    samples[s].x = multiJittered(i, m, rowShift[j], n, jitterX);
+    samples[s].y = multiJittered(j, n, columnShift[i], m, jitterY);
   }
 }
 
