@@ -402,12 +402,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           passOrReflect(current, event, material);
           continue;
         }
-        if (isEmissionRay(current)) {
-          addEmission(current, event, out);
-          return;
-        }
         if (parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current))
           addEmission(current, event, out);
+        if (isEmissionRay(current)) return;
         if (parameters_.aov == JobSettings::Aov::Cells)
           addToFilm(current.pixel, current.weight * cellColour(tracer_.cell().id()), out);
         else if (parameters_.aov == JobSettings::Aov::Portals)
@@ -469,7 +466,7 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
 
 Vec3 CellKernel::insideCell(const Vec3& point) const {
   const Bounds3& box = tracer_.cell().bounds();
-  const float margin = 2e-5f * std::max({1.0f, std::abs(point.x), std::abs(point.y), std::abs(point.z)});
+  const float margin = surfaceOffset(point);
   Vec3 inside = point;
   for (int axis = 0; axis < 3; ++axis) {
     if (inside[axis] < box.lo[axis]) inside[axis] = std::min(box.lo[axis] + margin, box.hi[axis]);

@@ -19,12 +19,15 @@ inline Vec3 sampleCosineHemisphere(const Vec3& n, float u1, float u2) {
   return normalize(t * x + b * y + n * z);
 }
 
-// Offset for rays leaving a surface: large enough to clear float error at
-// building scale (coordinates up to ~1 km), small against any real gap.
-inline Vec3 offsetAlongNormal(const Vec3& p, const Vec3& n) {
-  const float scale = std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  return p + n * (2e-5f * scale);
+// How far a ray's start is moved off or into a surface near p: large enough
+// to clear float error at building scale (coordinates up to ~1 km), small
+// against any real gap.
+inline float surfaceOffset(const Vec3& p) {
+  return 2e-5f * std::max({1.0f, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
 }
+
+// Offset for rays leaving a surface.
+inline Vec3 offsetAlongNormal(const Vec3& p, const Vec3& n) { return p + n * surfaceOffset(p); }
 
 inline float luminance(const Vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 

@@ -7,6 +7,7 @@
 
 #include "common/math.h"
 #include "common/mesh_view.h"
+#include "common/transport/sampling.h"
 
 namespace portico {
 
@@ -25,8 +26,7 @@ inline Vec3 interiorHitPoint(const MeshView& mesh, uint32_t primitive, float u, 
   const Vec3 towardCentre = (v0 + v1 + v2) * (1.0f / 3.0f) - point;
   const float distance = std::sqrt(dot(towardCentre, towardCentre));
   if (!(distance > 0)) return point;
-  const float scale = std::max({1.0f, std::abs(point.x), std::abs(point.y), std::abs(point.z)});
-  return point + towardCentre * std::min(0.5f, 2e-5f * scale / distance);
+  return point + towardCentre * std::min(0.5f, surfaceOffset(point) / distance);
 }
 
 }  // namespace portico
