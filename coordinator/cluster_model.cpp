@@ -159,7 +159,8 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase, double workScale) 
     // its loads' seconds per triangle, the lease's (the log counts the
     // lease's loads, not whose). Unlogged, a lease of several cells counts
     // as its own cell's.
-    for (const auto& [cell, work] : cellWork(lease, costs.cellsLogged)) {
+    const std::vector<std::pair<uint32_t, int64_t>> cells = cellWork(lease, costs.cellsLogged);
+    for (const auto& [cell, work] : cells) {
       const double share = double(work) / double(lease.work);
       const int64_t scaled = std::max<int64_t>(1, std::llround(double(work) * workScale));
       // A cell's first piece is queued from the start; a later one once
@@ -179,7 +180,7 @@ PhaseCosts phaseCosts(const ClusterRecord& record, int phase, double workScale) 
         m.loadTriangles += double(lease.trianglesLoaded);
       }
     }
-    for (const auto& [cell, work] : cellWork(lease, costs.cellsLogged)) backAt[cell] = double(doneWork) / phaseWork;
+    for (const auto& [cell, work] : cells) backAt[cell] = double(doneWork) / phaseWork;
     loadSeconds += load;
     triangles += double(lease.trianglesLoaded);
     own += time.seconds;
@@ -477,7 +478,7 @@ class PhaseSimulation {
     const double cost = perLease() / 2 + chooseSeconds;
     prediction_.coordinatorBusySeconds += cost;
     const uint64_t lease = (*nextLease_)++;
-    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, uint32_t(cells.size() - 1), {}});
+    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, {}});
     for (const auto& [cell, piece] : cells) info.cells.use(kModelJob, cell, cachedBytesOf(record_.cells, cell));
     ModelLease modelLease = leaseOf(w, lease, cells);
     modelLease.work = work;

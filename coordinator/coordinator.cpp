@@ -539,7 +539,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
-  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, uint32_t(moreCells.size()), {}};
+  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}};
   for (const auto& [cell, extra] : moreCells) {
     int64_t work = 0;
     for (const QueuedBatch& batch : extra) work += batch.work;
@@ -680,7 +680,7 @@ void Coordinator::recordResultCounters(const std::string& identity, const LeaseR
   if (auto sent = arrivedLeases_.find(lease.id); sent != arrivedLeases_.end()) {
     entry.sentMs = sent->second.sentMs;
     entry.work = sent->second.work;
-    entry.moreCells = sent->second.moreCells;
+    entry.moreCells = uint32_t(sent->second.moreCellWork.size());
     entry.moreCellWork = std::move(sent->second.moreCellWork);
     entry.moreCellsLogged = true;
     arrivedLeases_.erase(sent);

@@ -25,7 +25,6 @@ struct WorkerInfo {
   struct LeaseInFlight {
     int64_t sentMs = 0;
     int64_t work = 0;
-    uint32_t moreCells = 0;
     // Each more cell and the work taken from its queue: logged with the
     // lease (LeaseLogEntry) for the cluster model; never read to schedule.
     std::vector<std::pair<uint32_t, int64_t>> moreCellWork;

@@ -84,7 +84,7 @@ struct RandomCluster {
     w.loadSecondsPerTriangle = below(3) == 0 ? 0 : 1e-8 * double(1 + below(100));
     w.leases.clear();
     for (uint64_t l = 0, n = below(WorkerInfo::kMostLeasesInFlight + 1); l < n; ++l)
-      w.leases.emplace(l, WorkerInfo::LeaseInFlight{0, int64_t(below(200000)), 0, {}});
+      w.leases.emplace(l, WorkerInfo::LeaseInFlight{0, int64_t(below(200000)), {}});
   }
   explicit RandomCluster(size_t count) {
     for (uint32_t c = 0; c < kCells; ++c) {

@@ -6,6 +6,17 @@
 namespace portico {
 namespace {
 
+// Cells 0 to count - 1 of 10 000 triangles in 400 000 bytes each.
+void addCells(ClusterRecord& record, uint32_t count) {
+  for (uint32_t c = 0; c < count; ++c) {
+    CellInfo info;
+    info.id = c;
+    info.triangleCount = 10000;
+    info.byteCount = 400000;
+    record.cells.push_back(info);
+  }
+}
+
 // A record of `cells` cells, each with `leasesPerCell` photon leases of
 // 10 000 work taking 50 ms each and a render lease of 10 000 taking 20 ms;
 // each cell 10 000 triangles loaded in 1 ms. `waited`: the share of each
@@ -14,12 +25,8 @@ namespace {
 ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinatorSecondsPerLease,
                             double waited = -1) {
   ClusterRecord record;
+  addCells(record, cells);
   for (uint32_t c = 0; c < cells; ++c) {
-    CellInfo info;
-    info.id = c;
-    info.triangleCount = 10000;
-    info.byteCount = 400000;
-    record.cells.push_back(info);
     for (int k = 0; k < leasesPerCell; ++k)
       record.leases.push_back({1, 0, 0, c, 0, 10000, "w", 0, 0, k == 0 ? 51000 : 50000, k == 0 ? 1000 : 0,
                                k == 0 ? 1 : 0, k == 0 ? 10000 : 0});
@@ -44,13 +51,7 @@ ClusterRecord uniformRecord(uint32_t cells, int leasesPerCell, double coordinato
 // cell loading it (10 000 triangles in 20 ms); then a render lease per cell.
 ClusterRecord roundsRecord(uint32_t cells, int rounds) {
   ClusterRecord record;
-  for (uint32_t c = 0; c < cells; ++c) {
-    CellInfo info;
-    info.id = c;
-    info.triangleCount = 10000;
-    info.byteCount = 400000;
-    record.cells.push_back(info);
-  }
+  addCells(record, cells);
   const auto lease = [&](int phase, uint32_t cell, bool loads, int64_t resultMs) {
     LeaseLogEntry entry;
     entry.job = 1;
