@@ -230,16 +230,20 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
   const Binning binning = rangeBinning;   // a copy the bins' stores cannot alias
   static_assert(sizeof(BinBox) == sizeof(__m256) && sizeof(PrimitiveReference) == sizeof(__m256));
   const __m256 signOfHi = _mm256_setr_ps(0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f);
+  const __m256 one = _mm256_setr_ps(0, 0, 0, 1, 0, 0, 0, 0);
+  // Lane 3 of a bin counts its references, as a float (exact below 2^24,
+  // and a range bins at most 2 x kSampledReferences of them): the count
+  // rides in the box's own load and store.
   const auto clear = [&](BinSet<kBins>& set) {
-    const __m256 infinity = _mm256_set1_ps(kInfinity);
+    const __m256 empty = _mm256_setr_ps(kInfinity, kInfinity, kInfinity, 0, kInfinity, kInfinity, kInfinity, kInfinity);
     for (int axis = 0; axis < 3; ++axis)
-      for (int b = 0; b < kBins; ++b) _mm256_store_ps(reinterpret_cast<float*>(&set.box[axis][b]), infinity);
-    std::memset(set.count, 0, sizeof(set.count));
+      for (int b = 0; b < kBins; ++b) _mm256_store_ps(reinterpret_cast<float*>(&set.box[axis][b]), empty);
   };
   const auto restoreHi = [&](BinSet<kBins>& set) {
     for (int axis = 0; axis < 3; ++axis)
       for (int b = 0; b < kBins; ++b) {
         float* box = reinterpret_cast<float*>(&set.box[axis][b]);
+        set.count[b][axis] = int32_t(box[3]);
         _mm256_store_ps(box, _mm256_xor_ps(_mm256_load_ps(box), signOfHi));
       }
   };
@@ -248,15 +252,14 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
     __m128i boxOffset, countOffset;
     BinSet<kBins>::offsetsOf(binning.bins(_mm_add_ps(reference.lo, reference.hi)), boxOffset, countOffset);
     char* const boxes = reinterpret_cast<char*>(set.box);
-    char* const counts = reinterpret_cast<char*>(set.count);
-    const auto extend = [&](uint32_t boxAt, uint32_t countAt) {
+    const auto extend = [&](uint32_t boxAt) {
       float* bin = reinterpret_cast<float*>(boxes + boxAt);
-      _mm256_store_ps(bin, _mm256_min_ps(_mm256_load_ps(bin), box));
-      ++*reinterpret_cast<int32_t*>(counts + countAt);
+      const __m256 old = _mm256_load_ps(bin);
+      _mm256_store_ps(bin, _mm256_blend_ps(_mm256_min_ps(old, box), _mm256_add_ps(old, one), 0x08));
     };
-    extend(uint32_t(_mm_cvtsi128_si32(boxOffset)), uint32_t(_mm_cvtsi128_si32(countOffset)));
-    extend(uint32_t(_mm_extract_epi32(boxOffset, 1)), uint32_t(_mm_extract_epi32(countOffset, 1)));
-    extend(uint32_t(_mm_extract_epi32(boxOffset, 2)), uint32_t(_mm_extract_epi32(countOffset, 2)));
+    extend(uint32_t(_mm_cvtsi128_si32(boxOffset)));
+    extend(uint32_t(_mm_extract_epi32(boxOffset, 1)));
+    extend(uint32_t(_mm_extract_epi32(boxOffset, 2)));
   };
   clear(bins);
   if (twoSets) clear(odd);
