@@ -169,13 +169,13 @@ inline __m128 packets4(__m128i counts) {
 struct Binning {
   __m128 base, scale;
   int binCount;
+  // The three axes' scales in one division: bins x 0.99999 / extent where
+  // the extent is positive (lanes 0-2), else 0.
   Binning(const Range& range, int bins) : base(range.centroidLo), binCount(bins) {
-    alignas(16) float extent[4];
-    _mm_store_ps(extent, _mm_sub_ps(range.centroidHi, range.centroidLo));
-    alignas(16) float s[4] = {0, 0, 0, 0};
-    for (int axis = 0; axis < 3; ++axis)
-      s[axis] = extent[axis] > 0 ? float(bins) * 0.99999f / extent[axis] : 0.0f;
-    scale = _mm_load_ps(s);
+    const __m128 extent = _mm_sub_ps(range.centroidHi, range.centroidLo);
+    const __m128 positive = _mm_and_ps(_mm_cmpgt_ps(extent, _mm_setzero_ps()),
+                                       _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0)));
+    scale = _mm_and_ps(positive, _mm_div_ps(_mm_set1_ps(float(bins) * 0.99999f), extent));
   }
   // The bins of a centroid along the three axes (lane 3 unused), clamped to
   // [0, bins - 1] before truncation (rounding may stray by one at either
@@ -239,11 +239,20 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
     for (int axis = 0; axis < 3; ++axis)
       for (int b = 0; b < kBins; ++b) _mm256_store_ps(reinterpret_cast<float*>(&set.box[axis][b]), empty);
   };
+  // Each bin's row of counts (the three axes' lanes 3) is written as one
+  // vector, which the sweep's load of it takes straight from the store.
   const auto restoreHi = [&](BinSet<kBins>& set) {
+    for (int b = 0; b < kBins; ++b) {
+      const __m128 x = _mm_load_ps(reinterpret_cast<const float*>(&set.box[0][b]));
+      const __m128 y = _mm_load_ps(reinterpret_cast<const float*>(&set.box[1][b]));
+      const __m128 z = _mm_load_ps(reinterpret_cast<const float*>(&set.box[2][b]));
+      const __m128 counts = _mm_shuffle_ps(_mm_unpackhi_ps(x, y), _mm_unpackhi_ps(z, _mm_setzero_ps()),
+                                           _MM_SHUFFLE(3, 2, 3, 2));
+      _mm_store_si128(reinterpret_cast<__m128i*>(set.count[b]), _mm_cvttps_epi32(counts));
+    }
     for (int axis = 0; axis < 3; ++axis)
       for (int b = 0; b < kBins; ++b) {
         float* box = reinterpret_cast<float*>(&set.box[axis][b]);
-        set.count[b][axis] = int32_t(box[3]);
         _mm256_store_ps(box, _mm256_xor_ps(_mm256_load_ps(box), signOfHi));
       }
   };
@@ -289,6 +298,7 @@ struct Split {
   int bins = kBins;     // per axis
   int bin = 0;          // references with bin < this go left
   float cost = 0;       // SAH, in packet tests per unit of the parent's half area
+  float base = 0, scale = 0;   // the binning along the split's axis (Binning)
   // When every reference was binned: the two sides' boxes and the left
   // side's count, exact, so the partition need not measure them.
   bool exact = false;
@@ -303,12 +313,8 @@ struct Split {
 struct SideTest {
   float base, scale, limit;
   int axis;
-  SideTest(const Binning& binning, const Split& split) : limit(float(split.bin)), axis(split.axis) {
-    alignas(16) float b[4], s[4];
-    _mm_store_ps(b, binning.base);
-    _mm_store_ps(s, binning.scale);
-    base = b[axis], scale = s[axis];
-  }
+  explicit SideTest(const Split& split)
+      : base(split.base), scale(split.scale), limit(float(split.bin)), axis(split.axis) {}
   bool left(const PrimitiveReference& reference) const {
     const float* lo = reinterpret_cast<const float*>(&reference.lo);
     const float* hi = reinterpret_cast<const float*>(&reference.hi);
@@ -406,6 +412,12 @@ class Builder {
       binReferences(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
     Split best = sweep(bins);
     best.bins = kBins;
+    if (best.axis >= 0) {
+      alignas(16) float base[4], scale[4];
+      _mm_store_ps(base, binning.base);
+      _mm_store_ps(scale, binning.scale);
+      best.base = base[best.axis], best.scale = scale[best.axis];
+    }
     if (stride == 1 && best.axis >= 0) sidesOf(bins, best);
     return best;
   }
@@ -480,12 +492,11 @@ class Builder {
   // Partitions the range by the split, measuring the two sides' boxes (the
   // split's own come from sampled bins in large ranges).
   void partition(const Range& range, const Split& split, Range& left, Range& right) {
-    const Binning binning(range, split.bins);
     const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
     __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
     __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
     __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
-    const SideTest test(binning, split);
+    const SideTest test(split);
     uint32_t i = range.begin, j = range.end;
     while (i < j) {
       const __m128 centroid = _mm_add_ps(references_[i].lo, references_[i].hi);
@@ -576,7 +587,7 @@ class Builder {
   // The children's centroid boxes are bounded rather than measured: the
   // parent's, cut to twice their triangles' box.
   void partitionByCount(const Range& range, const Split& split, Range& left, Range& right) {
-    const SideTest test(Binning(range, split.bins), split);
+    const SideTest test(split);
     const uint32_t middle = range.begin + split.leftCount;
     constexpr uint32_t kBlock = 64;
     uint32_t leftMisplaced[kBlock], rightMisplaced[kBlock];
