@@ -356,8 +356,7 @@ class Builder {
 
   // References to every finite, non-degenerate triangle, and their range.
   Range gatherReferences() {
-    references_.reset(ReferenceAllocator().allocate(mesh_.triangleCount));
-    references_.get_deleter().count = mesh_.triangleCount;
+    references_.reset(new PrimitiveReference[mesh_.triangleCount]);
     uint32_t count = 0;
     __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
     __m128 centroidLo = lo, centroidHi = hi;
@@ -751,14 +750,7 @@ class Builder {
 
   const MeshView& mesh_;
   BvhData<Width>& out_;
-  // On huge pages from 4 MiB, as the tree's arrays: a fresh 4 KiB page costs
-  // a fault, the references of 500k triangles 4 000 of them.
-  using ReferenceAllocator = BvhArrayAllocator<PrimitiveReference>;
-  struct FreeReferences {
-    size_t count = 0;
-    void operator()(PrimitiveReference* references) const { ReferenceAllocator().deallocate(references, count); }
-  };
-  std::unique_ptr<PrimitiveReference[], FreeReferences> references_;   // one per triangle of the mesh, the held ones first
+  std::unique_ptr<PrimitiveReference[]> references_;   // one per triangle of the mesh, the held ones first
   std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's references
   uint32_t packetCount_ = 0;
 };
