@@ -146,8 +146,11 @@ struct BinSet {
         box[axis][b].lo = _mm_min_ps(box[axis][b].lo, other.box[axis][b].lo);
         box[axis][b].hi = _mm_max_ps(box[axis][b].hi, other.box[axis][b].hi);
       }
-    for (int b = 0; b < kBins; ++b)
-      for (int axis = 0; axis < 3; ++axis) count[b][axis] += other.count[b][axis];
+    // Whole rows (lane 3 is 0 in both), as the sweep loads them.
+    for (int b = 0; b < kBins; ++b) {
+      __m128i* row = reinterpret_cast<__m128i*>(count[b]);
+      _mm_store_si128(row, _mm_add_epi32(_mm_load_si128(row), _mm_load_si128(reinterpret_cast<const __m128i*>(other.count[b]))));
+    }
   }
 };
 
@@ -230,7 +233,9 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
   const Binning binning = rangeBinning;   // a copy the bins' stores cannot alias
   static_assert(sizeof(BinBox) == sizeof(__m256) && sizeof(PrimitiveReference) == sizeof(__m256));
   const __m256 signOfHi = _mm256_setr_ps(0, 0, 0, 0, -0.0f, -0.0f, -0.0f, -0.0f);
-  const __m256 one = _mm256_setr_ps(0, 0, 0, 1, 0, 0, 0, 0);
+  // Adding -0 leaves every float as it is (-0 too); lane 3 counts one more.
+  const __m256 one = _mm256_setr_ps(-0.0f, -0.0f, -0.0f, 1, -0.0f, -0.0f, -0.0f, -0.0f);
+  const __m256 infinity = _mm256_set1_ps(kInfinity);
   // Lane 3 of a bin counts its references, as a float (exact below 2^24,
   // and a range bins at most 2 x kSampledReferences of them): the count
   // rides in the box's own load and store.
@@ -257,14 +262,16 @@ void binReferencesAvx(BinSet<kBins>& bins, BinSet<kBins>& odd, bool twoSets, con
       }
   };
   const auto add = [&](BinSet<kBins>& set, const PrimitiveReference& reference) __attribute__((always_inline)) {
-    const __m256 box = _mm256_xor_ps(_mm256_load_ps(reinterpret_cast<const float*>(&reference)), signOfHi);
+    // (lo, -hi), with +infinity in lane 3 (the id's), which the minimum then
+    // leaves to the bin's count.
+    const __m256 box =
+        _mm256_blend_ps(_mm256_xor_ps(_mm256_load_ps(reinterpret_cast<const float*>(&reference)), signOfHi), infinity, 0x08);
     __m128i boxOffset, countOffset;
     BinSet<kBins>::offsetsOf(binning.bins(_mm_add_ps(reference.lo, reference.hi)), boxOffset, countOffset);
     char* const boxes = reinterpret_cast<char*>(set.box);
     const auto extend = [&](uint32_t boxAt) {
       float* bin = reinterpret_cast<float*>(boxes + boxAt);
-      const __m256 old = _mm256_load_ps(bin);
-      _mm256_store_ps(bin, _mm256_blend_ps(_mm256_min_ps(old, box), _mm256_add_ps(old, one), 0x08));
+      _mm256_store_ps(bin, _mm256_add_ps(_mm256_min_ps(_mm256_load_ps(bin), box), one));
     };
     extend(uint32_t(_mm_cvtsi128_si32(boxOffset)));
     extend(uint32_t(_mm_extract_epi32(boxOffset, 1)));
