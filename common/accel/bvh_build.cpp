@@ -369,8 +369,15 @@ class Builder {
     __m128 centroidLo = lo, centroidHi = hi;
     const __m128 infinity = _mm_set1_ps(kInfinity), absolute = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
     const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    // The vertices are read through the indices, in no order the processor
+    // foresees: those of the triangle kVerticesAhead on are asked for now.
+    constexpr uint32_t kVerticesAhead = 16;
     for (uint32_t primitive = 0; primitive < mesh_.triangleCount; ++primitive) {
       const uint32_t* corner = mesh_.indices + 3 * size_t(primitive);
+      if (primitive + kVerticesAhead < mesh_.triangleCount)
+        for (int vertex = 0; vertex < 3; ++vertex)
+          _mm_prefetch(reinterpret_cast<const char*>(mesh_.positions + 3 * size_t(corner[3 * kVerticesAhead + vertex])),
+                       _MM_HINT_T0);
       const __m128 a = loadVertex(corner[0]), b = loadVertex(corner[1]), c = loadVertex(corner[2]);
       // Finite: |v| < infinity, false for NaN too.
       const __m128 finite = _mm_and_ps(_mm_and_ps(_mm_cmplt_ps(_mm_and_ps(a, absolute), infinity),
