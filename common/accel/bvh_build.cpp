@@ -341,6 +341,7 @@ class Builder {
     out_.nodes.reserve(size_t(root.count()) / (2 * Width) + 2);
     // At most one leaf a triangle; pages reserved and never written cost nothing.
     leafRanges_.reserve(root.count());
+    leafPrimitives_.reserve(root.count());
     root.leaf = false;   // the root is always a node, even over one leaf
     alignas(16) float lo[4], hi[4];
     _mm_store_ps(lo, root.lo);
@@ -348,6 +349,7 @@ class Builder {
     out_.bounds = Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
     out_.triangles = root.count();
     buildNode(root, 1);
+    references_.reset();   // writePackets reads leafPrimitives_
     writePackets();
   }
 
@@ -708,15 +710,19 @@ class Builder {
   }
 
   // Numbers the leaf's packets; writePackets fills them once the tree is
-  // built and their count known (one exact allocation). A leaf's range of
-  // references stays as it is: later partitions touch only other ranges.
+  // built and their count known (one exact allocation). The leaf's
+  // triangle ids are copied now, while its references are in cache, into
+  // one array in the leaves' order, which writePackets then reads straight
+  // through.
   uint32_t writeLeaf(const Range& range, int depth) {
     const uint32_t first = packetCount_;
     const uint32_t count = packets(range.count());
     if (first + count - 1 > bvh_child::kMaxFirstPacket)
       throw std::length_error("bvh: more than 2^28 triangle packets");
     packetCount_ += count;
-    leafRanges_.push_back({range.begin, range.end});
+    const uint32_t start = uint32_t(leafPrimitives_.size());
+    for (uint32_t r = range.begin; r < range.end; ++r) leafPrimitives_.push_back(references_[r].primitive());
+    leafRanges_.push_back({start, start + range.count()});
     ++out_.leaves;
     out_.depthSum += depth;
     out_.maxDepth = std::max<uint32_t>(out_.maxDepth, uint32_t(depth));
@@ -736,10 +742,10 @@ class Builder {
     for (size_t leaf = 0; leaf < leaves; ++leaf) {
       if (leaf + kIndicesAhead < leaves)
         for (uint32_t r = leafRanges_[leaf + kIndicesAhead].first; r < leafRanges_[leaf + kIndicesAhead].second; ++r)
-          _mm_prefetch(reinterpret_cast<const char*>(mesh_.indices + 3 * size_t(references_[r].primitive())), _MM_HINT_T0);
+          _mm_prefetch(reinterpret_cast<const char*>(mesh_.indices + 3 * size_t(leafPrimitives_[r])), _MM_HINT_T0);
       if (leaf + kVerticesAhead < leaves)
         for (uint32_t r = leafRanges_[leaf + kVerticesAhead].first; r < leafRanges_[leaf + kVerticesAhead].second; ++r) {
-          const uint32_t* corner = mesh_.indices + 3 * size_t(references_[r].primitive());
+          const uint32_t* corner = mesh_.indices + 3 * size_t(leafPrimitives_[r]);
           for (int vertex = 0; vertex < 3; ++vertex)
             _mm_prefetch(reinterpret_cast<const char*>(mesh_.positions + 3 * size_t(corner[vertex])), _MM_HINT_T0);
         }
@@ -748,7 +754,7 @@ class Builder {
         grid_traversal::TrianglePacket packet;
         __m128 rows[3][kPacketSize];
         for (uint32_t lane = 0; lane < kPacketSize; ++lane) {
-          const uint32_t primitive = references_[std::min(start + lane, end - 1)].primitive();
+          const uint32_t primitive = leafPrimitives_[std::min(start + lane, end - 1)];
           const uint32_t* corner = mesh_.indices + 3 * size_t(primitive);
           for (int vertex = 0; vertex < 3; ++vertex) rows[vertex][lane] = loadVertex(corner[vertex]);
           packet.primitive[lane] = primitive;
@@ -765,7 +771,8 @@ class Builder {
   const MeshView& mesh_;
   BvhData<Width>& out_;
   std::unique_ptr<PrimitiveReference[]> references_;   // one per triangle of the mesh, the held ones first
-  std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's references
+  std::vector<uint32_t> leafPrimitives_;   // the leaves' triangle ids, leaf after leaf
+  std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's ids in leafPrimitives_
   uint32_t packetCount_ = 0;
 };
 
