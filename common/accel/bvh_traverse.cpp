@@ -150,8 +150,11 @@ bool WideBvh<Width>::traverse(const Ray& ray, Hit& best) const {
     const __m128 infinite = _mm_set1_ps(kInfinity);
     const __m128 overflow = _mm_andnot_ps(zero, _mm_or_ps(_mm_cmpnlt_ps(_mm_and_ps(nearScaled, absolute), infinite),
                                                           _mm_cmpnlt_ps(_mm_and_ps(farScaled, absolute), infinite)));
-    if (bvhAvx2InUse() && _mm_movemask_ps(overflow) == 0)
+    if (bvhAvx2InUse() && _mm_movemask_ps(overflow) == 0) {
+      _mm_storeu_ps(slabs.nearScaled, nearScaled);
+      _mm_storeu_ps(slabs.farScaled, farScaled);
       return traverseBvh8Avx2<AnyHit>(tree_, ray, slabs, frame, best);
+    }
   }
   return traverseBvh<Width, AnyHit, SseBoxes>(tree_, ray, slabs, frame, best);
 }

@@ -59,15 +59,17 @@ namespace {
 using Float8 = float __attribute__((vector_size(32)));
 using Int8 = int32_t __attribute__((vector_size(32)));
 
-inline Float8 widen(grid_traversal::PacketRay::Float4 x) { return __builtin_shufflevector(x, x, 0, 1, 2, 3, 0, 1, 2, 3); }
+inline Float8 broadcast8(float x) { return reinterpret_cast<Float8>(_mm256_set1_ps(x)); }   // bit for bit, -0 included
 
+// grid_traversal::PacketRay on eight lanes: the same values, broadcast.
 struct PacketRay8 {
   Float8 originX, originY, originZ, shearX, shearY, scaleZ, tMin, tMax;
   int kx, ky, kz;
-  explicit PacketRay8(const grid_traversal::PacketRay& ray) : kx(ray.kx), ky(ray.ky), kz(ray.kz) {
-    originX = widen(ray.originX), originY = widen(ray.originY), originZ = widen(ray.originZ);
-    shearX = widen(ray.shearX), shearY = widen(ray.shearY), scaleZ = widen(ray.scaleZ);
-    tMin = widen(ray.tMin), tMax = widen(ray.tMax);
+  PacketRay8(const WatertightRay& frame, const Ray& ray) : kx(frame.kx), ky(frame.ky), kz(frame.kz) {
+    const float origin[3] = {ray.origin.x, ray.origin.y, ray.origin.z};
+    originX = broadcast8(origin[kx]), originY = broadcast8(origin[ky]), originZ = broadcast8(origin[kz]);
+    shearX = broadcast8(frame.Sx), shearY = broadcast8(frame.Sy), scaleZ = broadcast8(frame.Sz);
+    tMin = broadcast8(ray.tMin), tMax = broadcast8(ray.tMax);
   }
 };
 
@@ -146,10 +148,11 @@ struct Avx2Boxes {
   __m256 nearScaled[3], farScaled[3], inverse[3];   // origin' * inverse, near and far
   int nearBound[3], farBound[3];                    // float offsets in a node of each axis's near and far bounds
   PacketRay8 packetRay;
-  Avx2Boxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay4) : packetRay(packetRay4) {
+  Avx2Boxes(const BvhSlabs& slabs, const WatertightRay& frame, const Ray& ray) : packetRay(frame, ray) {
+#pragma GCC unroll 3
     for (int axis = 0; axis < 3; ++axis) {
-      nearScaled[axis] = _mm256_set1_ps(slabs.nearOrigin[axis] * slabs.inverse[axis]);
-      farScaled[axis] = _mm256_set1_ps(slabs.farOrigin[axis] * slabs.inverse[axis]);
+      nearScaled[axis] = _mm256_set1_ps(slabs.nearScaled[axis]);
+      farScaled[axis] = _mm256_set1_ps(slabs.farScaled[axis]);
       inverse[axis] = _mm256_set1_ps(slabs.inverse[axis]);
       nearBound[axis] = (2 * axis + slabs.nearSide[axis]) * 8;
       farBound[axis] = (2 * axis + 1 - slabs.nearSide[axis]) * 8;

@@ -14,9 +14,12 @@ namespace portico {
 // inverse, origin' = origin + margin toward the near side for the near
 // bounds and away from it for the far bounds, the near bound being the low
 // one when the direction is positive.
-// Lane 3 of each array is padding (written by four-lane stores).
+// Lane 3 of each array is padding (written by four-lane stores). The AVX2
+// test also takes origin' * inverse, near and far, rounded once per ray
+// (set only where it is chosen).
 struct BvhSlabs {
   float nearOrigin[4], farOrigin[4], inverse[4];
+  float nearScaled[4], farScaled[4];
   int nearSide[3];   // 0: the low bounds are the near ones; 1: the high ones
 };
 

@@ -89,7 +89,7 @@ struct SseBoxes {
   __m128 nearOrigin[3], farOrigin[3], inverse[3];
   int nearSide[3];
   grid_traversal::PacketRay packetRay;
-  SseBoxes(const BvhSlabs& slabs, const grid_traversal::PacketRay& packetRay) : packetRay(packetRay) {
+  SseBoxes(const BvhSlabs& slabs, const WatertightRay& frame, const Ray& ray) : packetRay(frame, ray) {
     for (int axis = 0; axis < 3; ++axis) {
       nearOrigin[axis] = _mm_set1_ps(slabs.nearOrigin[axis]);
       farOrigin[axis] = _mm_set1_ps(slabs.farOrigin[axis]);
@@ -133,11 +133,13 @@ struct SseBoxes {
 template <int Width>
 inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets,
                                 uint32_t child) {
-  // Both computed, one chosen: no branch to mispredict.
+  // Both computed, one chosen by a mask: no branch to mispredict (GCC
+  // turns the plain conditional into one).
   const uintptr_t leaf = reinterpret_cast<uintptr_t>(packets) +
                          uintptr_t(bvh_child::firstPacket(child)) * sizeof(grid_traversal::TrianglePacket);
   const uintptr_t node = reinterpret_cast<uintptr_t>(nodes) + uintptr_t(child) * sizeof(BvhNode<Width>);
-  return reinterpret_cast<const char*>(bvh_child::isLeaf(child) ? leaf : node);
+  const uintptr_t leafMask = uintptr_t(0) - uintptr_t(child >> 31);
+  return reinterpret_cast<const char*>((leaf & leafMask) | (node & ~leafMask));
 }
 
 // Starts the cache misses of a child's four lines (a node's whole, a leaf's
@@ -158,7 +160,7 @@ template <int Width, bool AnyHit, class Boxes>
 [[gnu::flatten]] bool traverseBvh(const BvhData<Width>& tree, const Ray& ray, const BvhSlabs& slabs,
                                    const WatertightRay& frame, Hit& result) {
   Hit best = result;   // a local copy: the stack's stores cannot alias it, so best.t stays in a register
-  const Boxes boxes(slabs, grid_traversal::PacketRay(frame, ray));
+  const Boxes boxes(slabs, frame, ray);
   const BvhNode<Width>* const nodes = tree.nodes.data();
   const grid_traversal::TrianglePacket* const packets = tree.packets.data();
   BvhStackEntry stack[(Width - 1) * kBvhMaxDepth + 1];

@@ -55,11 +55,13 @@ struct WatertightRay {
     const int xLargest = int(ax >= ay) & int(ax >= az);
     const int yLargest = (1 - xLargest) & int(ay >= az);
     kz = 2 - 2 * xLargest - yLargest;
-    const int next = kz == 2 ? 0 : kz + 1, after = next == 2 ? 0 : next + 1;
+    // The two axes after kz, cyclically, as arithmetic and masks: GCC
+    // compiles the plain conditionals into branches.
+    const int next = (kz + 1) & -int(kz != 2), after = (next + 1) & -int(next != 2);
     const float d[3] = {direction.x, direction.y, direction.z};
-    const bool negative = d[kz] < 0.0f;
-    kx = negative ? after : next;
-    ky = negative ? next : after;
+    const int swap = (next ^ after) & -int(d[kz] < 0.0f);
+    kx = next ^ swap;
+    ky = after ^ swap;
   }
 };
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 namespace portico {
@@ -32,6 +33,27 @@ int countHits(const Ray& ray, const std::vector<Triangle>& triangles) {
 Vec3 lerp(const Vec3& a, const Vec3& b, float s) { return a + (b - a) * s; }
 
 const Triangle kUnitTriangle{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+
+// The frame's axes as the paper writes them: kz the largest magnitude (ties
+// to the lower axis), kx and ky the next two cyclically, swapped when the
+// direction along kz is negative.
+TEST(WatertightTriangle, FrameAxesFollowThePaperForEveryOrderingSignAndTie) {
+  const float magnitudes[] = {0.0f, 1.0f, 2.0f};
+  for (float x : magnitudes)
+    for (float y : magnitudes)
+      for (float z : magnitudes)
+        for (int signs = 0; signs < 8; ++signs) {
+          const Vec3 d{(signs & 1) ? -x : x, (signs & 2) ? -y : y, (signs & 4) ? -z : z};   // -0 included
+          const float a[3] = {std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)}, c[3] = {d.x, d.y, d.z};
+          const int kz = a[0] >= a[1] && a[0] >= a[2] ? 0 : (a[1] >= a[2] ? 1 : 2);
+          int kx = (kz + 1) % 3, ky = (kz + 2) % 3;
+          if (c[kz] < 0.0f) std::swap(kx, ky);
+          const WatertightRay frame(d);
+          EXPECT_EQ(frame.kz, kz) << d.x << " " << d.y << " " << d.z;
+          EXPECT_EQ(frame.kx, kx) << d.x << " " << d.y << " " << d.z;
+          EXPECT_EQ(frame.ky, ky) << d.x << " " << d.y << " " << d.z;
+        }
+}
 
 TEST(WatertightTriangle, HitsInteriorEdgesAndVerticesOfOneTriangle) {
   // Axis-aligned rays, and oblique rays whose direction ratios are powers of
