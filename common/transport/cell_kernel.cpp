@@ -127,6 +127,8 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
   std::vector<PixelSample> samples;
   std::vector<uint32_t> scratch;
   const uint32_t emissionSpp = emissionSamplesPerPixel();
+  if (emissionSpp > 0 && !daylight_ && !emitterPixels_)
+    emitterPixels_.emplace(*camera_, parameters_.width, parameters_.height, tracer_.cell(), scene_.materials());
   for (uint32_t pixel = firstPixel; pixel < firstPixel + pixelCount; ++pixel) {
     traceEmissionRays(pixel, emissionSpp, samples, scratch, out);
     const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
@@ -170,6 +172,8 @@ uint32_t CellKernel::emissionSamplesPerPixel() const {
 void CellKernel::traceEmissionRays(uint32_t pixel, uint32_t count, std::vector<PixelSample>& samples,
                                    std::vector<uint32_t>& scratch, KernelOutputs& out) {
   if (count == 0) return;
+  // All would miss the cell's emitters and add nothing.
+  if (emitterPixels_ && !emitterPixels_->mayShowEmitter(pixel)) return;
   const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
   // Positions of their own, not those of the shaded samples.
   pixelSamples(mix64(parameters_.seed ^ kEmissionSeedSalt), pixel, count, samples, scratch);

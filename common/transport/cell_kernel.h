@@ -16,6 +16,7 @@
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_tracer.h"
 #include "common/transport/daylight_openings.h"
+#include "common/transport/emitter_pixels.h"
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
 #include "common/transport/outdoor_passage.h"
@@ -159,6 +160,9 @@ class CellKernel {
   std::vector<uint32_t> nearOpenings_;
   std::optional<LightSampler> lightSampler_;
   std::optional<CameraModel> camera_;
+  // Where emission rays can meet an emitter, made by the first camera batch
+  // that traces them (none with daylight: the sky shows through openings).
+  std::optional<EmitterPixels> emitterPixels_;
   const std::atomic<bool>* stop_ = nullptr;
 };
 
