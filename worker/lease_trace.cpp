@@ -36,6 +36,7 @@ void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobSettings
         break;
     }
   }
+  kernel.finishGathers(out);
 }
 
 int64_t workOf(capnp::List<wire::RayBatch>::Reader batches) {
@@ -97,6 +98,7 @@ int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t l
       CellKernel kernel(*lease.scene, *held->tracer, lease.parameters, photons);
       kernel.setStopFlag(stop);
       for (const RayState& ray : rays) kernel.trace(ray, out);
+      kernel.finishGathers(out);
       forwarded += int64_t(rays.size());
       progress = true;
     }

@@ -26,6 +26,19 @@ class CameraModel {
     const float sy = (1.0f - 2.0f * py / float(height_)) * tanY_;
     return normalize(forward_ + right_ * sx + up_ * sy);
   }
+  // How far `point` lies in front of the camera, along its axis.
+  float depthOf(const Vec3& point) const { return dot(point - origin_, forward_); }
+  // The continuous pixel position (px, py) that direction() aims through
+  // towards `point`; false for a point not in front of the camera (at least
+  // `minDepth` along its axis).
+  bool project(const Vec3& point, float minDepth, float& px, float& py) const {
+    const Vec3 offset = point - origin_;
+    const float depth = depthOf(point);
+    if (!(depth >= minDepth)) return false;
+    px = (dot(offset, right_) / depth / tanX_ + 1.0f) * 0.5f * float(width_);
+    py = (1.0f - dot(offset, up_) / depth / tanY_) * 0.5f * float(height_);
+    return true;
+  }
 
  private:
   Vec3 origin_, forward_, right_, up_;

@@ -127,6 +127,8 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
   std::vector<PixelSample> samples;
   std::vector<uint32_t> scratch;
   const uint32_t emissionSpp = emissionSamplesPerPixel();
+  if (emissionSpp > 0 && !daylight_ && !emitterPixels_)
+    emitterPixels_.emplace(*camera_, parameters_.width, parameters_.height, tracer_.cell(), scene_.materials());
   for (uint32_t pixel = firstPixel; pixel < firstPixel + pixelCount; ++pixel) {
     traceEmissionRays(pixel, emissionSpp, samples, scratch, out);
     const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
@@ -170,6 +172,8 @@ uint32_t CellKernel::emissionSamplesPerPixel() const {
 void CellKernel::traceEmissionRays(uint32_t pixel, uint32_t count, std::vector<PixelSample>& samples,
                                    std::vector<uint32_t>& scratch, KernelOutputs& out) {
   if (count == 0) return;
+  // All would miss the cell's emitters and add nothing.
+  if (emitterPixels_ && !emitterPixels_->mayShowEmitter(pixel)) return;
   const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
   // Positions of their own, not those of the shaded samples.
   pixelSamples(mix64(parameters_.seed ^ kEmissionSeedSalt), pixel, count, samples, scratch);
@@ -522,19 +526,61 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
       const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive, point);
-      Vec3 perAlbedo;
-      if (irradiance_ && irradiance_->lookup(point, normal, perAlbedo)) {
-        addToFilm(ray.pixel, ray.weight * albedo * perAlbedo, out);
+      const PendingGather gather{point, normal, ray.weight, albedo, ray.pixel};
+      if (!irradiance_) {
+        readGather(gather, out);
         return;
       }
-      // Each gather lookup is one of many averaged per pixel, so it can use
-      // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
-      const uint32_t k = std::max(8u, parameters_.photonK / 4);
-      addToFilm(ray.pixel, ray.weight * photons_->radiance(point, normal, albedo, k, parameters_.photonRadius),
-                out);
+      pendingGathers_.push_back(gather);
+      if (pendingGathers_.size() >= kMaxPendingGathers) finishGathers(out);
       return;
     }
   }
+}
+
+void CellKernel::readGather(const PendingGather& gather, KernelOutputs& out) {
+  Vec3 perAlbedo;
+  if (irradiance_ && irradiance_->lookup(gather.point, gather.normal, perAlbedo)) {
+    addToFilm(gather.pixel, gather.weight * gather.albedo * perAlbedo, out);
+    return;
+  }
+  // Each gather lookup is one of many averaged per pixel, so it can use
+  // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
+  const uint32_t k = std::max(8u, parameters_.photonK / 4);
+  addToFilm(gather.pixel,
+            gather.weight * photons_->radiance(gather.point, gather.normal, gather.albedo, k, parameters_.photonRadius),
+            out);
+}
+
+void CellKernel::finishGathers(KernelOutputs& out) {
+  if (pendingGathers_.empty()) return;
+  // Counting sort by the block of a 16 x 16 x 16 grid over the cell's box.
+  constexpr uint32_t kSide = 16;
+  const Bounds3& box = tracer_.cell().bounds();
+  const Vec3 scale = Vec3(float(kSide)) / max(box.diagonal(), Vec3(1e-6f));
+  const auto blockOf = [&](const Vec3& point) {
+    uint32_t block = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const float at = (point[axis] - box.lo[axis]) * scale[axis];
+      const uint32_t step = at > 0 ? std::min(static_cast<uint32_t>(at), kSide - 1) : 0;
+      block = block * kSide + step;
+    }
+    return block;
+  };
+  std::vector<uint32_t> blocks(pendingGathers_.size());
+  std::vector<uint32_t> starts(kSide * kSide * kSide + 1, 0);
+  for (size_t i = 0; i < pendingGathers_.size(); ++i) {
+    blocks[i] = blockOf(pendingGathers_[i].point);
+    ++starts[blocks[i] + 1];
+  }
+  for (size_t b = 1; b < starts.size(); ++b) starts[b] += starts[b - 1];
+  std::vector<uint32_t> order(pendingGathers_.size());
+  for (size_t i = 0; i < pendingGathers_.size(); ++i) order[starts[blocks[i]]++] = static_cast<uint32_t>(i);
+  for (size_t n = 0; n < order.size(); ++n) {
+    if (n % 4096 == 0) checkStop();
+    readGather(pendingGathers_[order[n]], out);
+  }
+  pendingGathers_.clear();
 }
 
 void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {

@@ -16,6 +16,7 @@
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_tracer.h"
 #include "common/transport/daylight_openings.h"
+#include "common/transport/emitter_pixels.h"
 #include "common/transport/film.h"
 #include "common/transport/light_sampler.h"
 #include "common/transport/outdoor_passage.h"
@@ -64,6 +65,10 @@ class CellKernel {
   void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
   // Runs a ray, and the shadow rays it spawns here, to its end in this cell or a crossing.
   void trace(const RayState& ray, KernelOutputs& out);
+  // Final-gather hits that read the irradiance cache wait in the kernel
+  // (see PendingGather); this reads them all and adds their light to `out`.
+  // Call it after the last ray or camera batch a kernel traces.
+  void finishGathers(KernelOutputs& out);
   // Checked before each photon, camera sample and traced ray (a camera
   // sample's gather rays take milliseconds): once set, tracing throws
   // TracingStopped. Each ray's output depends on the ray alone, so where
@@ -141,6 +146,21 @@ class CellKernel {
     return scene_.materials()[tracer_.cell().material(primitive)];
   }
 
+  // A gather hit waiting for its irradiance lookup. Lookups made one after
+  // another at random places of the cell each miss the caches and mispredict
+  // the tree's branches; made in the order of a coarse grid over the cell
+  // (counting sort on 16^3 blocks), consecutive ones read the same leaves.
+  // The film's sums do not depend on the order contributions arrive in
+  // (film.h), so no bit changes.
+  struct PendingGather {
+    Vec3 point, normal, weight, albedo;
+    uint32_t pixel;
+  };
+  // Waiting hits are read when this many are held, to bound the memory.
+  static constexpr size_t kMaxPendingGathers = size_t{1} << 16;
+  void readGather(const PendingGather& gather, KernelOutputs& out);
+  std::vector<PendingGather> pendingGathers_;
+
   const SceneStore& scene_;
   const CellTracer& tracer_;
   const JobSettings& parameters_;
@@ -159,6 +179,9 @@ class CellKernel {
   std::vector<uint32_t> nearOpenings_;
   std::optional<LightSampler> lightSampler_;
   std::optional<CameraModel> camera_;
+  // Where emission rays can meet an emitter, made by the first camera batch
+  // that traces them (none with daylight: the sky shows through openings).
+  std::optional<EmitterPixels> emitterPixels_;
   const std::atomic<bool>* stop_ = nullptr;
 };
 
