@@ -125,7 +125,7 @@ class PointKdTreeBuilder {
   PointKdTree& tree_;
 };
 
-PointKdTree::PointKdTree(const std::vector<Vec3>& positions) {
+PointKdTree::PointKdTree(const std::vector<Vec3>& positions) : pointCount_(positions.size()) {
   if (positions.empty()) return;
   std::vector<BuildItem> items(positions.size()), scratch(positions.size());
   for (size_t i = 0; i < positions.size(); ++i)

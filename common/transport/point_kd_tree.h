@@ -41,7 +41,7 @@ class PointKdTree {
   // n <= kMaxPoints.
   explicit PointKdTree(const std::vector<Vec3>& positions);
 
-  size_t size() const { return order_.size(); }
+  size_t size() const { return pointCount_; }
   // For each slot, the index its point had in `positions`.
   const std::vector<uint32_t>& order() const { return order_; }
   // Frees order() once the caller has used it.
@@ -104,6 +104,7 @@ class PointKdTree {
   std::vector<Node> nodes_;
   std::vector<float> x_, y_, z_;   // per slot, then kLanes - 1 NaN
   std::vector<uint32_t> order_;
+  size_t pointCount_ = 0;
 };
 
 template <typename VisitLeaf>

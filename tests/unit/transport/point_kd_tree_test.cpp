@@ -86,6 +86,18 @@ TEST(PointKdTree, AllPointsEqual) {
   EXPECT_EQ(tree.search({0, 0, 0}, 1500, kInfinity, [](uint32_t) { return true; }, heap), 1000u);
 }
 
+TEST(PointKdTree, ForgettingTheOrderKeepsTheTree) {
+  PointKdTree tree(randomPoints(100, 5));
+  const Vec3 first = tree.position(0);
+  tree.forgetOrder();
+  EXPECT_TRUE(tree.order().empty());
+  EXPECT_EQ(tree.size(), 100u);
+  EXPECT_EQ(tree.position(0), first);
+  std::vector<uint64_t> keys;
+  tree.within({0.5f, 0.5f, 0.5f}, kInfinity, [](uint32_t) { return true; }, keys);
+  EXPECT_EQ(keys.size(), 100u);
+}
+
 TEST(PointKdTree, EmptyTreeFindsNothing) {
   const PointKdTree tree(std::vector<Vec3>{});
   uint64_t heap[4];
