@@ -28,7 +28,7 @@ constexpr uint32_t kSamplesPerCameraBatch = 16384;
 // at these floors), and at most kMaxDefaultPhotons (a default render of
 // the largest buildings stays minutes of photon pass on one machine).
 constexpr uint64_t kDefaultPhotonsPerLight = 5000;
-constexpr uint64_t kMinDefaultPhotons = 200000;
+constexpr uint64_t kMinDefaultPhotons = 400000;
 constexpr uint64_t kMaxDefaultPhotons = 20000000;
 uint64_t defaultPhotonCount(size_t lightCount, size_t cellCount, size_t litCellCount);
 

@@ -76,7 +76,7 @@ struct JobSettings {
   // Defaults checked against the reference scenes (docs/validation.md):
   // final gathering at every camera hit, multi-jittered pixel samples.
   // 0: chosen from the building at submit (defaultPhotonCount,
-  // coordinator/job_planner.h): 5 000 per light, 200 000 to 20 M.
+  // coordinator/job_planner.h): 5 000 per light, 400 000 to 20 M.
   uint64_t photons = 0;
   uint32_t spp = 16;
   uint32_t gather = 4;               // final-gather rays per camera hit (0: estimate at the hit)

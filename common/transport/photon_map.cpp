@@ -7,24 +7,61 @@
 #include <string>
 #include <tuple>
 
+#include "common/rng.h"
+#include "common/transport/order_free_sum.h"
+
 namespace portico {
 namespace {
 
-// The canonical photon order: (pathId, bounce), then every other field by
-// bit pattern, so that even two deposits with the same key (never produced
-// by the tracer, but possible in hand-made input) land in one fixed order.
+// Every field by bit pattern: the order among photons of equal hash (below).
 // Fully identical photons are interchangeable.
-auto photonKey(const StoredPhoton& p) {
-  auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
-  return std::make_tuple(p.pathId, p.bounce, bits(p.position.x), bits(p.position.y), bits(p.position.z),
-                         bits(p.direction.x), bits(p.direction.y), bits(p.direction.z), bits(p.power.x),
-                         bits(p.power.y), bits(p.power.z));
+bool photonLess(const StoredPhoton& a, const StoredPhoton& b) {
+  auto key = [](const StoredPhoton& p) {
+    auto bits = [](float f) { return std::bit_cast<uint32_t>(f); };
+    return std::make_tuple(p.pathId, p.bounce, bits(p.position.x), bits(p.position.y), bits(p.position.z),
+                           bits(p.direction.x), bits(p.direction.y), bits(p.direction.z), bits(p.power.x),
+                           bits(p.power.y), bits(p.power.z));
+  };
+  return key(a) < key(b);
 }
 
-bool photonLess(const StoredPhoton& a, const StoredPhoton& b) {
-  if (a.pathId != b.pathId) return a.pathId < b.pathId;
-  if (a.bounce != b.bounce) return a.bounce < b.bounce;
-  return photonKey(a) < photonKey(b);
+// A hash of every field of a photon: equal for identical photons, and
+// independent of where the photon sits in the input.
+uint64_t photonHash(const StoredPhoton& p) {
+  auto bits = [](float f) { return uint64_t{std::bit_cast<uint32_t>(f)}; };
+  uint64_t h = mix64(p.pathId ^ 0x9e3779b97f4a7c15ull);
+  h = mix64(h ^ (uint64_t{p.bounce} << 32 | bits(p.position.x)));
+  h = mix64(h ^ (bits(p.position.y) << 32 | bits(p.position.z)));
+  h = mix64(h ^ (bits(p.direction.x) << 32 | bits(p.direction.y)));
+  h = mix64(h ^ (bits(p.direction.z) << 32 | bits(p.power.x)));
+  return mix64(h ^ (bits(p.power.y) << 32 | bits(p.power.z)));
+}
+
+// The indices of the photons in an order that depends only on the photons
+// and not on the order they came in: by the hash of their fields, photons
+// of equal hash by every field (photonLess). Sorting 16-byte (hash, index)
+// pairs by one integer is several times faster than comparing the photons'
+// fields.
+std::vector<uint32_t> canonicalOrder(const std::vector<StoredPhoton>& photons) {
+  struct HashAndIndex {
+    uint64_t hash;
+    uint64_t index;
+  };
+  std::vector<HashAndIndex> keys(photons.size());
+  for (size_t i = 0; i < photons.size(); ++i) keys[i] = {photonHash(photons[i]), i};
+  std::sort(keys.begin(), keys.end(), [](const HashAndIndex& a, const HashAndIndex& b) { return a.hash < b.hash; });
+  for (size_t begin = 0; begin < keys.size();) {
+    size_t end = begin + 1;
+    while (end < keys.size() && keys[end].hash == keys[begin].hash) ++end;
+    if (end - begin > 1)
+      std::sort(keys.begin() + begin, keys.begin() + end, [&](const HashAndIndex& a, const HashAndIndex& b) {
+        return photonLess(photons[a.index], photons[b.index]);
+      });
+    begin = end;
+  }
+  std::vector<uint32_t> order(photons.size());
+  for (size_t i = 0; i < keys.size(); ++i) order[i] = static_cast<uint32_t>(keys[i].index);
+  return order;
 }
 
 }  // namespace
@@ -38,96 +75,127 @@ PhotonMap::PhotonMap(std::vector<StoredPhoton> photons) {
       throw std::invalid_argument("photon map: photon of path " + std::to_string(photons[i].pathId) + ", bounce " +
                                   std::to_string(photons[i].bounce) + " has a non-finite position");
 
-  // Canonical order. Sort 32-byte keys rather than 56-byte photons, then
-  // permute once; input that is already in order (the usual case) is kept.
-  // The keys hold the leading fields of photonKey (maps built from photon
-  // tables have pathId 0 and bounce 0 or 1 throughout: the position decides),
-  // so the full key is read only for photons at the same position.
-  if (!std::is_sorted(photons.begin(), photons.end(), photonLess)) {
-    struct SortKey {
-      uint64_t pathId;
-      uint64_t bounceAndX;   // bounce << 32 | bits(position.x)
-      uint64_t yAndZ;        // bits(position.y) << 32 | bits(position.z)
-      uint64_t index;
-    };
-    auto bits = [](float f) { return uint64_t{std::bit_cast<uint32_t>(f)}; };
-    std::vector<SortKey> keys(photons.size());
-    for (size_t i = 0; i < photons.size(); ++i) {
-      const StoredPhoton& p = photons[i];
-      keys[i] = {p.pathId, uint64_t{p.bounce} << 32 | bits(p.position.x), bits(p.position.y) << 32 | bits(p.position.z),
-                 i};
-    }
-    std::sort(keys.begin(), keys.end(), [&](const SortKey& a, const SortKey& b) {
-      if (a.pathId != b.pathId) return a.pathId < b.pathId;
-      if (a.bounceAndX != b.bounceAndX) return a.bounceAndX < b.bounceAndX;
-      if (a.yAndZ != b.yAndZ) return a.yAndZ < b.yAndZ;
-      return photonKey(photons[a.index]) < photonKey(photons[b.index]);
-    });
-    photons_.reserve(photons.size());
-    for (const SortKey& key : keys) photons_.push_back(photons[key.index]);
-  } else {
-    photons_ = std::move(photons);
-    photons_.shrink_to_fit();
-  }
-
-  std::vector<Vec3> positions(photons_.size());
-  for (size_t i = 0; i < photons_.size(); ++i) {
-    positions[i] = photons_[i].position;
+  // The tree over the positions in canonical order, then the photons in the
+  // tree's leaf order, copied once: a search reads the photons of a leaf
+  // side by side.
+  const std::vector<uint32_t> canonical = canonicalOrder(photons);
+  std::vector<Vec3> positions(photons.size());
+  for (size_t i = 0; i < photons.size(); ++i) {
+    positions[i] = photons[canonical[i]].position;
     bounds_.extend(positions[i]);
   }
   tree_ = PointKdTree(positions);
+  positions = {};
+  photons_.reserve(photons.size());
+  for (uint32_t sorted : tree_.order()) photons_.push_back(photons[canonical[sorted]]);
+  tree_.forgetOrder();
 }
 
-float PhotonMap::nearest(const Vec3& p, uint32_t k, float maxRadius, std::vector<uint32_t>& out) const {
+namespace {
+
+// A guessed radius is searched with this margin: the density changes from
+// one query to the next nearby one, and a search that finds fewer than k
+// starts again.
+constexpr float kGuessMargin = 1.15f;
+// Widenings before the search gives up on the guess for the heap search
+// (a guess far too small, or fewer than k photons in the whole map).
+constexpr int kMostWidenings = 3;
+
+float sqrtOrZero(float x) { return x > 0 ? std::sqrt(x) : 0.0f; }
+
+}  // namespace
+
+template <typename Accept>
+PhotonMap::Nearest PhotonMap::nearestKeys(const Vec3& p, uint32_t k, float maxRadiusSquared, Accept accept,
+                                          float* radiusGuess) const {
+  thread_local std::vector<uint64_t> keys;
+  Nearest nearest{};
+  if (radiusGuess && *radiusGuess > 0) {
+    // Every accepted photon within a radius: when k or more, the k nearest
+    // of them are the k nearest of all (the others lie farther).
+    float radius = *radiusGuess * kGuessMargin;
+    for (int widening = 0; widening <= kMostWidenings; ++widening) {
+      const float radiusSquared = std::min(radius * radius, maxRadiusSquared);
+      keys.clear();
+      tree_.within(p, radiusSquared, accept, keys);
+      if (keys.size() >= k) {
+        std::nth_element(keys.begin(), keys.begin() + (k - 1), keys.end());
+        nearest = {keys.data(), k, keys[k - 1]};
+        *radiusGuess = sqrtOrZero(PointKdTree::candidateDistanceSquared(nearest.farthest));
+        return nearest;
+      }
+      if (radiusSquared >= maxRadiusSquared) {   // the whole disc: fewer than k there
+        nearest = {keys.data(), static_cast<uint32_t>(keys.size()), 0};
+        if (!keys.empty()) nearest.farthest = *std::max_element(keys.begin(), keys.end());
+        *radiusGuess = sqrtOrZero(maxRadiusSquared);
+        return nearest;
+      }
+      // As far as a uniform density would need, and at least 1.5 times.
+      const float needed = keys.empty() ? 2.0f : std::sqrt(float(k) / float(keys.size())) * kGuessMargin;
+      radius *= std::clamp(needed, 1.5f, 4.0f);
+    }
+  }
+  if (keys.size() < k) keys.resize(k);
+  nearest.keys = keys.data();
+  nearest.found = tree_.search(p, k, maxRadiusSquared, accept, keys.data());
+  nearest.farthest = nearest.found > 0 ? keys[0] : 0;   // the max-heap's top
+  if (radiusGuess)
+    *radiusGuess =
+        sqrtOrZero(nearest.found == k ? PointKdTree::candidateDistanceSquared(nearest.farthest) : maxRadiusSquared);
+  return nearest;
+}
+
+float PhotonMap::nearest(const Vec3& p, uint32_t k, float maxRadius, std::vector<uint32_t>& out,
+                         float* radiusGuess) const {
   out.clear();
   if (k == 0 || !(maxRadius >= 0)) return 0.0f;
   const float maxRadiusSquared = maxRadius * maxRadius;
   const uint32_t wanted = static_cast<uint32_t>(std::min<size_t>(k, photons_.size()));
   if (wanted == 0) return maxRadiusSquared;
 
-  thread_local std::vector<uint64_t> heap;
-  if (heap.size() < wanted) heap.resize(wanted);
-  const uint32_t found = tree_.search(p, wanted, maxRadiusSquared, [](uint32_t) { return true; }, heap.data());
-
-  std::sort_heap(heap.data(), heap.data() + found);
-  out.resize(found);
-  for (uint32_t i = 0; i < found; ++i) out[i] = PointKdTree::candidateIndex(heap[i]);
-  return found == k ? PointKdTree::candidateDistanceSquared(heap[found - 1]) : maxRadiusSquared;
+  const Nearest nearest = nearestKeys(p, wanted, maxRadiusSquared, [](uint32_t) { return true; }, radiusGuess);
+  std::sort(nearest.keys, nearest.keys + nearest.found);   // nearest first, ties by index
+  out.resize(nearest.found);
+  for (uint32_t i = 0; i < nearest.found; ++i) out[i] = PointKdTree::candidateSlot(nearest.keys[i]);
+  return nearest.found == k ? PointKdTree::candidateDistanceSquared(nearest.farthest) : maxRadiusSquared;
 }
 
 Vec3 PhotonMap::radiance(const Vec3& p, const Vec3& n, const Vec3& albedo, uint32_t k, float maxRadius,
-                         const std::vector<uint8_t>* leftOut) const {
+                         const std::vector<uint8_t>* leftOut, float* radiusGuess) const {
   if (k == 0 || !(maxRadius >= 0)) return {};
   const float maxRadiusSquared = maxRadius * maxRadius;
   const uint32_t wanted = static_cast<uint32_t>(std::min<size_t>(k, photons_.size()));
   if (wanted == 0) return {};
 
-  thread_local std::vector<uint64_t> heap;
-  if (heap.size() < wanted) heap.resize(wanted);
   const auto accept = [&](uint32_t i) {
     return dot(photons_[i].direction, n) < kMostFacingAway && !(leftOut && (*leftOut)[i]);
   };
-  const uint32_t found = tree_.search(p, wanted, maxRadiusSquared, accept, heap.data());
-  if (found == 0) return {};
+  const Nearest nearest = nearestKeys(p, wanted, maxRadiusSquared, accept, radiusGuess);
+  if (nearest.found == 0) return {};
 
-  // Ascending (distance, index): a fixed summation order.
-  std::sort_heap(heap.data(), heap.data() + found);
-  float radiusSquared = PointKdTree::candidateDistanceSquared(heap[found - 1]);
-  if (found < k && std::isfinite(maxRadiusSquared)) radiusSquared = maxRadiusSquared;
+  float radiusSquared = PointKdTree::candidateDistanceSquared(nearest.farthest);
+  if (nearest.found < k && std::isfinite(maxRadiusSquared)) radiusSquared = maxRadiusSquared;
   if (!(radiusSquared > 0)) return {};
   const float radius = std::sqrt(radiusSquared);
   const float discHalfThickness = kDiscThickness * radius;
   const float coneScale = 1.0f / (kConeFilter * radius);
 
-  Vec3 sum;
-  for (uint32_t i = 0; i < found; ++i) {
-    const StoredPhoton& photon = photons_[PointKdTree::candidateIndex(heap[i])];
+  // Each photon's share, then their sum, which does not depend on the
+  // order the search found them in.
+  thread_local std::vector<Vec3> shares;
+  shares.clear();
+  float largest = 0;
+  for (uint32_t i = 0; i < nearest.found; ++i) {
+    const StoredPhoton& photon = photons_[PointKdTree::candidateSlot(nearest.keys[i])];
     if (std::abs(dot(photon.position - p, n)) > discHalfThickness) continue;
-    const float weight = 1.0f - std::sqrt(PointKdTree::candidateDistanceSquared(heap[i])) * coneScale;
-    sum += photon.power * weight;
+    const float weight = 1.0f - std::sqrt(PointKdTree::candidateDistanceSquared(nearest.keys[i])) * coneScale;
+    shares.push_back(photon.power * weight);
+    for (int c = 0; c < 3; ++c) largest = std::max(largest, std::abs(shares.back()[c]));
   }
+  OrderFreeSum sum(largest, static_cast<uint32_t>(shares.size()));
+  for (const Vec3& share : shares) sum.add(share);
   constexpr float coneNormalisation = 1.0f - 2.0f / (3.0f * kConeFilter);
-  return albedo * sum * (1.0f / (kPi * coneNormalisation * kPi * radiusSquared));
+  return albedo * sum.total() * (1.0f / (kPi * coneNormalisation * kPi * radiusSquared));
 }
 
 uint64_t PhotonMap::bytes() const {

@@ -1,17 +1,18 @@
 // A cell's photon map: the photons deposited in (and near) one cell, a
-// balanced kd-tree over their positions, exact k-nearest-neighbour queries
-// and the radiance estimate the renderer takes at a hit point.
+// kd-tree over their positions, exact k-nearest-neighbour queries and the
+// radiance estimate the renderer takes at a hit point.
 //
 // Determinism: the constructor sorts the photons by (pathId, bounce) — with a
-// total tie-break on the remaining fields — before building, so the map, its
-// indices and every query result are bit-identical whatever order the photons
-// arrived in (workers, batches, retries). Queries break distance ties by
-// photon index.
+// total tie-break on the remaining fields — before building, so the tree,
+// the photons' order and indices and every query result are bit-identical
+// whatever order the photons arrived in (workers, batches, retries).
+// Queries break distance ties by photon index.
 //
 // Layout: two flat arrays and no pointers. `photons_` holds the photons in
-// sorted order (photon(i) is the i-th); `tree_` is a left-balanced kd-tree
-// over their positions (PointKdTree). Both can be written out and read back
-// as-is.
+// the tree's leaf order (photon(i) is the i-th; the tree's slot i); `tree_`
+// is a kd-tree with buckets over their positions (PointKdTree), so a search
+// reads the photons of a leaf side by side. Both can be written out and
+// read back as-is.
 #pragma once
 
 #include <cstddef>
@@ -72,9 +73,16 @@ class PhotonMap {
   // when k were found, else maxRadius^2 (infinity for an infinite radius).
   // k == 0 returns 0 and leaves `out` empty.
   //
-  // Allocates nothing except growth of `out` and, on a thread's first query
-  // with a larger k than before, a thread-local heap.
-  float nearest(const Vec3& p, uint32_t k, float maxRadius, std::vector<uint32_t>& out) const;
+  // `radiusGuess` (optional) speeds up a run of queries at nearby points,
+  // and changes no result: on entry a radius expected to hold about k
+  // photons (0 for no guess), on return the radius of the result (the k-th
+  // photon's distance, else maxRadius). With a guess, the search first
+  // collects the photons within a little more than it and widens it when
+  // they are fewer than k, instead of keeping a heap of the k nearest.
+  //
+  // Allocates nothing except growth of `out` and of thread-local buffers.
+  float nearest(const Vec3& p, uint32_t k, float maxRadius, std::vector<uint32_t>& out,
+                float* radiusGuess = nullptr) const;
 
   // Radiance reflected towards the viewer by a Lambertian surface with this
   // albedo at p, normal n (unit, on the viewer's side):
@@ -90,14 +98,26 @@ class PhotonMap {
   // 0 (all found photons sit exactly on p).
   //
   // `leftOut` (null, or one flag per photon) leaves out the photons flagged
-  // non-zero, as if the map had none of them.
+  // non-zero, as if the map had none of them. `radiusGuess` as for
+  // nearest(): the same bits with or without it.
   Vec3 radiance(const Vec3& p, const Vec3& n, const Vec3& albedo, uint32_t k, float maxRadius,
-                const std::vector<uint8_t>* leftOut = nullptr) const;
+                const std::vector<uint8_t>* leftOut = nullptr, float* radiusGuess = nullptr) const;
 
   // Memory held by the map, in bytes.
   uint64_t bytes() const;
 
  private:
+  // The k nearest accepted photons within maxRadiusSquared (k >= 1): their
+  // candidate keys, in no particular order, in a thread-local buffer valid
+  // until the thread's next query.
+  struct Nearest {
+    uint64_t* keys;
+    uint32_t found;
+    uint64_t farthest;   // the largest key, when found > 0
+  };
+  template <typename Accept>
+  Nearest nearestKeys(const Vec3& p, uint32_t k, float maxRadiusSquared, Accept accept, float* radiusGuess) const;
+
   std::vector<StoredPhoton> photons_;
   PointKdTree tree_;
   Bounds3 bounds_;

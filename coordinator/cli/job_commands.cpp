@@ -214,7 +214,7 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
   command.add_option("--photons", o.photons,
-                     "photons emitted in all (default: 5000 per light of the building, at least 200000, at most "
+                     "photons emitted in all (default: 5000 per light of the building, at least 400000, at most "
                      "20000000; docs/large-buildings.md)")
       ->check(wholeNumber(1, limits::kMaxPhotons));
   command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str()->check(wholeNumber(1, limits::kMaxSpp));

@@ -65,7 +65,7 @@ TEST(JobSettings, TheDefaultPhotonCountFollowsTheLightsBetweenAFloorAndACap) {
   EXPECT_EQ(defaultPhotonCount(1, 3, 2), 3 * kMinDefaultPhotons / 2);
   EXPECT_EQ(defaultPhotonCount(1, 3, 1), 2 * kMinDefaultPhotons);
   EXPECT_EQ(defaultPhotonCount(0, 2, 0), 2 * kMinDefaultPhotons);
-  EXPECT_EQ(defaultPhotonCount(100, 300, 100), 100 * kDefaultPhotonsPerLight);
+  EXPECT_EQ(defaultPhotonCount(200, 300, 100), 200 * kDefaultPhotonsPerLight);
   // two_rooms: one light in room A; room B and the door are lit through it.
   const SceneStore& rooms = twoRooms(0);
   EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).photons, 2 * kMinDefaultPhotons);

@@ -111,10 +111,15 @@ void expectMatchesBruteForce(const std::vector<StoredPhoton>& photons, uint64_t 
                               : Vec3(u.next(-0.2f, 1.2f), u.next(-0.2f, 1.2f), u.next(-0.2f, 1.2f));
     for (uint32_t k : ks) {
       for (float radius : radii) {
-        const float returned = map.nearest(p, k, radius, out);
         const Expected expected = bruteForce(map, p, k, radius);
-        ASSERT_EQ(out, expected.indices) << "query " << q << " k " << k << " radius " << radius;
-        ASSERT_EQ(returned, expected.radiusSquared) << "query " << q << " k " << k << " radius " << radius;
+        // No guess (a heap of the k nearest), then guessed radii far too
+        // small, about right and far too large (a range search, widened).
+        for (float guess : {0.0f, 1e-4f, 0.02f, 0.2f, 5.0f}) {
+          float radiusGuess = guess;
+          const float returned = map.nearest(p, k, radius, out, guess > 0 ? &radiusGuess : nullptr);
+          ASSERT_EQ(out, expected.indices) << "query " << q << " k " << k << " radius " << radius << " guess " << guess;
+          ASSERT_EQ(returned, expected.radiusSquared) << "query " << q << " k " << k << " radius " << radius;
+        }
       }
     }
   }
@@ -125,8 +130,27 @@ TEST(PhotonMap, NearestMatchesBruteForceInClusters) { expectMatchesBruteForce(cl
 TEST(PhotonMap, NearestMatchesBruteForceOnAPlane) { expectMatchesBruteForce(onPlane(20000, 3), 13); }
 TEST(PhotonMap, NearestMatchesBruteForceWithManyDuplicates) { expectMatchesBruteForce(duplicates(5000, 4), 14); }
 
+// Points on one line, and points at distances halving towards one end
+// (each midpoint split would take off a single point: the builder falls
+// back to median splits).
+std::vector<StoredPhoton> onALine(uint32_t count, uint64_t seed) {
+  Uniform u(seed);
+  std::vector<StoredPhoton> photons;
+  for (uint32_t i = 0; i < count; ++i) photons.push_back(makePhoton({u.next(), 0.25f, 0.75f}, i));
+  return photons;
+}
+
+std::vector<StoredPhoton> halvingDistances(uint32_t count) {
+  std::vector<StoredPhoton> photons;
+  for (uint32_t i = 0; i < count; ++i) photons.push_back(makePhoton({std::ldexp(1.0f, -int(i % 120)), 0.5f, float(i / 120) * 1e-3f}, i));
+  return photons;
+}
+
+TEST(PhotonMap, NearestMatchesBruteForceOnALine) { expectMatchesBruteForce(onALine(5000, 15), 16); }
+TEST(PhotonMap, NearestMatchesBruteForceAtHalvingDistances) { expectMatchesBruteForce(halvingDistances(3000), 17); }
+
 TEST(PhotonMap, NearestMatchesBruteForceForEverySmallSize) {
-  // Every shape of left-balanced tree from 1 to 40 nodes, k larger than the map.
+  // Every size from a single leaf to a few, k larger than the map.
   for (uint32_t count = 1; count <= 40; ++count) {
     const PhotonMap map(uniformCube(count, 100 + count));
     Uniform u(count);
@@ -134,7 +158,8 @@ TEST(PhotonMap, NearestMatchesBruteForceForEverySmallSize) {
     for (int q = 0; q < 20; ++q) {
       const Vec3 p(u.next(), u.next(), u.next());
       for (uint32_t k : {1u, 3u, count, count + 5}) {
-        const float returned = map.nearest(p, k, kInfinity, out);
+        float radiusGuess = 0.1f;
+        const float returned = map.nearest(p, k, kInfinity, out, q % 2 ? &radiusGuess : nullptr);
         const Expected expected = bruteForce(map, p, k, kInfinity);
         ASSERT_EQ(out, expected.indices) << "count " << count << " k " << k;
         ASSERT_EQ(returned, expected.radiusSquared);
@@ -143,15 +168,20 @@ TEST(PhotonMap, NearestMatchesBruteForceForEverySmallSize) {
   }
 }
 
-TEST(PhotonMap, PhotonsAreSortedByPathAndBounce) {
+TEST(PhotonMap, HoldsEveryPhotonOnce) {
+  // The map reorders the photons (the tree's leaf order): the same photons,
+  // each once.
   std::vector<StoredPhoton> photons = uniformCube(1000, 5);
   std::reverse(photons.begin(), photons.end());
   const PhotonMap map(photons);
-  for (size_t i = 1; i < map.size(); ++i) {
-    const StoredPhoton& a = map.photon(i - 1);
-    const StoredPhoton& b = map.photon(i);
-    ASSERT_TRUE(a.pathId < b.pathId || (a.pathId == b.pathId && a.bounce <= b.bounce)) << i;
+  ASSERT_EQ(map.size(), photons.size());
+  std::vector<uint64_t> paths;
+  for (size_t i = 0; i < map.size(); ++i) {
+    ASSERT_EQ(map.photon(i).position, photons[photons.size() - 1 - map.photon(i).pathId].position) << i;
+    paths.push_back(map.photon(i).pathId);
   }
+  std::sort(paths.begin(), paths.end());
+  for (size_t i = 0; i < paths.size(); ++i) ASSERT_EQ(paths[i], i);
 }
 
 void expectSamePhoton(const StoredPhoton& a, const StoredPhoton& b) {
@@ -191,6 +221,34 @@ TEST(PhotonMap, ArrivalOrderDoesNotChangeAnything) {
     const Vec3 lb = reordered.radiance(p, n, Vec3(0.5f), 40, 0.2f);
     EXPECT_EQ(la, lb);   // bit-identical
   }
+}
+
+TEST(PhotonMap, RadianceIsTheSameWithOrWithoutAGuess) {
+  // A run of nearby queries passing the radius on, as the irradiance cache
+  // does, against each query alone: the same bits, with photons left out
+  // and photons facing either way.
+  Uniform u(40);
+  std::vector<StoredPhoton> photons = clustered(8000, 41);
+  for (uint32_t i = 0; i < 12000; ++i) {
+    const Vec3 direction = normalize(Vec3(u.next(-0.3f, 0.3f), u.next() < 0.8f ? -1.0f : 1.0f, u.next(-0.3f, 0.3f)));
+    photons.push_back(makePhoton({u.next(), u.next(0.0f, 0.05f), u.next()}, 5000 + i, 1, direction,
+                                 {u.next(), u.next(), u.next()}));
+  }
+  const PhotonMap map(std::move(photons));
+  std::vector<uint8_t> leftOut(map.size());
+  for (size_t i = 0; i < map.size(); ++i) leftOut[i] = u.next() < 0.125f;
+  const Vec3 n(0, 1, 0);
+  float radiusGuess = 0;
+  int lit = 0;
+  for (int q = 0; q < 400; ++q) {
+    const Vec3 p(0.002f * float(q % 200), 0.01f, 0.3f + 0.2f * float(q / 200) + u.next(0.0f, 0.01f));
+    for (uint32_t k : {8u, 64u}) {
+      const Vec3 alone = map.radiance(p, n, Vec3(0.7f), k, 0.3f, &leftOut);
+      ASSERT_EQ(map.radiance(p, n, Vec3(0.7f), k, 0.3f, &leftOut, &radiusGuess), alone) << q << " k " << k;
+      lit += alone.x > 0;
+    }
+  }
+  EXPECT_GT(lit, 700);
 }
 
 // A square [0, side]^2 on the plane y = height, lit with total power `total`
