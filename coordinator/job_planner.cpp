@@ -24,13 +24,6 @@ namespace portico {
 
 namespace {
 
-// How many cells hold at least one light.
-size_t litCellCount(const SceneStore& scene) {
-  std::vector<bool> lit(scene.cells().size(), false);
-  for (const AreaLight& light : scene.lights())
-    if (light.cell < lit.size()) lit[light.cell] = true;
-  return static_cast<size_t>(std::count(lit.begin(), lit.end(), true));
-}
 template <typename T>
 void requireAtMost(const char* what, T value, T most) {
   if (value > most) throw std::invalid_argument(fmt::format("{} {} is too large: at most {}", what, value, most));
@@ -127,10 +120,8 @@ const Camera& namedCamera(const std::string& name, const SceneStore& scene) {
 }
 }  // namespace
 
-uint64_t defaultPhotonCount(size_t lightCount, size_t cellCount, size_t litCellCount) {
-  const double unlitShare = std::clamp(double(cellCount) / double(std::max<size_t>(litCellCount, 1)), 1.0, 2.0);
-  const uint64_t floor = static_cast<uint64_t>(double(kMinDefaultPhotons) * unlitShare);
-  return std::clamp<uint64_t>(kDefaultPhotonsPerLight * lightCount, floor, kMaxDefaultPhotons);
+uint64_t defaultPhotonCount(size_t lightCount) {
+  return std::clamp<uint64_t>(kDefaultPhotonsPerLight * lightCount, kMinDefaultPhotons, kMaxDefaultPhotons);
 }
 
 JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
@@ -163,7 +154,7 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   }
   // A cell or portal picture has no photon pass: its 0 stays 0.
   if (settings.photons == 0 && settings.aov == JobSettings::Aov::Radiance)
-    settings.photons = defaultPhotonCount(scene.lights().size(), scene.cells().size(), litCellCount(scene));
+    settings.photons = defaultPhotonCount(scene.lights().size());
   if (settings.photonK == 0) settings.photonK = defaults.photonK;
   if (settings.exposure == 0) settings.exposure = defaults.exposure;
   settings.camera = resolveCamera(settings.camera, scene);

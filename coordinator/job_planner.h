@@ -22,15 +22,13 @@ constexpr uint32_t kSamplesPerCameraBatch = 16384;
 
 // The photon count of a job that names none (docs/large-buildings.md,
 // "Default photon count"): kDefaultPhotonsPerLight per light of the
-// building, at least kMinDefaultPhotons times (cells / cells holding a
-// light), up to twice that (a room lit only through a door gets a share of
-// the photons; the reference scenes' image-quality defaults were checked
-// at these floors), and at most kMaxDefaultPhotons (a default render of
+// building, at least kMinDefaultPhotons (what the reference scenes'
+// image-quality defaults were measured at), and at most kMaxDefaultPhotons (a default render of
 // the largest buildings stays minutes of photon pass on one machine).
 constexpr uint64_t kDefaultPhotonsPerLight = 5000;
 constexpr uint64_t kMinDefaultPhotons = 400000;
 constexpr uint64_t kMaxDefaultPhotons = 20000000;
-uint64_t defaultPhotonCount(size_t lightCount, size_t cellCount, size_t litCellCount);
+uint64_t defaultPhotonCount(size_t lightCount);
 
 // Every automatic value of a submitted job, resolved once from its scene:
 // the image size from the camera, the photon count from the lights (a

@@ -58,17 +58,13 @@ TEST(JobSettings, EveryAutomaticValueIsResolvedOnceFromTheScene) {
 }
 
 TEST(JobSettings, TheDefaultPhotonCountFollowsTheLightsBetweenAFloorAndACap) {
-  EXPECT_EQ(defaultPhotonCount(1, 1, 1), kMinDefaultPhotons);
-  EXPECT_EQ(defaultPhotonCount(100, 100, 100), 100 * kDefaultPhotonsPerLight);
-  EXPECT_EQ(defaultPhotonCount(61000, 18000, 17000), kMaxDefaultPhotons);
-  // Cells without a light raise the floor, up to twice.
-  EXPECT_EQ(defaultPhotonCount(1, 3, 2), 3 * kMinDefaultPhotons / 2);
-  EXPECT_EQ(defaultPhotonCount(1, 3, 1), 2 * kMinDefaultPhotons);
-  EXPECT_EQ(defaultPhotonCount(0, 2, 0), 2 * kMinDefaultPhotons);
-  EXPECT_EQ(defaultPhotonCount(200, 300, 100), 200 * kDefaultPhotonsPerLight);
+  EXPECT_EQ(defaultPhotonCount(1), kMinDefaultPhotons);
+  EXPECT_EQ(defaultPhotonCount(0), kMinDefaultPhotons);
+  EXPECT_EQ(defaultPhotonCount(100), 100 * kDefaultPhotonsPerLight);
+  EXPECT_EQ(defaultPhotonCount(61000), kMaxDefaultPhotons);
   // two_rooms: one light in room A; room B and the door are lit through it.
   const SceneStore& rooms = twoRooms(0);
-  EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).photons, 2 * kMinDefaultPhotons);
+  EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).photons, kMinDefaultPhotons);
   JobSettings chosen;
   chosen.photons = 12345;
   EXPECT_EQ(resolveJobSettings(chosen, rooms).photons, 12345u);
