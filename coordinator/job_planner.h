@@ -23,8 +23,9 @@ constexpr uint32_t kSamplesPerCameraBatch = 16384;
 // The photon count of a job that names none (docs/large-buildings.md,
 // "Default photon count"): kDefaultPhotonsPerLight per light of the
 // building, at least kMinDefaultPhotons (what the reference scenes'
-// image-quality defaults were measured at), and at most kMaxDefaultPhotons (a default render of
-// the largest buildings stays minutes of photon pass on one machine).
+// image-quality defaults are measured at), and at most kMaxDefaultPhotons
+// (a default render of the largest buildings stays minutes of photon pass
+// on one machine).
 constexpr uint64_t kDefaultPhotonsPerLight = 5000;
 constexpr uint64_t kMinDefaultPhotons = 400000;
 constexpr uint64_t kMaxDefaultPhotons = 20000000;

@@ -2,8 +2,8 @@
 // kd-tree over their positions, exact k-nearest-neighbour queries and the
 // radiance estimate the renderer takes at a hit point.
 //
-// Determinism: the constructor sorts the photons by (pathId, bounce) — with a
-// total tie-break on the remaining fields — before building, so the tree,
+// Determinism: the constructor puts the photons in a canonical order (by a
+// hash of every field, ties by every field) before building, so the tree,
 // the photons' order and indices and every query result are bit-identical
 // whatever order the photons arrived in (workers, batches, retries).
 // Queries break distance ties by photon index.
@@ -39,10 +39,10 @@ class PhotonMap {
   // The most photons one map holds: node words keep 30 bits of index.
   static constexpr size_t kMaxPhotons = PointKdTree::kMaxPoints;
   // Cone filter constant k_c (Jensen): w = 1 - d / (k_c r). 1, the
-  // sharpest cone, blurs least: the reference scenes' error is mostly the
-  // estimate's blur (a flat disc doubles it), and against 1.1 it takes
-  // cornell_closed's block RMSE from 0.46 to 0.42 % (0.43 to 0.37 % at 64
-  // spp); a bias-cancelling kernel with a negative lobe was noisier (0.52 %).
+  // sharpest cone, blurs least, and the reference scenes' error is mostly
+  // the estimate's blur: a flat disc (box filter) has about twice the
+  // cornell_closed block RMSE, a kernel with a negative lobe is noisier
+  // (docs/image-quality.md).
   static constexpr float kConeFilter = 1.0f;
   // radiance() counts a photon whose surface's normal is within 120 degrees
   // of the query's: the far side of a thin wall (opposite normals) is left

@@ -62,7 +62,7 @@ TEST(JobSettings, TheDefaultPhotonCountFollowsTheLightsBetweenAFloorAndACap) {
   EXPECT_EQ(defaultPhotonCount(0), kMinDefaultPhotons);
   EXPECT_EQ(defaultPhotonCount(100), 100 * kDefaultPhotonsPerLight);
   EXPECT_EQ(defaultPhotonCount(61000), kMaxDefaultPhotons);
-  // two_rooms: one light in room A; room B and the door are lit through it.
+  // two_rooms: one light, in one of its three cells: the floor.
   const SceneStore& rooms = twoRooms(0);
   EXPECT_EQ(resolveJobSettings(JobSettings{}, rooms).photons, kMinDefaultPhotons);
   JobSettings chosen;
