@@ -13,11 +13,22 @@
 // (order() maps each point's number to the number it was given), so a
 // query's filter reads memory next to what the tree reads.
 //
+// Splits: points on walls, floors and ceilings share a coordinate, and
+// queries lie on the same planes. A split never divides points of equal
+// coordinate between its sides: each side keeps the exact extent of its
+// points on the axis (the left's highest, the right's lowest), so a query
+// on a wall's plane, at distance 0 from a plane through the wall, still
+// skips the side that holds none of the wall's points. (Splitting equal
+// coordinates by index made such queries visit both sides at every level
+// that split on the wall's axis: a few per cent of the lookups did most
+// of the work.)
+//
 // Determinism: the tree depends only on the points and their order, and a
 // query's answer is the accepted point of least (squared distance in
 // float, number): the exact nearest, ties broken by number.
 #pragma once
 
+#include <algorithm>
 #include <bit>
 #include <cstdint>
 #include <vector>
@@ -50,16 +61,26 @@ class NearestPointTree {
   uint32_t nearest(const Vec3& p, float maxRadiusSquared, Accept accept) const;
 
  private:
-  // Interior: split plane `split` on axis `axisOrLeaf` (0-2), the left child
+  // Interior: on axis `axisOrLeaf` (0-2), every point of the left subtree
+  // <= leftHigh <= rightLow <= every point of the right one; the left child
   // next in the array, the right one at `index`. Leaf: axisOrLeaf is
   // kLeaf | count << 2, its points [index, index + count).
   struct Node {
-    float split;
+    float leftHigh;
+    float rightLow;
     uint32_t index;
     uint32_t axisOrLeaf;
   };
   static constexpr uint32_t kLeaf = 3;
-  uint32_t build(uint32_t begin, uint32_t end, std::vector<uint32_t>& items, const std::vector<Vec3>& positions);
+  // Far children waiting: one per level. Below kMostSplitDepth a split can
+  // leave one side most of the points (a plane of equal coordinates);
+  // deeper ones halve them, and < 2^30 points need under 30 more levels.
+  static constexpr int kMostDepth = 64;
+  static constexpr int kMostSplitDepth = 32;
+  static_assert(kMostSplitDepth + 30 < kMostDepth);
+
+  uint32_t build(uint32_t begin, uint32_t end, int depth, std::vector<uint32_t>& items,
+                 const std::vector<Vec3>& positions);
 
   std::vector<Node> nodes_;
   std::vector<Vec3> positions_;
@@ -71,24 +92,27 @@ uint32_t NearestPointTree::nearest(const Vec3& p, float maxRadiusSquared, Accept
   if (nodes_.empty()) return kNone;
   uint64_t best = ~uint64_t{0};   // (squared distance bits, number): one comparison orders both
   float bound = maxRadiusSquared;
-  // Far children waiting, with the squared distance to their plane. Each
-  // level pushes at most one, and the depth is under 32 for < 2^32 points.
+  // Far children waiting, with the squared distance to their side's
+  // extent on the node's axis.
   struct Pending {
     uint32_t node;
     float planeDistanceSquared;
   };
-  Pending stack[64];
+  Pending stack[kMostDepth];
   int pending = 0;
   uint32_t node = 0;
   for (;;) {
     const Node* current = &nodes_[node];
     while ((current->axisOrLeaf & 3) != kLeaf) {
-      const float delta = p[static_cast<int>(current->axisOrLeaf)] - current->split;
+      const float coordinate = p[static_cast<int>(current->axisOrLeaf)];
+      // How far beyond each side's extent the query lies (<= 0: within).
+      const float beyondLeft = coordinate - current->leftHigh;
+      const float beforeRight = current->rightLow - coordinate;
       const uint32_t left = static_cast<uint32_t>(current - nodes_.data()) + 1;
-      const uint32_t nearChild = delta > 0 ? current->index : left;
-      const uint32_t farChild = delta > 0 ? left : current->index;
-      stack[pending++] = {farChild, delta * delta};
-      current = &nodes_[nearChild];
+      const bool rightNearer = beyondLeft > beforeRight;
+      const float farDistance = std::max(rightNearer ? beyondLeft : beforeRight, 0.0f);
+      stack[pending++] = {rightNearer ? left : current->index, farDistance * farDistance};
+      current = &nodes_[rightNearer ? current->index : left];
     }
     const uint32_t end = current->index + (current->axisOrLeaf >> 2);
     for (uint32_t i = current->index; i < end; ++i) {

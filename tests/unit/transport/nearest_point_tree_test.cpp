@@ -70,6 +70,46 @@ TEST(NearestPointTree, FindsWhatBruteForceFindsWithFiltersRadiiAndTies) {
   }
 }
 
+// Queries on the planes the points lie on (a hit on a wall reads points on
+// that wall): exact, like any other query.
+TEST(NearestPointTree, FindsWhatBruteForceFindsOnThePlanesOfItsPoints) {
+  const std::vector<Vec3> points = testPoints(20000, 3);
+  const NearestPointTree tree(points);
+  const auto all = [](uint32_t) { return true; };
+  const auto everyThird = [&](uint32_t i) { return tree.order()[i] % 3 == 0; };
+  for (uint32_t q = 0; q < 300; ++q) {
+    const float u = uniform(41, q, 0), v = uniform(41, q, 1);
+    const Vec3 onPlane[] = {{u * 4, 0, v * 3}, {0, u * 2.5f, v * 3}, {u * 4, 2.5f, v * 3}, {u * 4, 1.0f, v * 3}};
+    for (const Vec3& p : onPlane)
+      for (float r2 : {0.0004f, 0.04f, 100.0f}) {
+        ASSERT_EQ(tree.nearest(p, r2, all), bruteForceNearest(tree, p, r2, all)) << q;
+        ASSERT_EQ(tree.nearest(p, r2, everyThird), bruteForceNearest(tree, p, r2, everyThird)) << q;
+      }
+  }
+}
+
+// Many equal coordinates, down to every point at one place: the splits that
+// keep equal coordinates together still leave a tree its stack can walk.
+TEST(NearestPointTree, FindsWhatBruteForceFindsAmongEqualCoordinates) {
+  std::vector<Vec3> stairs, same(3000, Vec3(1, 2, 3));
+  // Half the points at x 0, a quarter at x 1, an eighth at x 2, ...
+  for (uint32_t i = 0; i < 40000; ++i)
+    stairs.push_back({float(std::countr_zero(i + 1)), float(i % 3) * 1e-3f, 0});
+  for (const std::vector<Vec3>* points : {&stairs, &same}) {
+    const NearestPointTree tree(*points);
+    ASSERT_EQ(tree.size(), points->size());
+    const auto all = [](uint32_t) { return true; };
+    const auto odd = [&](uint32_t i) { return tree.order()[i] % 2 == 1; };
+    for (uint32_t q = 0; q < 200; ++q) {
+      const Vec3 p = (*points)[(q * 7919) % points->size()] + Vec3(0, uniform(5, q, 0) * 2e-3f, 0);
+      for (float r2 : {0.0f, 1e-6f, 4.0f}) {
+        ASSERT_EQ(tree.nearest(p, r2, all), bruteForceNearest(tree, p, r2, all)) << q;
+        ASSERT_EQ(tree.nearest(p, r2, odd), bruteForceNearest(tree, p, r2, odd)) << q;
+      }
+    }
+  }
+}
+
 TEST(NearestPointTree, DependsOnlyOnThePointsAndTheirOrder) {
   const std::vector<Vec3> points = testPoints(3000, 5);
   const NearestPointTree a(points), b(points);
