@@ -37,19 +37,43 @@ uint64_t photonHash(const StoredPhoton& p) {
   return mix64(h ^ (bits(p.power.y) << 32 | bits(p.power.z)));
 }
 
+struct HashAndIndex {
+  uint64_t hash;
+  uint64_t index;
+};
+
+// Sorts by hash, stably: an LSD radix sort of 11-bit digits (six passes,
+// the six digits' counts taken in one read). On a million photons it takes
+// a fraction of std::sort's time, whose comparisons of random hashes
+// mispredict about every other branch.
+void sortByHash(std::vector<HashAndIndex>& keys) {
+  constexpr int kDigitBits = 11, kPasses = 6;
+  constexpr uint32_t kDigits = 1u << kDigitBits;
+  std::vector<uint32_t> counts(size_t{kPasses} * kDigits, 0);
+  for (const HashAndIndex& key : keys)
+    for (int pass = 0; pass < kPasses; ++pass) ++counts[pass * kDigits + ((key.hash >> (pass * kDigitBits)) & (kDigits - 1))];
+  std::vector<HashAndIndex> scratch(keys.size());
+  for (int pass = 0; pass < kPasses; ++pass) {
+    uint32_t* offsets = &counts[pass * kDigits];
+    uint32_t sum = 0;
+    for (uint32_t digit = 0; digit < kDigits; ++digit) {
+      const uint32_t count = offsets[digit];
+      offsets[digit] = sum;
+      sum += count;
+    }
+    const int shift = pass * kDigitBits;
+    for (const HashAndIndex& key : keys) scratch[offsets[(key.hash >> shift) & (kDigits - 1)]++] = key;
+    keys.swap(scratch);
+  }
+}
+
 // The indices of the photons in an order that depends only on the photons
 // and not on the order they came in: by the hash of their fields, photons
-// of equal hash by every field (photonLess). Sorting 16-byte (hash, index)
-// pairs by one integer is several times faster than comparing the photons'
-// fields.
+// of equal hash by every field (photonLess).
 std::vector<uint32_t> canonicalOrder(const std::vector<StoredPhoton>& photons) {
-  struct HashAndIndex {
-    uint64_t hash;
-    uint64_t index;
-  };
   std::vector<HashAndIndex> keys(photons.size());
   for (size_t i = 0; i < photons.size(); ++i) keys[i] = {photonHash(photons[i]), i};
-  std::sort(keys.begin(), keys.end(), [](const HashAndIndex& a, const HashAndIndex& b) { return a.hash < b.hash; });
+  sortByHash(keys);
   for (size_t begin = 0; begin < keys.size();) {
     size_t end = begin + 1;
     while (end < keys.size() && keys[end].hash == keys[begin].hash) ++end;
@@ -78,17 +102,28 @@ PhotonMap::PhotonMap(std::vector<StoredPhoton> photons) {
   // The tree over the positions in canonical order, then the photons in the
   // tree's leaf order, copied once: a search reads the photons of a leaf
   // side by side.
-  const std::vector<uint32_t> canonical = canonicalOrder(photons);
+  // Both copies read the input in a random order: each prefetches the
+  // photon it reads kAhead photons later (about twice as fast on a million).
+  constexpr size_t kAhead = 16;
+  std::vector<uint32_t> source = canonicalOrder(photons);
   std::vector<Vec3> positions(photons.size());
   for (size_t i = 0; i < photons.size(); ++i) {
-    positions[i] = photons[canonical[i]].position;
+    if (i + kAhead < photons.size()) __builtin_prefetch(&photons[source[i + kAhead]]);
+    positions[i] = photons[source[i]].position;
     bounds_.extend(positions[i]);
   }
   tree_ = PointKdTree(positions);
   positions = {};
-  photons_.reserve(photons.size());
-  for (uint32_t sorted : tree_.order()) photons_.push_back(photons[canonical[sorted]]);
+  // Each slot's photon's index in the input.
+  std::vector<uint32_t> inputOf(photons.size());
+  for (size_t slot = 0; slot < photons.size(); ++slot) inputOf[slot] = source[tree_.order()[slot]];
+  source = {};
   tree_.forgetOrder();
+  photons_.reserve(photons.size());
+  for (size_t slot = 0; slot < photons.size(); ++slot) {
+    if (slot + kAhead < photons.size()) __builtin_prefetch(&photons[inputOf[slot + kAhead]]);
+    photons_.push_back(photons[inputOf[slot]]);
+  }
 }
 
 namespace {

@@ -57,6 +57,24 @@ std::string summaryLine(const nlohmann::json& s) {
 }
 }  // namespace
 
+std::chrono::milliseconds PollPacer::next(const nlohmann::json& status, Clock::time_point now) {
+  const std::chrono::milliseconds interval = statusPollInterval(now - started_);
+  const auto& progress = status.find("progress");
+  if (progress == status.end() || !progress->is_object()) return interval;
+  const int64_t done = progress->value("camera_rays_done", int64_t{0});
+  const int64_t total = progress->value("camera_rays_total", int64_t{0});
+  if (firstRays_ == 0) {
+    if (done > 0) firstRays_ = done, firstRaysSeen_ = now;
+    return interval;
+  }
+  if (done <= firstRays_ || done >= total) return interval;
+  const double seconds = std::chrono::duration<double>(now - firstRaysSeen_).count();
+  const auto remaining = std::chrono::milliseconds(
+      static_cast<int64_t>(1000.0 * seconds * double(total - done) / double(done - firstRays_)));
+  const auto shortest = std::max(interval / 4, std::chrono::milliseconds(50));
+  return std::clamp(remaining, shortest, interval);
+}
+
 std::string describeStatus(const nlohmann::json& s) {
   std::string text;
   if (s.contains("jobs")) {

@@ -45,7 +45,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
   bool sunShown = false;
   std::string state;
   nlohmann::json status;
-  const auto waitStarted = std::chrono::steady_clock::now();
+  PollPacer pacer(std::chrono::steady_clock::now());
   while (!interrupted()) {
     try {
       status = nlohmann::json::parse(client.statusJson(job));
@@ -62,7 +62,7 @@ int runRender(const JobSettings& render, const LocalRunOptions& local) {
       status["error"] = *failure;
       break;
     }
-    std::this_thread::sleep_for(statusPollInterval(std::chrono::steady_clock::now() - waitStarted));
+    std::this_thread::sleep_for(pacer.next(status, std::chrono::steady_clock::now()));
   }
   if (interrupted()) {
     // A terminal's Ctrl-C reached the services too, and the coordinator may
