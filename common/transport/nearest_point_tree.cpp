@@ -1,6 +1,7 @@
 #include "common/transport/nearest_point_tree.h"
 
 #include <algorithm>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -14,8 +15,14 @@ NearestPointTree::NearestPointTree(const std::vector<Vec3>& positions) {
   nodes_.reserve(2 * (positions.size() / kLeafSize + 1));
   if (!items.empty()) build(0, static_cast<uint32_t>(items.size()), 0, items, positions);
   order_ = std::move(items);
-  positions_.resize(order_.size());
-  for (size_t i = 0; i < order_.size(); ++i) positions_[i] = positions[order_[i]];
+  const size_t slots = order_.empty() ? 0 : order_.size() + PointLanes::kLanes - 1;
+  for (auto* column : {&x_, &y_, &z_}) column->assign(slots, std::numeric_limits<float>::quiet_NaN());
+  for (size_t i = 0; i < order_.size(); ++i) {
+    const Vec3& position = positions[order_[i]];
+    x_[i] = position.x;
+    y_[i] = position.y;
+    z_[i] = position.z;
+  }
 }
 
 // Splits [begin, end) of `items` across its box's longest axis until a

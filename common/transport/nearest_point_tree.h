@@ -34,6 +34,7 @@
 #include <vector>
 
 #include "common/math.h"
+#include "common/transport/point_lanes.h"
 
 namespace portico {
 
@@ -45,12 +46,12 @@ class NearestPointTree {
   NearestPointTree() = default;
   explicit NearestPointTree(const std::vector<Vec3>& positions);
 
-  size_t size() const { return positions_.size(); }
+  size_t size() const { return order_.size(); }
   // For each point number (leaf order), the index it had in `positions`.
   const std::vector<uint32_t>& order() const { return order_; }
-  const Vec3& position(uint32_t point) const { return positions_[point]; }
+  Vec3 position(uint32_t point) const { return {x_[point], y_[point], z_[point]}; }
   uint64_t bytes() const {
-    return nodes_.capacity() * sizeof(Node) + positions_.capacity() * sizeof(Vec3) +
+    return nodes_.capacity() * sizeof(Node) + (x_.capacity() + y_.capacity() + z_.capacity()) * sizeof(float) +
            order_.capacity() * sizeof(uint32_t);
   }
 
@@ -83,7 +84,7 @@ class NearestPointTree {
                  const std::vector<Vec3>& positions);
 
   std::vector<Node> nodes_;
-  std::vector<Vec3> positions_;
+  std::vector<float> x_, y_, z_;   // per point, then PointLanes::kLanes - 1 NaN
   std::vector<uint32_t> order_;
 };
 
@@ -100,6 +101,7 @@ uint32_t NearestPointTree::nearest(const Vec3& p, float maxRadiusSquared, Accept
   };
   Pending stack[kMostDepth];
   int pending = 0;
+  const PointLanes lanes(p);
   uint32_t node = 0;
   for (;;) {
     const Node* current = &nodes_[node];
@@ -114,15 +116,20 @@ uint32_t NearestPointTree::nearest(const Vec3& p, float maxRadiusSquared, Accept
       stack[pending++] = {rightNearer ? left : current->index, farDistance * farDistance};
       current = &nodes_[rightNearer ? current->index : left];
     }
+    // kLanes points at a time; the last group reads past the leaf (the next
+    // leaf's points, or the NaN after the last), which the mask drops.
     const uint32_t end = current->index + (current->axisOrLeaf >> 2);
-    for (uint32_t i = current->index; i < end; ++i) {
-      const Vec3 offset = positions_[i] - p;
-      const float distanceSquared = dot(offset, offset);
-      if (distanceSquared > bound) continue;
-      const uint64_t key = (uint64_t{std::bit_cast<uint32_t>(distanceSquared)} << 32) | i;
-      if (key < best && accept(i)) {
-        best = key;
-        bound = distanceSquared;
+    for (uint32_t first = current->index; first < end; first += PointLanes::kLanes) {
+      float distanceSquared[PointLanes::kLanes];
+      uint32_t inside = lanes.within(&x_[first], &y_[first], &z_[first], bound, distanceSquared);
+      if (end - first < PointLanes::kLanes) inside &= (1u << (end - first)) - 1;
+      for (; inside; inside &= inside - 1) {
+        const uint32_t i = first + static_cast<uint32_t>(std::countr_zero(inside));
+        const uint64_t key = (uint64_t{std::bit_cast<uint32_t>(distanceSquared[i - first])} << 32) | i;
+        if (key < best && accept(i)) {
+          best = key;
+          bound = distanceSquared[i - first];
+        }
       }
     }
     // The next far side that can still hold a point as near (rounding is
