@@ -385,31 +385,54 @@ class Builder {
   // furniture, which usually hides it. With more than Width - 2 such leaves
   // (too few slots left for the rest), none: the root's range stays whole.
   int separateLarge(Range& root, Range (&leaves)[Width]) {
+    constexpr uint32_t kMostLarge = kPacketSize * (Width - 2);
     const float rootArea = halfArea(root.lo, root.hi);
     if (!(rootArea > 0)) return 0;
+    // One pass: the others moved down in order (measured as they go), the
+    // large ones aside. More than fit in the leaves: they are put back
+    // into the slots already read past, the range the same set.
     PrimitiveReference* const references = references_.get();
-    PrimitiveReference* const firstLarge =
-        std::stable_partition(references + root.begin, references + root.end, [&](const PrimitiveReference& r) {
-          return halfArea(r.lo, r.hi) * kLargeShare < rootArea;
-        });
-    const uint32_t begin = uint32_t(firstLarge - references);
-    if (begin == root.begin || begin == root.end) return 0;
-    std::stable_sort(firstLarge, references + root.end, [](const PrimitiveReference& a, const PrimitiveReference& b) {
+    PrimitiveReference large[kMostLarge];
+    uint32_t taken = 0, kept = root.begin;
+    const __m128 infinity = _mm_set1_ps(kInfinity);
+    __m128 lo = infinity, hi = _mm_set1_ps(-kInfinity), centroidLo = lo, centroidHi = hi;
+    const auto putBack = [&] {
+      std::copy(large, large + taken, references + kept);
+      return 0;
+    };
+    for (uint32_t i = root.begin; i < root.end; ++i) {
+      const PrimitiveReference reference = references[i];
+      if (halfArea(reference.lo, reference.hi) * kLargeShare >= rootArea) {
+        if (taken == kMostLarge) return putBack();
+        large[taken++] = reference;
+        continue;
+      }
+      references[kept++] = reference;
+      lo = _mm_min_ps(lo, reference.lo);
+      hi = _mm_max_ps(hi, reference.hi);
+      const __m128 centroid = _mm_add_ps(reference.lo, reference.hi);
+      centroidLo = _mm_min_ps(centroidLo, centroid);
+      centroidHi = _mm_max_ps(centroidHi, centroid);
+    }
+    if (taken == 0) return 0;
+    std::stable_sort(large, large + taken, [](const PrimitiveReference& a, const PrimitiveReference& b) {
       return corners(a) < corners(b);
     });
+    if (kept == root.begin) return putBack();   // nothing but large ones
     int count = 0;
-    for (uint32_t start = begin; start < root.end;) {
+    for (uint32_t start = 0; start < taken;) {
       uint32_t end = start + 1;
-      while (end < root.end && end - start < kPacketSize && corners(references[end]) == corners(references[start])) ++end;
-      if (count == Width - 2) return 0;
+      while (end < taken && end - start < kPacketSize && corners(large[end]) == corners(large[start])) ++end;
+      if (count == Width - 2) return putBack();
       Range& leaf = leaves[count++];
-      leaf.begin = start, leaf.end = end;
-      measure(leaf);
+      leaf.begin = kept + start, leaf.end = kept + end;
       leaf.leaf = true;
       start = end;
     }
-    root.end = begin;
-    measure(root);
+    putBack();
+    for (int k = 0; k < count; ++k) measure(leaves[k]);
+    root.end = kept;
+    root.lo = lo, root.hi = hi, root.centroidLo = centroidLo, root.centroidHi = centroidHi;
     return count;
   }
 
