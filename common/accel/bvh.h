@@ -4,7 +4,8 @@
 // largest children (as Embree's BVH4/BVH8 builders do), into a flat array of
 // nodes whose children's boxes are tested four at a time with SSE, or all
 // eight at once with AVX2 where the processor has it; leaves
-// of up to eight triangles, copied into the 4-wide layout of the triangle
+// of up to eight triangles (sixteen in 8-wide trees), the room's largest
+// triangles (floor, ceiling, walls) in leaves of the root, copied into the 4-wide layout of the triangle
 // test (the AVX2 traversal tests two such packets at once). Traversal: children nearest first, an explicit stack, any-hit for
 // occluded(). The fastest of portico's structures to trace, and fast to
 // build: choose it for cells that take many rays.

@@ -12,7 +12,10 @@
 // test them (Embree's block size), so a range of at most four triangles is
 // one packet test and always a leaf, and one of at most eight becomes a
 // leaf unless a split is predicted cheaper (in 8-wide trees, whose AVX2
-// traversal tests two packets at once, always a leaf). A range whose
+// traversal tests two packets at once, always a leaf, and one of at most
+// sixteen a leaf unless a split is predicted cheaper in two-packet tests).
+// Triangles of a large share of the root's area (a room's floor, ceiling
+// and walls) become leaves of the root (separateLarge). A range whose
 // centroids all fall in one bin, or one deeper than kBvhForcedMedianDepth,
 // is cut at its median instead. A range binned in full knows its sides'
 // boxes and counts from the bins, so its partition only moves references
@@ -25,6 +28,7 @@
 #include <immintrin.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -64,8 +68,15 @@ constexpr uint32_t kAlwaysLeaf = 4;      // at most one packet: a leaf
 template <int Width>
 constexpr uint32_t kAlwaysLeafOf = Width == 8 ? 2 * kAlwaysLeaf : kAlwaysLeaf;
 constexpr uint32_t kMaxLeaf = 8;         // at most two: a leaf unless a split is cheaper
+// In 8-wide trees a range of up to four packets is a leaf unless a split is
+// cheaper, its cost counted in the two-packet tests of testLeaf8.
+template <int Width>
+constexpr uint32_t kMaxLeafOf = Width == 8 ? 4 * kPacketSize : kMaxLeaf;
 // SAH costs, in units of one packet test: one wide node's box test.
 constexpr float kTraversalCost = 1.0f;
+// Triangles whose box's half area is at least 1 / kLargeShare of the
+// root's (a room's floor, ceiling and walls) become leaves of the root.
+constexpr float kLargeShare = 64;
 
 // A triangle's box (lanes 0-2) with its primitive id in lane 3 of lo.
 struct alignas(32) PrimitiveReference {
@@ -348,12 +359,83 @@ class Builder {
     _mm_store_ps(hi, root.hi);
     out_.bounds = Bounds3({lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
     out_.triangles = root.count();
-    buildNode(root, 1);
+    Range largeLeaves[Width];
+    const int largeLeafCount = separateLarge(root, largeLeaves);
+    buildNode(root, 1, largeLeaves, largeLeafCount);
     references_.reset();   // writePackets reads leafPrimitives_
     writePackets();
   }
 
  private:
+  // The corners of a reference's box, lo then hi.
+  static std::array<float, 6> corners(const PrimitiveReference& reference) {
+    alignas(16) float lo[4], hi[4];
+    _mm_store_ps(lo, reference.lo);
+    _mm_store_ps(hi, reference.hi);
+    return {lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+  }
+
+  // Moves the root's large triangles (kLargeShare) out of its range into
+  // leaves of their own, those of one box together (a rectangle's two
+  // triangles), four at most a leaf; returns how many leaves. Centroid
+  // binning cannot place them: a floor's centroid lies mid-room, and the
+  // subtree that took it would span the room, entered by every ray. As
+  // leaves of the root, each flat box is entered only by the rays that reach
+  // its plane inside it, and nearest first puts it after the nearer
+  // furniture, which usually hides it. With more than Width - 2 such leaves
+  // (too few slots left for the rest), none: the root's range stays whole.
+  int separateLarge(Range& root, Range (&leaves)[Width]) {
+    constexpr uint32_t kMostLarge = kPacketSize * (Width - 2);
+    const float rootArea = halfArea(root.lo, root.hi);
+    if (!(rootArea > 0)) return 0;
+    // One pass: the others moved down in order (measured as they go), the
+    // large ones aside. More than fit in the leaves: they are put back
+    // into the slots already read past, the range the same set.
+    PrimitiveReference* const references = references_.get();
+    PrimitiveReference large[kMostLarge];
+    uint32_t taken = 0, kept = root.begin;
+    const __m128 infinity = _mm_set1_ps(kInfinity);
+    __m128 lo = infinity, hi = _mm_set1_ps(-kInfinity), centroidLo = lo, centroidHi = hi;
+    const auto putBack = [&] {
+      std::copy(large, large + taken, references + kept);
+      return 0;
+    };
+    for (uint32_t i = root.begin; i < root.end; ++i) {
+      const PrimitiveReference reference = references[i];
+      if (halfArea(reference.lo, reference.hi) * kLargeShare >= rootArea) {
+        if (taken == kMostLarge) return putBack();
+        large[taken++] = reference;
+        continue;
+      }
+      references[kept++] = reference;
+      lo = _mm_min_ps(lo, reference.lo);
+      hi = _mm_max_ps(hi, reference.hi);
+      const __m128 centroid = _mm_add_ps(reference.lo, reference.hi);
+      centroidLo = _mm_min_ps(centroidLo, centroid);
+      centroidHi = _mm_max_ps(centroidHi, centroid);
+    }
+    if (taken == 0) return 0;
+    std::stable_sort(large, large + taken, [](const PrimitiveReference& a, const PrimitiveReference& b) {
+      return corners(a) < corners(b);
+    });
+    if (kept == root.begin) return putBack();   // nothing but large ones
+    int count = 0;
+    for (uint32_t start = 0; start < taken;) {
+      uint32_t end = start + 1;
+      while (end < taken && end - start < kPacketSize && corners(large[end]) == corners(large[start])) ++end;
+      if (count == Width - 2) return putBack();
+      Range& leaf = leaves[count++];
+      leaf.begin = kept + start, leaf.end = kept + end;
+      leaf.leaf = true;
+      start = end;
+    }
+    putBack();
+    for (int k = 0; k < count; ++k) measure(leaves[k]);
+    root.end = kept;
+    root.lo = lo, root.hi = hi, root.centroidLo = centroidLo, root.centroidHi = centroidHi;
+    return count;
+  }
+
   // A vertex in lanes 0-2 of a register; lane 3 holds the next float of
   // the positions, read only where the mesh promises one (padding, or a
   // next vertex).
@@ -579,15 +661,19 @@ class Builder {
     }
     const Split best = findSplit(range);
     if (best.axis < 0) {
-      if (range.count() <= kMaxLeaf) return false;
+      if (range.count() <= kMaxLeafOf<Width>) return false;
       splitAtMedian(range, left, right);
       return true;
     }
-    if (range.count() <= kMaxLeaf) {
-      // Leaf: its packets, every ray that reaches it. Split: the children's
-      // packets, each for the fraction of those rays its box takes.
-      const float leafCost = float(packets(range.count())) * halfArea(range.lo, range.hi);
-      if (leafCost <= best.cost + kTraversalCost * halfArea(range.lo, range.hi)) return false;
+    if (range.count() <= kMaxLeafOf<Width>) {
+      // Leaf: its packet tests, every ray that reaches it. Split: a node's
+      // box test and the children's packet tests, each for the fraction of
+      // those rays its box takes. 8-wide trees test packets in pairs: their
+      // costs count pairs (the split's, halved, rounds each side's down).
+      const float area = halfArea(range.lo, range.hi);
+      const float tests = Width == 8 ? float((packets(range.count()) + 1) / 2) : float(packets(range.count()));
+      const float splitTests = Width == 8 ? 0.5f * best.cost : best.cost;
+      if (tests * area <= splitTests + kTraversalCost * area) return false;
     }
     if (best.exact) partitionByCount(range, best, left, right);
     else partition(range, best, left, right);
@@ -665,12 +751,13 @@ class Builder {
     right.centroidLo = _mm_load_ps(rightLo);
   }
 
-  // Writes the node for the range (and, depth first, its subtrees); returns its index.
-  uint32_t buildNode(const Range& range, int depth) {
+  // Writes the node for the range (and, depth first, its subtrees), with
+  // the given leaves as its last children; returns its index.
+  uint32_t buildNode(const Range& range, int depth, const Range* leaves = nullptr, int leafCount = 0) {
     Range children[Width];
     int count = 1;
     children[0] = range;
-    while (count < Width) {
+    while (count < Width - leafCount) {
       int widest = -1;
       float widestArea = -1;
       for (int k = 0; k < count; ++k) {
@@ -689,7 +776,8 @@ class Builder {
     }
     // Children the node had no slot left to split: small ones become leaves.
     for (int k = 0; k < count; ++k)
-      if (children[k].count() <= kMaxLeaf) children[k].leaf = true;
+      if (children[k].count() <= kMaxLeafOf<Width>) children[k].leaf = true;
+    for (int k = 0; k < leafCount; ++k) children[count++] = leaves[k];
 
     const uint32_t index = uint32_t(out_.nodes.size());
     out_.nodes.emplace_back();

@@ -116,6 +116,64 @@ TEST(BvhBuild, HoldsEveryTriangleOnceThroughEverySplitPath) {
     }
 }
 
+// The triangles of a leaf (its packets' distinct ids).
+template <int Width>
+std::vector<uint32_t> leafPrimitives(const BvhData<Width>& tree, uint32_t child) {
+  std::vector<uint32_t> primitives;
+  for (uint32_t p = 0; p < bvh_child::packetCount(child); ++p)
+    for (const uint32_t primitive : tree.packets[bvh_child::firstPacket(child) + p].primitive)
+      if (std::find(primitives.begin(), primitives.end(), primitive) == primitives.end()) primitives.push_back(primitive);
+  return primitives;
+}
+
+double halfArea(const Bounds3& box) {
+  const Vec3 d = box.diagonal();
+  return double(d.x) * d.y + double(d.y) * d.z + double(d.z) * d.x;
+}
+
+TEST(BvhBuild, PutsTheRoomsLargeTrianglesInLeavesOfTheRoot) {
+  // A hall's shell: floor, ceiling and four walls, two triangles each, each
+  // of at least 1/64 of the root's half area; the furniture's are far smaller.
+  const TestMesh hall = accel_test::furnishedHall(20000, 6);
+  const BvhData<8> tree = buildBvh<8>(hall.view());
+  const double rootArea = halfArea(tree.bounds);
+  std::vector<uint32_t> large;
+  for (uint32_t t = 0; t < hall.triangleCount(); ++t) {
+    Bounds3 box;
+    for (int vertex = 0; vertex < 3; ++vertex) box.extend(hall.vertex(hall.indices[3 * t + vertex]));
+    if (halfArea(box) * 64 >= rootArea) large.push_back(t);
+  }
+  ASSERT_EQ(large.size(), 12u);
+  std::vector<uint32_t> inRootLeaves;
+  int rootLeaves = 0;
+  for (int k = 0; k < 8; ++k) {
+    const uint32_t child = tree.nodes[0].child[k];
+    if (!(tree.nodes[0].box[0][0][k] <= tree.nodes[0].box[0][1][k]) || !bvh_child::isLeaf(child)) continue;
+    ++rootLeaves;
+    const std::vector<uint32_t> primitives = leafPrimitives(tree, child);
+    EXPECT_EQ(primitives.size(), 2u);   // one rectangle
+    inRootLeaves.insert(inRootLeaves.end(), primitives.begin(), primitives.end());
+    // Flat: the rectangle's plane.
+    int flatAxes = 0;
+    for (int axis = 0; axis < 3; ++axis) flatAxes += tree.nodes[0].box[axis][0][k] == tree.nodes[0].box[axis][1][k];
+    EXPECT_EQ(flatAxes, 1);
+  }
+  EXPECT_EQ(rootLeaves, 6);
+  std::sort(inRootLeaves.begin(), inRootLeaves.end());
+  EXPECT_EQ(inRootLeaves, large);
+  expectEveryTriangleOnce(hall, tree);
+}
+
+TEST(BvhBuild, KeepsLargeTrianglesInTheTreeWhenTheyWouldTakeTooManyOfTheRootsSlots) {
+  // The hall's six rectangles in a 4-wide tree, whose root has room for
+  // two such leaves: none is made; the root's children are the SAH's, each
+  // over thousands of triangles.
+  const TestMesh hall = accel_test::furnishedHall(20000, 6);
+  const BvhData<4> tree = buildBvh<4>(hall.view());
+  for (int k = 0; k < 4; ++k) EXPECT_FALSE(bvh_child::isLeaf(tree.nodes[0].child[k])) << k;
+  expectEveryTriangleOnce(hall, tree);
+}
+
 TEST(BvhBuild, BuildsTheSameTreeBitForBitEveryTime) {
   const TestMesh hall = accel_test::furnishedHall(20000, 9);
   expectSameTree(buildBvh<8>(hall.view()), buildBvh<8>(hall.view()));
