@@ -26,6 +26,9 @@ constexpr uint32_t PixelShuffle = 8;   // keyed by pixel (not path) and step
 constexpr uint32_t GlassChoice = 9;
 // The key of a pixel's pattern (pixel_pattern.h).
 constexpr uint32_t PixelPattern = 10;
+// A point on the sun's disc, where the direction dimensions are taken.
+constexpr uint32_t SunU = 11;
+constexpr uint32_t SunV = 12;
 }  // namespace dim
 
 // SplitMix64 finaliser: a bijective 64-bit mixer with full avalanche.

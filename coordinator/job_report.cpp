@@ -165,6 +165,7 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                    {"emission", get(counters, "rays.emission")},
                    {"shadow", get(counters, "rays.shadow")},
                    {"gather", get(counters, "rays.gather")},
+                   {"gather_short", get(counters, "rays.gather_short")},
                    {"shadow_blocked", get(counters, "rays.shadow_blocked")},
                    {"shadow_reached", get(counters, "rays.shadow_reached")},
                    {"escaped", get(counters, "rays.escaped")},

@@ -43,11 +43,11 @@ Camera cameraOf(const JobSettings& parameters, const SceneStore& scene) {
 // is absorbed, a shadow ray blocked).
 constexpr int kMaxGlassEvents = 16;
 
-// A key of the ray's exact state for the random choice at a pane: rays of
-// one path (a pixel sample's gather rays) differ in it, and it is the same
-// wherever the ray is traced.
-uint32_t glassKey(const RayState& ray) {
-  uint64_t h = mix64(ray.pathId ^ 0x6a09e667f3bcc909ull);
+// A key of the ray's exact state: rays of one path (a pixel sample's gather
+// rays) differ in it, and it is the same wherever the ray is traced. Each
+// use salts it with its own constant.
+uint32_t stateKey(const RayState& ray, uint64_t salt) {
+  uint64_t h = mix64(ray.pathId ^ salt);
   for (float f : {ray.origin.x, ray.origin.y, ray.origin.z, ray.direction.x, ray.direction.y, ray.direction.z,
                   ray.tMin}) {
     uint32_t bits;
@@ -56,6 +56,11 @@ uint32_t glassKey(const RayState& ray) {
   }
   return static_cast<uint32_t>(h);
 }
+
+// The key of the random choice at a glass pane.
+uint32_t glassKey(const RayState& ray) { return stateKey(ray, 0x6a09e667f3bcc909ull); }
+// The key of a short gather hit's random numbers (CellKernel::traceShortGather).
+uint32_t gatherKey(const RayState& ray) { return stateKey(ray, 0xbb67ae8584caa73bull); }
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
@@ -163,10 +168,16 @@ uint32_t CellKernel::emissionSamplesPerPixel() const {
   // They see only what is emitted inside this cell (or the sky out of it):
   // with no emitter here and no daylight they would all add zero.
   if (!daylight_ && !cellHasEmitters()) return 0;
-  // 64 (an 8 x 8 multi-jittered pattern) take a lamp's edge in cornell_closed
-  // from +-2.6 % to under 1 % of its 16 x 16 block at 16 spp, for ~5 % more
-  // time; 16 leave it at +-2.9 % (docs/image-quality.md).
-  return std::max(64u, 4 * parameters_.spp);
+  // An 8 x 8 multi-jittered pattern (64) takes a lamp's edge in
+  // cornell_closed from +-2.6 % (16) to under 1.2 % of its 16 x 16 block at
+  // 16 spp, a 16 x 16 one (256) to under 0.5 %.
+  // With daylight they are traced in every pixel (the sky may show through
+  // any opening): 64 a pixel. Without, only in the few pixels where a lamp
+  // may show (emitter_pixels.h), so 256 cost little (cornell_closed: 248 000
+  // rays, against 4.2 M gather rays) and take its lamp's edge blocks from
+  // -1.2 / +1.0 % to -0.4 / +0.2 % (docs/image-quality.md).
+  if (daylight_) return std::max(64u, 4 * parameters_.spp);
+  return std::max(256u, 16 * parameters_.spp);
 }
 
 void CellKernel::traceEmissionRays(uint32_t pixel, uint32_t count, std::vector<PixelSample>& samples,
@@ -432,7 +443,12 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   const Vec3 brdf = albedo * (1.0f / kPi);
 
   sampleLights(ray, point, normal, brdf, out);
-  if (daylight_ && daylight_->sky().hasSun()) sampleSun(ray, point, normal, brdf, out);
+  // The sun's numbers are the camera path's direction dimensions at bounce
+  // 0, which a camera ray (aimed by its pixel sample) leaves unused.
+  if (daylight_ && daylight_->sky().hasSun())
+    sampleSun(ray, point, normal, brdf,
+              randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
+              randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV), out);
 
   if (parameters_.gather > 0) {
     // Final gathering: cosine-distributed rays whose landing points take a
@@ -526,9 +542,11 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
       const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive, point);
-      const PendingGather gather{point, normal, ray.weight, albedo, ray.pixel};
+      const PendingGather gather{point,     normal,          ray.weight, albedo, ray.pathId,
+                                 ray.pixel, gatherKey(ray), event.t,    isSecondaryGather(ray)};
       if (!irradiance_) {
         readGather(gather, out);
+        if (shortGathers_.size() >= kMaxPendingGathers) finishGathers(out);
         return;
       }
       pendingGathers_.push_back(gather);
@@ -539,20 +557,71 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
 }
 
 void CellKernel::readGather(const PendingGather& gather, KernelOutputs& out) {
-  Vec3 perAlbedo;
-  if (irradiance_ && irradiance_->lookup(gather.point, gather.normal, perAlbedo)) {
-    addToFilm(gather.pixel, gather.weight * gather.albedo * perAlbedo, out);
+  Vec3 radiance, perAlbedo;
+  float radius = 0;   // of the estimate's photon disc
+  if (irradiance_ && irradiance_->lookup(gather.point, gather.normal, perAlbedo, &radius)) {
+    radiance = gather.albedo * perAlbedo;
+  } else {
+    // Each gather lookup is one of many averaged per pixel, so it can use
+    // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
+    const uint32_t k = std::max(8u, parameters_.photonK / 4);
+    radiance = photons_->radiance(gather.point, gather.normal, gather.albedo, k, parameters_.photonRadius, nullptr,
+                                  &radius);
+  }
+  if (!gather.secondary && gather.distance < kShortGatherRadii * radius) {
+    shortGathers_.push_back(gather);
     return;
   }
-  // Each gather lookup is one of many averaged per pixel, so it can use
-  // fewer photons than an estimate seen directly (Jensen 2001, §9.3.2).
-  const uint32_t k = std::max(8u, parameters_.photonK / 4);
-  addToFilm(gather.pixel,
-            gather.weight * photons_->radiance(gather.point, gather.normal, gather.albedo, k, parameters_.photonRadius),
-            out);
+  addToFilm(gather.pixel, gather.weight * radiance, out);
 }
 
 void CellKernel::finishGathers(KernelOutputs& out) {
+  // A short hit's own gather ray waits as a pending lookup in turn (and
+  // makes no short hit).
+  while (!pendingGathers_.empty() || !shortGathers_.empty()) {
+    readPendingGathers(out);
+    traceShortGathers(out);
+  }
+}
+
+void CellKernel::traceShortGathers(KernelOutputs& out) {
+  // Taken out first: tracing them may read the pending lookups
+  // (finishGathers), which add no short hit.
+  std::vector<PendingGather> shortGathers;
+  shortGathers.swap(shortGathers_);
+  for (size_t n = 0; n < shortGathers.size(); ++n) {
+    if (n % 1024 == 0) checkStop();
+    traceShortGather(shortGathers[n], out);
+  }
+}
+
+void CellKernel::traceShortGather(const PendingGather& hit, KernelOutputs& out) {
+  ++out.counters.shortGathers;
+  // Its numbers: keyed by the gather ray's state, the same wherever it was traced.
+  const auto number = [&](uint32_t dimension) {
+    return randomUniform(parameters_.seed, RandomStream::Camera, hit.pathId, hit.key, dimension);
+  };
+  RayState from;   // what the hit's shadow rays and gather ray carry
+  from.kind = RayKind::Gather;
+  from.depth = kSecondaryGatherDepth;
+  from.pathId = hit.pathId;
+  from.pixel = hit.pixel;
+  from.weight = hit.weight;
+  const Vec3 brdf = hit.albedo * (1.0f / kPi);
+  sampleLight(from, hit.point, hit.normal, brdf, number(dim::LightChoice), {number(dim::LightU), number(dim::LightV)},
+              1, out);
+  if (daylight_ && daylight_->sky().hasSun())
+    sampleSun(from, hit.point, hit.normal, brdf, number(dim::SunU), number(dim::SunV), out);
+  // Indirect light: one cosine-distributed gather ray (weight: the albedo, as in shade()).
+  RayState gather = from;
+  gather.origin = insideCell(offsetAlongNormal(hit.point, hit.normal));
+  gather.direction = sampleCosineHemisphere(hit.normal, number(dim::DirectionU), number(dim::DirectionV));
+  gather.weight = hit.weight * hit.albedo;
+  ++out.counters.gatherRays;
+  traceGatherRay(gather, out);
+}
+
+void CellKernel::readPendingGathers(KernelOutputs& out) {
   if (pendingGathers_.empty()) return;
   // Counting sort by the block of a 16 x 16 x 16 grid over the cell's box.
   constexpr uint32_t kSide = 16;
@@ -666,50 +735,49 @@ void CellKernel::addShadowRay(const RayState& ray, const Vec3& origin, const Vec
 
 void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                               KernelOutputs& out) {
-  // Direct light: shadow rays to points on lights chosen by the light
-  // sampler; a daylight opening is a light of the sky's radiance beyond it.
-  const uint32_t samples = parameters_.lightSamples;
-  const size_t sceneLights = scene_.lights().size();
   // The pixel's spp x samples light choices and points on lights form
   // stratified patterns (pixel_pattern.h); this sample takes its own.
+  const uint32_t samples = parameters_.lightSamples;
   const uint32_t spp = parameters_.spp;
   const uint32_t sample = static_cast<uint32_t>(ray.pathId % spp);
   const PixelPattern choices(parameters_.seed, ray.pixel, PatternUse::LightChoice, spp * samples);
   const PixelPattern points(parameters_.seed, ray.pixel, PatternUse::LightPoint, spp * samples);
   for (uint32_t i = 0; i < samples; ++i) {
     const uint32_t index = sample * samples + i;
-    const LightChoice choice = lightSampler_->choose(point, normal, choices.value(index));
-    if (choice.probability <= 0) break;
-    const AreaLight& light = lights_[choice.light];
-    const PatternPoint onLight = points.point(index);
-    const Vec3 target = light.pointAt(onLight.u, onLight.v);
-    const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
-    const Vec3 toLight = target - origin;
-    const float distance2 = dot(toLight, toLight);
-    const float distance = std::sqrt(distance2);
-    const Vec3 direction = toLight / distance;
-    const float cosSurface = dot(normal, direction);
-    const float cosLight = -dot(light.normal(), direction);
-    if (cosSurface <= 0 || cosLight <= 0) continue;
-    const bool sky = choice.light >= sceneLights;
-    const Vec3 radiance = sky ? daylight_->sky().radiance(direction) : light.radiance;
-    // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
-    const float geometry = cosSurface * cosLight * light.area() / distance2;
-    addShadowRay(ray, origin, direction, distance,
-                 ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), sky, out);
+    sampleLight(ray, point, normal, brdf, choices.value(index), points.point(index), samples, out);
   }
 }
 
-void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
-                           KernelOutputs& out) {
+void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
+                             float choiceNumber, const PatternPoint& onLight, uint32_t samples, KernelOutputs& out) {
+  // Direct light: a shadow ray to a point on a light chosen by the light
+  // sampler; a daylight opening is a light of the sky's radiance beyond it.
+  const LightChoice choice = lightSampler_->choose(point, normal, choiceNumber);
+  if (choice.probability <= 0) return;
+  const AreaLight& light = lights_[choice.light];
+  const Vec3 target = light.pointAt(onLight.u, onLight.v);
+  const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
+  const Vec3 toLight = target - origin;
+  const float distance2 = dot(toLight, toLight);
+  const float distance = std::sqrt(distance2);
+  const Vec3 direction = toLight / distance;
+  const float cosSurface = dot(normal, direction);
+  const float cosLight = -dot(light.normal(), direction);
+  if (cosSurface <= 0 || cosLight <= 0) return;
+  const bool sky = choice.light >= scene_.lights().size();
+  const Vec3 radiance = sky ? daylight_->sky().radiance(direction) : light.radiance;
+  // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
+  const float geometry = cosSurface * cosLight * light.area() / distance2;
+  addShadowRay(ray, origin, direction, distance,
+               ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), sky, out);
+}
+
+void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float u,
+                           float v, KernelOutputs& out) {
   // A direction over the sun's disc: it reaches the point only through the
   // opening the ray towards it leaves by, the nearest it passes through,
   // and on past what stands outdoors.
-  // Its numbers are the camera path's direction dimensions at bounce 0,
-  // which a camera ray (aimed by its pixel sample) leaves unused.
-  const Vec3 direction = sampleSunDisc(
-      daylight_->sky().sunDirection(), randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
-      randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV));
+  const Vec3 direction = sampleSunDisc(daylight_->sky().sunDirection(), u, v);
   const float cosSurface = dot(normal, direction);
   if (cosSurface <= 0) return;
   const Vec3 origin = insideCell(offsetAlongNormal(point, normal));

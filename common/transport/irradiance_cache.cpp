@@ -36,16 +36,18 @@ IrradianceCache::IrradianceCache(const PhotonMap& map, uint32_t stride, uint32_t
   const std::vector<uint32_t>& oldIndex = tree_.order();
   normals_.resize(oldIndex.size());
   values_.resize(oldIndex.size());
+  radii_.resize(oldIndex.size());
   float radiusGuess = 0;
   for (size_t point = 0; point < oldIndex.size(); ++point) {
     const StoredPhoton& photon = map.photon(photonOf[oldIndex[point]]);
     normals_[point] = -photon.direction;
     values_[point] =
         map.radiance(photon.position, normals_[point], othersScale, k, maxRadius, &points, &radiusGuess);
+    radii_[point] = radiusGuess;   // on return: the radius of this estimate
   }
 }
 
-bool IrradianceCache::lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo) const {
+bool IrradianceCache::lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo, float* estimateRadius) const {
   const auto compatible = [&](uint32_t i) {
     if (dot(normals_[i], n) < kMinNormalCosine) return false;
     const Vec3 offset = tree_.position(i) - p;
@@ -55,12 +57,13 @@ bool IrradianceCache::lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbe
   const uint32_t point = tree_.nearest(p, maxRadiusSquared_, compatible);
   if (point == NearestPointTree::kNone) return false;
   radiancePerAlbedo = values_[point];
+  if (estimateRadius) *estimateRadius = radii_[point];
   return true;
 }
 
 uint64_t IrradianceCache::bytes() const {
   return sizeof(*this) + (positions_.capacity() + normals_.capacity() + values_.capacity()) * sizeof(Vec3) +
-         tree_.bytes();
+         radii_.capacity() * sizeof(float) + tree_.bytes();
 }
 
 }  // namespace portico

@@ -49,7 +49,9 @@ class IrradianceCache {
   // Radiance per unit albedo leaving a Lambertian surface at p, facing n
   // (unit), read from the nearest compatible point within the radius given
   // at construction. False when there is none (the caller estimates).
-  bool lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo) const;
+  // `estimateRadius` (optional) receives the radius of the photon disc
+  // that point's estimate averaged over: the scale of its blur.
+  bool lookup(const Vec3& p, const Vec3& n, Vec3& radiancePerAlbedo, float* estimateRadius = nullptr) const;
 
   size_t size() const { return tree_.size(); }
   // Whether the map's photon of this index carries a point: one in
@@ -60,6 +62,7 @@ class IrradianceCache {
  private:
   std::vector<Vec3> positions_;          // while building; then the tree's
   std::vector<Vec3> normals_, values_;   // in the tree's point order
+  std::vector<float> radii_;             // each estimate's disc radius, in the same order
   NearestPointTree tree_;
   float maxRadiusSquared_ = 0;
 };

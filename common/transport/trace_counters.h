@@ -41,6 +41,7 @@ struct TraceCounters {
   int64_t emissionRays = 0;       // camera rays that add only emitted light (cell_kernel.h)
   int64_t shadowRays = 0;
   int64_t gatherRays = 0;
+  int64_t shortGathers = 0;       // gather hits lit by shadow rays and a gather ray of their own
   int64_t shadowBlocked = 0;
   int64_t shadowReached = 0;
   int64_t rayCrossings = 0;       // camera and shadow rays handed to a neighbour cell
@@ -56,7 +57,7 @@ struct TraceCounters {
             {"photons.absorbed", photonsAbsorbed}, {"photons.escaped", photonsEscaped},
             {"photons.crossings", photonCrossings}, {"photons.portal_copies", photonCopies},
             {"rays.camera", cameraRays},           {"rays.emission", emissionRays},
-            {"rays.gather", gatherRays},
+            {"rays.gather", gatherRays},           {"rays.gather_short", shortGathers},
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},

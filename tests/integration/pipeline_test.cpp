@@ -43,6 +43,11 @@ TEST_F(Pipeline, TwoWorkersFinishAJobConservingPhotonsAndMatchingOneWorkerBitFor
   EXPECT_EQ(twoStats["photons"], oneStats["photons"]);
   EXPECT_GT(twoStats["photons"]["crossings"].get<int64_t>(), 0);   // light went through doors
   EXPECT_GT(twoStats["rays"]["crossings"].get<int64_t>(), 0);
+  // Short gather rays (lit by rays of their own, cell_kernel.h) are among
+  // what must come out the same.
+  EXPECT_GT(twoStats["rays"]["gather_short"].get<int64_t>(), 0);
+  EXPECT_EQ(twoStats["rays"]["gather_short"], oneStats["rays"]["gather_short"]);
+  EXPECT_EQ(twoStats["rays"]["gather"], oneStats["rays"]["gather"]);
 
   const LinearImage two = readImage((dir_ / "two.exr").string());
   const LinearImage one = readImage((dir_ / "one.exr").string());

@@ -41,6 +41,42 @@ TEST(IrradianceCache, HoldsAPointAtAboutOnePhotonInStrideWithTheOthersEstimateTh
   }
 }
 
+TEST(IrradianceCache, GivesTheRadiusOfThePointsEstimateTheDistanceOfItsKthPhoton) {
+  // The radius a gather hit's distance is measured against (short gather
+  // rays, cell_kernel.h): that of the k photons the point's estimate used.
+  const PhotonMap map(floorPhotons(10000, 0.0f, 7));
+  const IrradianceCache cache(map, 4, 32, 0.5f);
+  std::vector<uint8_t> points(map.size());
+  for (uint32_t i = 0; i < map.size(); ++i) points[i] = IrradianceCache::isPoint(i, 4);
+  size_t checked = 0;
+  for (uint32_t i = 0; i < map.size(); i += 31) {
+    if (!points[i]) continue;
+    Vec3 value;
+    float radius = 0;
+    ASSERT_TRUE(cache.lookup(map.photon(i).position, {0, 1, 0}, value, &radius));
+    // The 32nd nearest photon that is not a point (all face the query).
+    std::vector<uint32_t> nearest;
+    map.nearest(map.photon(i).position, 200, 0.5f, nearest);
+    uint32_t kept = 0;
+    float kth = 0;
+    for (uint32_t photon : nearest)
+      if (!points[photon] && ++kept == 32) {
+        kth = length(map.photon(photon).position - map.photon(i).position);
+        break;
+      }
+    ASSERT_EQ(kept, 32u);
+    EXPECT_NEAR(radius, kth, 1e-5f);
+    ++checked;
+  }
+  EXPECT_GT(checked, 50u);
+  // On 1 m^2 with 7 500 photons that are not points, 32 lie within about
+  // sqrt(32 / (7500 pi)) = 3.7 cm.
+  Vec3 value;
+  float radius = 0;
+  ASSERT_TRUE(cache.lookup({0.5f, 0, 0.5f}, {0, 1, 0}, value, &radius));
+  EXPECT_NEAR(radius, 0.037f, 0.012f);
+}
+
 TEST(IrradianceCache, ReadsTheIrradianceOfAUniformlyLitFloor) {
   // 20 000 photons of power 1 on 1 m^2: E = 20 000 W/m^2, radiance per unit albedo E / pi.
   const PhotonMap map(floorPhotons(20000, 0.0f, 5));
