@@ -5,8 +5,10 @@
 
 #include <cerrno>
 #include <cinttypes>
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
+#include <new>
 #include <system_error>
 
 #include <fmt/format.h>
@@ -21,14 +23,21 @@ namespace {
   if (code == ENOSPC || code == EDQUOT || code == EIO) throw DiskWriteError(what);
   throw std::runtime_error(what);
 }
+
+int64_t alignDown(int64_t n) { return n / AppendFiles::kDirectAlignment * AppendFiles::kDirectAlignment; }
+int64_t alignUp(int64_t n) { return alignDown(n + AppendFiles::kDirectAlignment - 1); }
 }  // namespace
 
 AppendFiles::AppendFiles(std::filesystem::path directory, Naming naming, std::string what,
-                         std::function<int64_t(Key)> committedEnd)
-    : directory_(std::move(directory)), naming_(naming), what_(std::move(what)), committedEnd_(std::move(committedEnd)) {}
+                         std::function<int64_t(Key)> committedEnd, Caching caching)
+    : directory_(std::move(directory)),
+      naming_(naming),
+      what_(std::move(what)),
+      committedEnd_(std::move(committedEnd)),
+      caching_(caching) {}
 
 AppendFiles::~AppendFiles() {
-  for (auto& [key, file] : files_) ::close(file.descriptor);
+  for (auto& [key, file] : files_) close(file);
 }
 
 std::filesystem::path AppendFiles::pathOf(Key key) const {
@@ -71,7 +80,60 @@ AppendFiles::OpenFile& AppendFiles::open(Key key) {
     ::close(descriptor);
     throw std::runtime_error(fmt::format("{}: cannot be cut to {} bytes ({})", path, end, std::strerror(code)));
   }
-  return files_[key] = OpenFile{descriptor, end};
+  // -1 on a file system without O_DIRECT: the page cache then.
+  const int direct = caching_ == Caching::Direct ? ::open(path.c_str(), O_RDWR | O_CLOEXEC | O_DIRECT) : -1;
+  return files_[key] = OpenFile{descriptor, direct, end};
+}
+
+void AppendFiles::close(OpenFile& file) {
+  ::close(file.descriptor);
+  dropDirect(file);
+}
+
+char* AppendFiles::staging(size_t bytes) {
+  if (bytes > stagingBytes_ || !staging_) {
+    size_t capacity = size_t(kDirectAlignment);
+    while (capacity < bytes) capacity *= 2;
+    void* memory = std::aligned_alloc(size_t(kDirectAlignment), capacity);
+    if (!memory) throw std::bad_alloc();
+    staging_.reset(static_cast<char*>(memory));
+    stagingBytes_ = capacity;
+  }
+  return staging_.get();
+}
+
+void AppendFiles::dropDirect(OpenFile& file) {
+  if (file.directDescriptor >= 0) ::close(file.directDescriptor);
+  file.directDescriptor = -1;
+}
+
+bool AppendFiles::writeAll(Key key, int descriptor, const char* data, size_t size, int64_t offset) {
+  size_t written = 0;
+  while (written < size) {
+    const ssize_t n = ::pwrite(descriptor, data + written, size - written, off_t(offset + int64_t(written)));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0 && errno == EINVAL && written == 0) return false;   // a direct transfer refused
+    if (n <= 0) {
+      const int code = n < 0 ? errno : ENOSPC;   // no progress: nothing more fits
+      throwWriteError(code, fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(), size,
+                                        offset, std::strerror(code)));
+    }
+    written += size_t(n);
+  }
+  return true;
+}
+
+size_t AppendFiles::readAll(int descriptor, char* out, size_t size, int64_t offset, int& error) {
+  size_t done = 0;
+  error = 0;
+  while (done < size) {
+    const ssize_t n = ::pread(descriptor, out + done, size - done, off_t(offset + int64_t(done)));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) error = errno;
+    if (n <= 0) break;
+    done += size_t(n);
+  }
+  return done;
 }
 
 int64_t AppendFiles::end(Key key) const {
@@ -81,7 +143,7 @@ int64_t AppendFiles::end(Key key) const {
 
 void AppendFiles::forget(Key key) {
   if (auto it = files_.find(key); it != files_.end()) {
-    ::close(it->second.descriptor);
+    close(it->second);
     files_.erase(it);
   }
 }
@@ -92,24 +154,33 @@ void AppendFiles::remove(Key key) {
   std::filesystem::remove(pathOf(key), ignored);
 }
 
+bool AppendFiles::goesDirect(const OpenFile& file, int64_t offset, int64_t size) {
+  return file.directDescriptor >= 0 && size >= kDirectLeastBytes && offset % kDirectAlignment == 0;
+}
+
 FileExtent AppendFiles::append(Key key, std::string_view bytes) {
   OpenFile& file = open(key);
   FileExtent extent{file.end, int64_t(bytes.size()), crc32c(bytes.data(), bytes.size())};
-  size_t written = 0;
-  while (written < bytes.size()) {
-    const ssize_t n = ::pwrite(file.descriptor, bytes.data() + written, bytes.size() - written,
-                               off_t(extent.offset + int64_t(written)));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int code = n < 0 ? errno : ENOSPC;   // no progress: nothing more fits
-      throwWriteError(code, fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(),
-                                        bytes.size(), extent.offset, std::strerror(code)));
+  if (goesDirect(file, alignUp(file.end), extent.size)) {
+    // From a reused aligned buffer, padded with zeros to whole blocks; the
+    // next batch starts after the padding, so that no block is both cached
+    // and written directly.
+    extent.offset = alignUp(file.end);
+    const size_t padded = size_t(alignUp(extent.size));
+    char* buffer = staging(padded);
+    std::memcpy(buffer, bytes.data(), bytes.size());
+    std::memset(buffer + bytes.size(), 0, padded - bytes.size());
+    if (writeAll(key, file.directDescriptor, buffer, padded, extent.offset)) {
+      file.end = extent.offset + int64_t(padded);
+      return extent;
     }
-    written += size_t(n);
+    dropDirect(file);   // the file system refused the transfer: the page cache then
+    extent.offset = file.end;
   }
+  writeAll(key, file.descriptor, bytes.data(), bytes.size(), extent.offset);
   // Advanced whether or not the caller's transaction commits: a rolled-back
   // batch leaves a gap rather than being overwritten by a committed one.
-  file.end += extent.size;
+  file.end = extent.offset + extent.size;
   return extent;
 }
 
@@ -119,15 +190,23 @@ std::string AppendFiles::readUnchecked(Key key, const FileExtent& extent) {
     throw DamagedFileError(fmt::format("{}: {} at offset {} ({} bytes) lies past the end of the file ({} bytes)",
                                        pathOf(key).string(), what_, extent.offset, extent.size, file.end));
   std::string bytes(size_t(extent.size), '\0');
-  size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::pread(file.descriptor, bytes.data() + done, bytes.size() - done, off_t(extent.offset + int64_t(done)));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0)
-      throw DamagedFileError(fmt::format("{}: {} at offset {} ({} bytes) cannot be read ({})", pathOf(key).string(), what_,
-                                         extent.offset, extent.size, n < 0 ? std::strerror(errno) : "file too short"));
-    done += size_t(n);
+  size_t got = 0;
+  int error = 0;
+  bool read = false;
+  if (goesDirect(file, extent.offset, extent.size)) {
+    // Whole blocks into the aligned buffer (the file may end inside the last).
+    const size_t blocks = size_t(alignUp(extent.size));
+    char* buffer = staging(blocks);
+    got = std::min(readAll(file.directDescriptor, buffer, blocks, extent.offset, error), bytes.size());
+    std::memcpy(bytes.data(), buffer, got);
+    read = error != EINVAL;
+    if (!read) dropDirect(file);   // refused: the page cache then
   }
+  if (!read) got = readAll(file.descriptor, bytes.data(), bytes.size(), extent.offset, error);
+  if (got < bytes.size())
+    throw DamagedFileError(fmt::format("{}: {} at offset {} ({} bytes) cannot be read ({})", pathOf(key).string(),
+                                       what_, extent.offset, extent.size,
+                                       error != 0 ? std::strerror(error) : "file too short"));
   return bytes;
 }
 

@@ -45,7 +45,8 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
                  const int64_t end = s.step() ? s.columnInt(0) : 0;
                  s.reset();
                  return end;
-               }),
+               },
+               AppendFiles::Caching::Direct),   // written once, read once: append_files.h
       batches_(path + "-batches", AppendFiles::Naming::PerSegment, "ray batch", [this](AppendFiles::Key file) {
         auto& s = db_.prepare(
             "SELECT COALESCE(MAX(file_offset + file_size), 0) FROM batches WHERE job = ? AND file_segment = ?");

@@ -155,9 +155,10 @@ CostModel CostModel::builtIn() {
   // `portico bench calibrate` on the 2-core development machine (Debian
   // bookworm VM), trace passes timed by thread CPU time: 25 cells (22 of
   // l-shape, 3 halls), 20 000 photon-like rays each. bvh comes from a later
-  // calibration run on an AMD EPYC VM with AVX2, scaled by the ratio of the
-  // two runs' kd:sah predictions for 10 000 triangles (trace x0.875, build
-  // x0.682), so that every family is on one machine's scale.
+  // run with the current bvh build (12 cells of soda-hall and a 3 000-
+  // triangle hall), scaled by the ratio of the two runs' kd:sah predictions
+  // for 10 000 triangles (trace x0.749, build x0.961), so that every family
+  // is on one machine's scale.
   CostModel model;
   model.origin = "built-in (development machine)";
   model.families["grid"] = {{0.001955, 2.644e-05, 1.85e-05}, {232.5, 4.343, 0.7417}};
@@ -165,7 +166,7 @@ CostModel CostModel::builtIn() {
   model.families["kd:median"] = {{0, 0.0005673, 0}, {0, 81.87}};
   model.families["kd:sah"] = {{0, 0.0001917, 4.85e-05}, {33.76, 23.71}};
   model.families["kd:bbox"] = {{0, 0, 0.0001467}, {0, 58.29}};
-  model.families["bvh"] = {{0, 0, 2.86e-05}, {72.07, 8.044}};
+  model.families["bvh"] = {{0.0061, 7.44e-05, 5.14e-06}, {24.08, 11.22}};
   return model;
 }
 

@@ -59,11 +59,35 @@ class PhotonFrame {
   Vec3 origin_, step_, inverseStep_;
 };
 
+// std::frexp and std::lround, bit for bit, without their library calls: the
+// kernel encodes every deposit (and each copy across a portal) with them,
+// and the calls were a twentieth of a worker's photon-pass CPU.
+inline float frexpOfNormal(float x, int* exponent) {
+  uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  const uint32_t biased = (bits >> 23) & 0xffu;
+  if (biased == 0 || biased == 0xffu) return std::frexp(x, exponent);   // zero, subnormal, inf, NaN
+  *exponent = int(biased) - 126;
+  bits = (bits & 0x807fffffu) | (126u << 23);
+  float mantissa;
+  std::memcpy(&mantissa, &bits, sizeof mantissa);
+  return mantissa;
+}
+
+// Half away from zero, as std::lround. x - trunc(x) is exact in float, so
+// the comparison with 0.5 decides as lround does.
+inline long roundHalfAway(float x) {
+  if (!(std::abs(x) < 1073741824.0f)) return std::lround(x);   // large, inf, NaN
+  const int32_t whole = int32_t(x);   // toward zero
+  const float fraction = x - float(whole);
+  return long(whole) + (fraction >= 0.5f ? 1 : fraction <= -0.5f ? -1 : 0);
+}
+
 inline uint32_t encodeRgbe(const Vec3& c) {
   const float largest = std::max(c.x, std::max(c.y, c.z));
   if (!(largest > 1e-32f)) return 0;
   int exponent;
-  const float mantissa = std::frexp(largest, &exponent) * 256.0f / largest;
+  const float mantissa = frexpOfNormal(largest, &exponent) * 256.0f / largest;
   auto channel = [&](float v) { return static_cast<uint32_t>(std::max(0.0f, v * mantissa)); };
   return channel(c.x) | channel(c.y) << 8 | channel(c.z) << 16 | static_cast<uint32_t>(exponent + 128) << 24;
 }
@@ -85,8 +109,8 @@ inline void encodeOctahedral(const Vec3& d, int16_t out[2]) {
     u = (1 - std::abs(ov)) * (ou >= 0 ? 1.0f : -1.0f);
     v = (1 - std::abs(ou)) * (ov >= 0 ? 1.0f : -1.0f);
   }
-  out[0] = static_cast<int16_t>(std::lround(std::clamp(u, -1.0f, 1.0f) * 32767.0f));
-  out[1] = static_cast<int16_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 32767.0f));
+  out[0] = static_cast<int16_t>(roundHalfAway(std::clamp(u, -1.0f, 1.0f) * 32767.0f));
+  out[1] = static_cast<int16_t>(roundHalfAway(std::clamp(v, -1.0f, 1.0f) * 32767.0f));
 }
 
 inline Vec3 decodeOctahedral(const int16_t in[2]) {

@@ -6,7 +6,8 @@
 #   tests/bench/photon_phase_cpu.sh BIN_DIR STORE WORKERS PHOTONS [RUNS]
 #
 # BIN_DIR: portico, portico-coordinator and portico-worker (e.g. build/bin).
-# COORDINATOR=PATH runs another coordinator binary (an A/B of two builds).
+# COORDINATOR=PATH runs another coordinator binary (an A/B of two builds);
+# ACCEL=SPEC another accelerator than grid.
 # Also printed: the machine's idle core-seconds over the phase (/proc/stat),
 # and the coordinator's CPU over the workers' (which cancels the VM's drift).
 # STORE: a scene store (e.g. the one `portico bench pipeline --store DIR` keeps).
@@ -40,7 +41,7 @@ for run in $(seq "$runs"); do
   sleep 0.5
   c0=$(cpu "$coordinator"); w0=$(cpu "${pids[@]}"); t0=$(date +%s.%N); i0=$(idle)
   "$bin/portico" submit "$store" --coordinator "$endpoint" -o "$work/x.exr" --photons "$photons" --spp 1 \
-    --gather 0 --width 8 --height 8 --accel grid > /dev/null
+    --gather 0 --width 8 --height 8 --accel "${ACCEL:-grid}" > /dev/null
   until grep -q "photon phase done" "$work/coordinator.log"; do sleep 0.02; done
   c1=$(cpu "$coordinator"); w1=$(cpu "${pids[@]}"); t1=$(date +%s.%N); i1=$(idle)
   python3 -c "c, w = ($c1 - $c0) / $ticks, ($w1 - $w0) / $ticks; print('workers %s  photon phase %.2f s  coordinator %.2f CPU-s  workers %.2f CPU-s  coordinator/workers %.3f  idle %.2f core-s' % ('$workers', $t1 - $t0, c, w, c / w, ($i1 - $i0) / $ticks))"

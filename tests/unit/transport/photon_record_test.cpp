@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
+#include <vector>
 
 namespace portico {
 namespace {
@@ -96,5 +99,44 @@ TEST(PhotonRecord, ZeroAndTinyPowersStayFinite) {
   EXPECT_TRUE(isFinite(tiny));
 }
 
+}  // namespace
+}  // namespace portico
+
+namespace portico {
+namespace {
+TEST(PhotonRecord, ItsRoundingAndExponentAreTheLibrarysBitForBit) {
+  // Every float with random bits (of every exponent), and those next to
+  // halves, where rounding decides.
+  std::mt19937 random(7);
+  std::vector<float> values{0.0f, -0.0f, 0.5f, -0.5f, 1.5f, -2.5f, 32767.0f, -32767.0f, 1e-32f, 1e-40f,
+                            std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()};
+  for (int i = 0; i < 2'000'000; ++i) {
+    const uint32_t bits = uint32_t(random());
+    float x;
+    std::memcpy(&x, &bits, sizeof x);
+    values.push_back(x);
+  }
+  for (int k = -33000; k <= 33000; ++k) {
+    const float half = float(k) + 0.5f;
+    values.insert(values.end(), {half, std::nextafter(half, 0.0f), std::nextafter(half, 1e9f),
+                                 std::nextafter(half, -1e9f), float(k) * 0.999f, float(k) * 1.0001f});
+  }
+  int checked = 0;
+  for (const float x : values) {
+    if (std::isfinite(x) && std::abs(x) < 1e9f) {
+      ASSERT_EQ(roundHalfAway(x), std::lround(x)) << x;
+      ++checked;
+    }
+    int expected = 0, got = 0;
+    const float m = std::frexp(x, &expected), n = frexpOfNormal(x, &got);
+    if (std::isnan(x)) {
+      EXPECT_TRUE(std::isnan(n));
+      continue;
+    }
+    ASSERT_EQ(std::memcmp(&m, &n, sizeof m), 0) << x;
+    if (std::isfinite(x)) ASSERT_EQ(got, expected) << x;
+  }
+  EXPECT_GT(checked, 400000);
+}
 }  // namespace
 }  // namespace portico
