@@ -8,6 +8,8 @@
 namespace portico {
 
 inline constexpr uint16_t kToSkyBit = 0x8000, kDepthBits = 0x7fff;
+// A secondary gather's mark travels in the depth the wire keeps.
+static_assert((kSecondaryGatherDepth & kDepthBits) == kSecondaryGatherDepth);
 
 inline void toWire(const RayState& ray, wire::Ray::Builder out) {
   out.setKind(static_cast<wire::RayKind>(ray.kind));

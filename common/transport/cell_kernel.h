@@ -185,16 +185,12 @@ class CellKernel {
   // Such a hit takes no estimate: its light is computed as a camera hit's
   // is, direct light by a shadow ray and indirect light by one gather ray
   // of its own, which reads the estimate wherever it lands (its `secondary`
-  // mark, carried across portals in the depth's kSecondaryGatherDepth bit,
-  // stops any further recursion). Short hits wait until the pending
+  // mark, carried across portals in the depth's kSecondaryGatherDepth bit
+  // (ray_state.h), stops any further recursion). Short hits wait until the pending
   // lookups are read (traceShortGathers), as those do. 6 radii: 5.7 % of
   // cornell_closed's gather rays, block RMSE 0.42 -> 0.31 % (2 radii:
   // 1.9 %, 0.39 %; 8: 8.7 %, 0.30 %).
   static constexpr float kShortGatherRadii = 6.0f;
-  static constexpr uint16_t kSecondaryGatherDepth = 0x4000;
-  static bool isSecondaryGather(const RayState& ray) {
-    return ray.kind == RayKind::Gather && (ray.depth & kSecondaryGatherDepth) != 0;
-  }
   void traceShortGathers(KernelOutputs& out);
   void traceShortGather(const PendingGather& gather, KernelOutputs& out);
   std::vector<PendingGather> shortGathers_;

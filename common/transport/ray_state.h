@@ -13,6 +13,8 @@ enum class RayKind : uint8_t { Photon, Camera, Shadow, Gather };
 
 struct RayState {
   RayKind kind = RayKind::Photon;
+  // Portals crossed (camera rays) or bounces; a gather ray's may carry
+  // kSecondaryGatherDepth. Its top bit is the wire's (ray_wire.h).
   uint16_t depth = 0;
   uint64_t pathId = 0;
   uint32_t pixel = 0;
@@ -30,6 +32,14 @@ struct RayState {
   // outdoors is in its way it is absorbed there.
   bool toSky = false;
 };
+
+// The depth bit of a short gather's own gather ray (CellKernel): read
+// wherever it lands, it starts no further recursion. It crosses portals
+// inside `depth`, below the wire's toSky bit.
+inline constexpr uint16_t kSecondaryGatherDepth = 0x4000;
+inline bool isSecondaryGather(const RayState& ray) {
+  return ray.kind == RayKind::Gather && (ray.depth & kSecondaryGatherDepth) != 0;
+}
 
 // A ray from the network is traced only if it is well formed.
 inline bool isValid(const RayState& ray) {
