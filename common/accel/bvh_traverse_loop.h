@@ -129,6 +129,16 @@ struct SseBoxes {
   }
 };
 
+// Starts the cache misses of a leaf's lines past its first 256 bytes: a
+// leaf of four packets spans ten lines, and the loads of its second pair
+// would otherwise wait for the first pair's test (its branches mispredict).
+inline void prefetchLeafTail(const grid_traversal::TrianglePacket* packets, uint32_t child) {
+  const char* const first = reinterpret_cast<const char*>(packets + bvh_child::firstPacket(child));
+  const char* const end =
+      reinterpret_cast<const char*>(packets + bvh_child::firstPacket(child) + bvh_child::packetCount(child));
+  for (const char* line = first + 256; line < end; line += 64) __builtin_prefetch(line);
+}
+
 // Where a child's node or first packet starts.
 template <int Width>
 inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets,
@@ -142,8 +152,8 @@ inline const char* childAddress(const BvhNode<Width>* nodes, const grid_traversa
   return reinterpret_cast<const char*>((leaf & leafMask) | (node & ~leafMask));
 }
 
-// Starts the cache misses of a child's four lines (a node's whole, a leaf's
-// first packet and more), for when it is popped.
+// Starts the cache misses of a child's lines (a node's four, a leaf's
+// whole), for when it is popped.
 template <int Width>
 inline void prefetchChild(const BvhNode<Width>* nodes, const grid_traversal::TrianglePacket* packets, uint32_t child) {
   const char* const address = childAddress(nodes, packets, child);
@@ -151,6 +161,7 @@ inline void prefetchChild(const BvhNode<Width>* nodes, const grid_traversal::Tri
   __builtin_prefetch(address + 64);
   __builtin_prefetch(address + 128);
   __builtin_prefetch(address + 192);
+  if (bvh_child::isLeaf(child) && bvh_child::packetCount(child) > 1) prefetchLeafTail(packets, child);
 }
 
 // Nearest hit (or, with AnyHit, any hit) of the ray in the tree, from the

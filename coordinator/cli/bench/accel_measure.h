@@ -46,6 +46,12 @@ struct TraceResult {
 // A warm-up pass over up to 10k rays, then the median of `runs` passes timed
 // by the thread's CPU time.
 TraceResult traceRays(const Accelerator& accelerator, const std::vector<Ray>& rays, uint32_t runs);
+// The same for several structures, their timed passes taken in turn (each
+// after a short warm-up of its own): a machine whose load changes over
+// seconds slows every structure alike, so their ratios hold where one
+// structure's passes after another's would not.
+std::vector<TraceResult> traceRaysInterleaved(const std::vector<const Accelerator*>& accelerators,
+                                              const std::vector<Ray>& rays, uint32_t runs);
 // Builds `runs` times (once when a build takes over 20 s) and keeps the last;
 // medianMs: the median build's CPU time over every thread of the process.
 std::unique_ptr<Accelerator> timedBuild(const AcceleratorSpec& spec, const MeshView& mesh, uint32_t runs,

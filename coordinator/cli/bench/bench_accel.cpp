@@ -7,10 +7,12 @@
 // ray sets (photon-like: origins on surfaces chosen by area, cosine-
 // distributed about the front normal; camera-like: from one point above the
 // furniture through a grid of directions, like a pinhole camera), and for
-// each structure: the median of `runs` builds, then per ray set a warm-up
-// pass and the median of `runs` timed passes, all on this one thread with
-// flush-to-zero on. Ratios to Embree compare numbers taken minutes apart on
-// the same machine; absolute numbers move with the machine's load.
+// each structure: the median of `runs` builds; then per ray set, with every
+// structure built, a warm-up pass of each and `runs` rounds of timed passes,
+// one per structure in turn (each after a short warm-up of its own), the
+// median per structure; all on this one thread with flush-to-zero on. Taken
+// in turn, the passes of two structures are seconds apart, so their ratio
+// holds while the machine's load moves; absolute numbers move with it.
 #include "coordinator/cli/bench/bench_accel.h"
 
 #include <fmt/format.h>
@@ -163,19 +165,25 @@ void compareWithReference(SizeResults& size) {
   }
 }
 
-// Builds and traces every structure on the mesh, in the order given.
+// Builds every structure on the mesh, in the order given, then traces each
+// ray set with all of them, their timed passes in turn.
 std::vector<StructureResult> measureStructures(const MeshView& mesh, const std::vector<RaySet>& raySets,
                                                const std::vector<AcceleratorSpec>& specs, uint32_t runs) {
   std::vector<StructureResult> results;
+  std::vector<std::unique_ptr<Accelerator>> built;
   for (const AcceleratorSpec& spec : specs) {
     StructureResult result;
     result.spec = spec.text;
     result.isEmbree = spec.kind == "embree";
-    std::unique_ptr<Accelerator> accelerator = timedBuild(spec, mesh, runs, result.buildMs);
-    result.stats = accelerator->stats();
-    for (const RaySet& set : raySets) result.traces.push_back(traceRays(*accelerator, set.rays, runs));
-    accelerator.reset();
+    built.push_back(timedBuild(spec, mesh, runs, result.buildMs));
+    result.stats = built.back()->stats();
     results.push_back(std::move(result));
+  }
+  std::vector<const Accelerator*> accelerators;
+  for (const auto& accelerator : built) accelerators.push_back(accelerator.get());
+  for (const RaySet& set : raySets) {
+    std::vector<TraceResult> traces = traceRaysInterleaved(accelerators, set.rays, runs);
+    for (size_t k = 0; k < results.size(); ++k) results[k].traces.push_back(std::move(traces[k]));
   }
   return results;
 }
