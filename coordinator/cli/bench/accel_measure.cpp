@@ -8,6 +8,7 @@
 #include <time.h>
 
 #include "common/rng.h"
+#include "common/transport/sampling.h"
 
 namespace portico::cli {
 
@@ -40,8 +41,6 @@ double median(std::vector<double> values) {
   return n == 0 ? 0.0 : (n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]));
 }
 
-constexpr float kSurfaceOffset = 1e-4f;  // metres: photon origins leave their surface by this much
-
 std::vector<Ray> photonRays(const MeshView& mesh, size_t count, uint64_t seed) {
   std::vector<double> cumulativeArea(mesh.triangleCount);
   double total = 0;
@@ -67,7 +66,8 @@ std::vector<Ray> photonRays(const MeshView& mesh, size_t count, uint64_t seed) {
     const float radius = std::sqrt(u(3)), phi = 2 * kPi * u(4);
     const Vec3 direction = tangent * (radius * std::cos(phi)) + bitangent * (radius * std::sin(phi)) +
                            normal * std::sqrt(std::max(0.0f, 1 - radius * radius));
-    rays.push_back(Ray{point + normal * kSurfaceOffset, direction});
+    // Off the surface as the renderer's bounced photons leave it.
+    rays.push_back(Ray{offsetAlongNormal(point, normal), direction});
   }
   return rays;
 }

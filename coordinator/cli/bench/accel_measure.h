@@ -29,7 +29,9 @@ std::vector<size_t> parseTriangleCounts(const std::string& text);
 MeshView hallMesh(FurnishedHall& hall);
 
 // Photon-like rays: a surface point chosen by area (uniform over the cell's
-// surface), leaving it on the front side with a cosine-distributed direction.
+// surface), leaving it on the front side with a cosine-distributed
+// direction, from the renderer's own offset off the surface
+// (offsetAlongNormal: 2e-5 of the point's largest coordinate, at least 20 um).
 std::vector<Ray> photonRays(const MeshView& mesh, size_t count, uint64_t seed);
 // Camera-like rays: from the hall's eye point (above the furniture), looking
 // diagonally across the hall and 30 degrees down, through a 16:9 grid of
