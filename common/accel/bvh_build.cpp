@@ -340,6 +340,25 @@ struct SideTest {
   }
 };
 
+// The references' array, uninitialised. From 2 MiB on it is aligned to 2
+// MiB and asks for transparent huge pages: the build writes every one of
+// its pages once, and a fresh 4 KiB page costs a fault each (at 500k
+// triangles, 4 096 of them, ~10 % of the build); a huge page costs one.
+constexpr size_t kHugePage = size_t(2) << 20;
+struct ReferencesDeleter {
+  std::align_val_t alignment{32};
+  void operator()(PrimitiveReference* pointer) const { ::operator delete(pointer, alignment); }
+};
+std::unique_ptr<PrimitiveReference[], ReferencesDeleter> newReferences(size_t count) {
+  const size_t bytes = std::max<size_t>(count, 1) * sizeof(PrimitiveReference);
+  if (bytes < kHugePage)
+    return {static_cast<PrimitiveReference*>(::operator new(bytes, std::align_val_t{32})), ReferencesDeleter{}};
+  const size_t whole = (bytes + kHugePage - 1) / kHugePage * kHugePage;   // whole huge pages, all ours
+  void* pointer = ::operator new(whole, std::align_val_t{kHugePage});
+  madvise(pointer, whole, MADV_HUGEPAGE);   // a hint: failure only costs speed
+  return {static_cast<PrimitiveReference*>(pointer), ReferencesDeleter{std::align_val_t{kHugePage}}};
+}
+
 template <int Width>
 class Builder {
  public:
@@ -447,7 +466,7 @@ class Builder {
 
   // References to every finite, non-degenerate triangle, and their range.
   Range gatherReferences() {
-    references_.reset(new PrimitiveReference[mesh_.triangleCount]);
+    references_ = newReferences(mesh_.triangleCount);
     uint32_t count = 0;
     __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
     __m128 centroidLo = lo, centroidHi = hi;
@@ -858,7 +877,7 @@ class Builder {
 
   const MeshView& mesh_;
   BvhData<Width>& out_;
-  std::unique_ptr<PrimitiveReference[]> references_;   // one per triangle of the mesh, the held ones first
+  std::unique_ptr<PrimitiveReference[], ReferencesDeleter> references_;   // one per triangle of the mesh, the held ones first
   std::vector<uint32_t> leafPrimitives_;   // the leaves' triangle ids, leaf after leaf
   std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's ids in leafPrimitives_
   uint32_t packetCount_ = 0;
