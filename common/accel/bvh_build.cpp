@@ -32,7 +32,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <memory>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -340,29 +339,59 @@ struct SideTest {
   }
 };
 
-// The references' array, uninitialised. From 2 MiB on it is aligned to 2
-// MiB and asks for transparent huge pages: the build writes every one of
-// its pages once, and a fresh 4 KiB page costs a fault each (at 500k
-// triangles, 4 096 of them, ~10 % of the build); a huge page costs one.
+// A build's scratch: the references, and the leaves' triangle ids and
+// ranges (Builder::writeLeaf). Each thread keeps its own from one build to
+// the next: a fresh page costs a fault and the kernel's zeroing, ~15 % of a
+// 500k-triangle build when all are fresh, and a worker builds cell after
+// cell. Kept only up to kKeptReferences references (64 MiB); a larger
+// build's scratch is freed with it. The references are uninitialised, from
+// 2 MiB on aligned to 2 MiB and on transparent huge pages: one fault per 2
+// MiB when they are fresh.
 constexpr size_t kHugePage = size_t(2) << 20;
-struct ReferencesDeleter {
-  std::align_val_t alignment{32};
-  void operator()(PrimitiveReference* pointer) const { ::operator delete(pointer, alignment); }
+constexpr size_t kKeptReferences = size_t(2) << 20;
+struct BuildScratch {
+  PrimitiveReference* references = nullptr;
+  size_t capacity = 0;   // references
+  std::vector<uint32_t> leafPrimitives;
+  std::vector<std::pair<uint32_t, uint32_t>> leafRanges;
+
+  ~BuildScratch() { release(); }
+  static std::align_val_t alignmentFor(size_t bytes) {
+    return bytes < kHugePage ? std::align_val_t{32} : std::align_val_t{kHugePage};
+  }
+  PrimitiveReference* referencesFor(size_t count) {
+    if (count <= capacity) return references;
+    release();
+    size_t bytes = std::max<size_t>(count, 1) * sizeof(PrimitiveReference);
+    if (bytes >= kHugePage) bytes = (bytes + kHugePage - 1) / kHugePage * kHugePage;   // whole huge pages, all ours
+    references = static_cast<PrimitiveReference*>(::operator new(bytes, alignmentFor(bytes)));
+    if (bytes >= kHugePage) madvise(references, bytes, MADV_HUGEPAGE);   // a hint: failure only costs speed
+    capacity = bytes / sizeof(PrimitiveReference);
+    return references;
+  }
+  // After a build: what a small build left stays for the next.
+  void finish() {
+    leafPrimitives.clear();
+    leafRanges.clear();
+    if (capacity > kKeptReferences) release();
+  }
+  void release() {
+    if (references) ::operator delete(references, alignmentFor(capacity * sizeof(PrimitiveReference)));
+    references = nullptr;
+    capacity = 0;
+    std::vector<uint32_t>().swap(leafPrimitives);
+    std::vector<std::pair<uint32_t, uint32_t>>().swap(leafRanges);
+  }
 };
-std::unique_ptr<PrimitiveReference[], ReferencesDeleter> newReferences(size_t count) {
-  const size_t bytes = std::max<size_t>(count, 1) * sizeof(PrimitiveReference);
-  if (bytes < kHugePage)
-    return {static_cast<PrimitiveReference*>(::operator new(bytes, std::align_val_t{32})), ReferencesDeleter{}};
-  const size_t whole = (bytes + kHugePage - 1) / kHugePage * kHugePage;   // whole huge pages, all ours
-  void* pointer = ::operator new(whole, std::align_val_t{kHugePage});
-  madvise(pointer, whole, MADV_HUGEPAGE);   // a hint: failure only costs speed
-  return {static_cast<PrimitiveReference*>(pointer), ReferencesDeleter{std::align_val_t{kHugePage}}};
-}
+thread_local BuildScratch buildScratch;
 
 template <int Width>
 class Builder {
  public:
-  Builder(const MeshView& mesh, BvhData<Width>& out) : mesh_(mesh), out_(out) {}
+  Builder(const MeshView& mesh, BvhData<Width>& out)
+      : mesh_(mesh), out_(out), scratch_(buildScratch), leafPrimitives_(scratch_.leafPrimitives),
+        leafRanges_(scratch_.leafRanges) {}
+  ~Builder() { scratch_.finish(); }
 
   void build() {
     Range root = gatherReferences();
@@ -381,7 +410,6 @@ class Builder {
     Range largeLeaves[Width];
     const int largeLeafCount = separateLarge(root, largeLeaves);
     buildNode(root, 1, largeLeaves, largeLeafCount);
-    references_.reset();   // writePackets reads leafPrimitives_
     writePackets();
   }
 
@@ -410,7 +438,7 @@ class Builder {
     // One pass: the others moved down in order (measured as they go), the
     // large ones aside. More than fit in the leaves: they are put back
     // into the slots already read past, the range the same set.
-    PrimitiveReference* const references = references_.get();
+    PrimitiveReference* const references = references_;
     PrimitiveReference large[kMostLarge];
     uint32_t taken = 0, kept = root.begin;
     const __m128 infinity = _mm_set1_ps(kInfinity);
@@ -466,7 +494,7 @@ class Builder {
 
   // References to every finite, non-degenerate triangle, and their range.
   Range gatherReferences() {
-    references_ = newReferences(mesh_.triangleCount);
+    references_ = scratch_.referencesFor(mesh_.triangleCount);
     uint32_t count = 0;
     __m128 lo = _mm_set1_ps(kInfinity), hi = _mm_set1_ps(-kInfinity);
     __m128 centroidLo = lo, centroidHi = hi;
@@ -523,9 +551,9 @@ class Builder {
     const uint32_t stride = std::max(1u, range.count() / kSampledReferences);
     BinSet<kBins> bins, odd;
     if (avxBinning.load(std::memory_order_relaxed))
-      binReferencesAvx(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
+      binReferencesAvx(bins, odd, twoSets, binning, references_, range.begin, range.end, stride);
     else
-      binReferences(bins, odd, twoSets, binning, references_.get(), range.begin, range.end, stride);
+      binReferences(bins, odd, twoSets, binning, references_, range.begin, range.end, stride);
     Split best = sweep(bins);
     best.bins = kBins;
     if (best.axis >= 0) {
@@ -650,8 +678,8 @@ class Builder {
       _mm_store_ps(c, _mm_add_ps(r.lo, r.hi));
       return c[axis];
     };
-    std::nth_element(references_.get() + range.begin, references_.get() + middle,
-                     references_.get() + range.end,
+    std::nth_element(references_ + range.begin, references_ + middle,
+                     references_ + range.end,
                      [&](const PrimitiveReference& a, const PrimitiveReference& b) { return centre(a) < centre(b); });
     left.begin = range.begin, left.end = middle;
     right.begin = middle, right.end = range.end;
@@ -713,7 +741,7 @@ class Builder {
     uint32_t leftMisplaced[kBlock], rightMisplaced[kBlock];
     uint32_t i = range.begin, j = middle;
     uint32_t leftListed = 0, leftDone = 0, rightListed = 0, rightDone = 0;
-    PrimitiveReference* references = references_.get();
+    PrimitiveReference* references = references_;
     for (;;) {
       if (leftDone == leftListed) {
         if (i == middle) break;
@@ -877,9 +905,10 @@ class Builder {
 
   const MeshView& mesh_;
   BvhData<Width>& out_;
-  std::unique_ptr<PrimitiveReference[], ReferencesDeleter> references_;   // one per triangle of the mesh, the held ones first
-  std::vector<uint32_t> leafPrimitives_;   // the leaves' triangle ids, leaf after leaf
-  std::vector<std::pair<uint32_t, uint32_t>> leafRanges_;   // [begin, end) of each leaf's ids in leafPrimitives_
+  BuildScratch& scratch_;
+  PrimitiveReference* references_ = nullptr;   // one per triangle of the mesh, the held ones first
+  std::vector<uint32_t>& leafPrimitives_;   // the leaves' triangle ids, leaf after leaf
+  std::vector<std::pair<uint32_t, uint32_t>>& leafRanges_;   // [begin, end) of each leaf's ids in leafPrimitives_
   uint32_t packetCount_ = 0;
 };
 
