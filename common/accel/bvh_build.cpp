@@ -5,9 +5,9 @@
 // spare lane) in one array, partitioned in place: a node's triangles are a
 // contiguous range of it. A node starts as one child holding its whole
 // range; the child of largest surface area is split by the best of 32
-// binned SAH planes per axis (16 below 1024 references, 8 below 32;
-// centroids binned; ranges of 8192 references or more bin every k-th,
-// 4096 to 8191 of them), until the node has Width children or none is
+// binned SAH planes per axis (16 below 1024 references, 8 below 256, 4
+// below 16; centroids binned; ranges of 8192 references or more bin every
+// k-th, 4096 to 8191 of them), until the node has Width children or none is
 // worth splitting. Costs count triangles in packets of four, as the leaves
 // test them (Embree's block size), so a range of at most four triangles is
 // one packet test and always a leaf, and one of at most eight becomes a
@@ -46,14 +46,18 @@ namespace {
 
 
 // Bins per axis: 32 for ranges of kFineBinning references or more, where a
-// better plane pays for the longer sweep many times over, 16 below, and 8
-// below kCoarseBinning, where clearing and sweeping the bins outweighs
-// binning the few references (builds 4-7 % faster, rays as fast).
+// better plane pays for the longer sweep many times over, 16 below, 8
+// below kCoarseBinning and 4 below kTinyBinning, where clearing and
+// sweeping the bins outweighs binning the few references (8 bins up to 255
+// rather than 31 and 4 below 16: builds ~10 % faster for a tree's SAH cost
+// 0.1-0.2 % higher).
 constexpr int kFineBins = 32;
 constexpr int kBins = 16;
 constexpr uint32_t kFineBinning = 1024;
 constexpr int kCoarseBins = 8;
-constexpr uint32_t kCoarseBinning = 32;
+constexpr uint32_t kCoarseBinning = 256;
+constexpr int kTinyBins = 4;
+constexpr uint32_t kTinyBinning = 16;
 // Ranges of at least this many references are binned into two sets of bins.
 constexpr uint32_t kTwoBinSets = 256;
 // Ranges of twice this many references or more bin every k-th, this many
@@ -548,6 +552,7 @@ class Builder {
   // The best binned SAH split of the range (axis -1: every centroid in one bin).
   Split findSplit(const Range& range) const {
     if (range.count() >= kFineBinning) return findSplitWith<kFineBins>(range);
+    if (range.count() < kTinyBinning) return findSplitWith<kTinyBins>(range);
     return range.count() >= kCoarseBinning ? findSplitWith<kBins>(range) : findSplitWith<kCoarseBins>(range);
   }
 
