@@ -19,8 +19,9 @@
 // centroids all fall in one bin, or one deeper than kBvhForcedMedianDepth,
 // is cut at its median instead. A range binned in full knows its sides'
 // boxes and counts from the bins, so its partition only moves references
-// (partitionByCount); a sampled one measures them while partitioning. The
-// leaves' packets are written once the
+// (partitionByCount); a sampled one measures its sides' boxes while
+// partitioning. Either way the sides' centroid boxes are bounded, not
+// measured (boundCentroids). The leaves' packets are written once the
 // tree is built, into one array of the exact size. O(n log n): each level
 // bins and partitions each triangle of the levels' ranges a bounded number
 // of times.
@@ -649,25 +650,19 @@ class Builder {
   }
 
   // Partitions the range by the split, measuring the two sides' boxes (the
-  // split's own come from sampled bins in large ranges).
+  // split's own come from sampled bins in large ranges); their centroid
+  // boxes are bounded (boundCentroids), as partitionByCount's are.
   void partition(const Range& range, const Split& split, Range& left, Range& right) {
     const __m128 infinity = _mm_set1_ps(kInfinity), minusInfinity = _mm_set1_ps(-kInfinity);
-    __m128 leftCentroidLo = infinity, leftCentroidHi = minusInfinity;
-    __m128 rightCentroidLo = infinity, rightCentroidHi = minusInfinity;
     __m128 leftLo = infinity, leftHi = minusInfinity, rightLo = infinity, rightHi = minusInfinity;
     const SideTest test(split);
     uint32_t i = range.begin, j = range.end;
     while (i < j) {
-      const __m128 centroid = _mm_add_ps(references_[i].lo, references_[i].hi);
       if (test.left(references_[i])) {
-        leftCentroidLo = _mm_min_ps(leftCentroidLo, centroid);
-        leftCentroidHi = _mm_max_ps(leftCentroidHi, centroid);
         leftLo = _mm_min_ps(leftLo, references_[i].lo);
         leftHi = _mm_max_ps(leftHi, references_[i].hi);
         ++i;
       } else {
-        rightCentroidLo = _mm_min_ps(rightCentroidLo, centroid);
-        rightCentroidHi = _mm_max_ps(rightCentroidHi, centroid);
         rightLo = _mm_min_ps(rightLo, references_[i].lo);
         rightHi = _mm_max_ps(rightHi, references_[i].hi);
         std::swap(references_[i], references_[--j]);
@@ -677,8 +672,7 @@ class Builder {
     right.begin = i, right.end = range.end;
     left.lo = leftLo, left.hi = leftHi;
     right.lo = rightLo, right.hi = rightHi;
-    left.centroidLo = leftCentroidLo, left.centroidHi = leftCentroidHi;
-    right.centroidLo = rightCentroidLo, right.centroidHi = rightCentroidHi;
+    boundCentroids(range, split, left, right);
   }
 
   // Cuts the range at its median along the longest axis of its centroids;
