@@ -505,6 +505,21 @@ class Builder {
                                                                                : _mm_setr_ps(p[0], p[1], p[2], 0);
   }
 
+  // isDegenerateTriangle of the vertices in lanes 0-2, from the registers:
+  // the same double differences, products and comparisons, two at a time.
+  static bool isDegenerate(__m128 v0, __m128 v1, __m128 v2) {
+    const __m128d xy0 = _mm_cvtps_pd(v0), z0 = _mm_cvtps_pd(_mm_movehl_ps(v0, v0));
+    const __m128d xy1 = _mm_sub_pd(_mm_cvtps_pd(v1), xy0), z1 = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(v1, v1)), z0);
+    const __m128d xy2 = _mm_sub_pd(_mm_cvtps_pd(v2), xy0), z2 = _mm_sub_sd(_mm_cvtps_pd(_mm_movehl_ps(v2, v2)), z0);
+    // a = v1 - v0, b = v2 - v0: (ay bz, az bx) against (az by, ax bz), and ax by against ay bx.
+    const __m128d ayz = _mm_unpacklo_pd(_mm_unpackhi_pd(xy1, xy1), z1), bzx = _mm_unpacklo_pd(z2, xy2);
+    const __m128d azx = _mm_unpacklo_pd(z1, xy1), byz = _mm_unpacklo_pd(_mm_unpackhi_pd(xy2, xy2), z2);
+    const __m128d axyByx = _mm_mul_pd(xy1, _mm_shuffle_pd(xy2, xy2, 1));   // (ax by, ay bx)
+    const int first = _mm_movemask_pd(_mm_cmpeq_pd(_mm_mul_pd(ayz, bzx), _mm_mul_pd(azx, byz)));
+    const int last = _mm_movemask_pd(_mm_cmpeq_sd(axyByx, _mm_unpackhi_pd(axyByx, axyByx)));
+    return first == 3 && (last & 1);
+  }
+
   // References to every finite, non-degenerate triangle, and their range.
   Range gatherReferences() {
     references_ = scratch_.referencesFor(mesh_.triangleCount);
@@ -528,9 +543,7 @@ class Builder {
                                                   _mm_cmplt_ps(_mm_and_ps(b, absolute), infinity)),
                                        _mm_cmplt_ps(_mm_and_ps(c, absolute), infinity));
       if ((_mm_movemask_ps(finite) & 7) != 7) continue;
-      Vec3 v0, v1, v2;
-      mesh_.triangle(primitive, v0, v1, v2);
-      if (isDegenerateTriangle(v0, v1, v2)) continue;
+      if (isDegenerate(a, b, c)) continue;
       PrimitiveReference& reference = references_[count++];
       // The id joins lo in a register: stored apart, its 4 bytes would keep
       // the next load of lo from being forwarded from the store.
