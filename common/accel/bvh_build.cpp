@@ -354,10 +354,10 @@ struct SideTest {
 
 // A build's scratch: the references, and the leaves' triangle ids and
 // ranges (Builder::writeLeaf). Each thread keeps its own from one build to
-// the next: a fresh page costs a fault and the kernel's zeroing, ~15 % of a
+// the next: a fresh page costs a fault and the kernel's zeroing, ~10 % of a
 // 500k-triangle build when all are fresh, and a worker builds cell after
-// cell. Kept only up to kKeptReferences references (64 MiB); a larger
-// build's scratch is freed with it. The references are uninitialised, from
+// cell. Kept only after builds of up to kKeptReferences triangles (about
+// 72 MiB of it used); a larger build's scratch is freed with it. The references are uninitialised, from
 // 2 MiB on aligned to 2 MiB and on transparent huge pages: one fault per 2
 // MiB when they are fresh.
 constexpr size_t kHugePage = size_t(2) << 20;
