@@ -824,16 +824,15 @@ class Builder {
   // the given leaves as its last children; returns its index.
   uint32_t buildNode(const Range& range, int depth, const Range* leaves = nullptr, int leafCount = 0) {
     Range children[Width];
+    float areas[Width];   // the children's half areas, each taken once
     int count = 1;
     children[0] = range;
+    areas[0] = halfArea(range.lo, range.hi);
     while (count < Width - leafCount) {
       int widest = -1;
       float widestArea = -1;
-      for (int k = 0; k < count; ++k) {
-        if (children[k].leaf) continue;
-        const float area = halfArea(children[k].lo, children[k].hi);
-        if (area > widestArea) widestArea = area, widest = k;
-      }
+      for (int k = 0; k < count; ++k)
+        if (!children[k].leaf && areas[k] > widestArea) widestArea = areas[k], widest = k;
       if (widest < 0) break;
       Range left, right;
       if (!split(children[widest], depth, left, right)) {
@@ -841,7 +840,9 @@ class Builder {
         continue;
       }
       children[widest] = left;
-      children[count++] = right;
+      areas[widest] = halfArea(left.lo, left.hi);
+      children[count] = right;
+      areas[count++] = halfArea(right.lo, right.hi);
     }
     // Children the node had no slot left to split: small ones become leaves.
     for (int k = 0; k < count; ++k)
