@@ -61,7 +61,7 @@ int64_t pendingWorkOfMoreCell(const SceneStore& scene, uint32_t cellId,
   if (photonsOfLight == 0) return 0;
   int64_t lights = 0;
   for (const AreaLight& light : scene.lights()) lights += light.cell == cellId;
-  return int64_t(photonsOfLight) * std::max<int64_t>(1, lights);   // daylight: its emitter's share
+  return int64_t(photonsOfLight) * std::max<int64_t>(1, lights);   // no lamps (daylight): the one emitter
 }
 
 LoadedCell& cellWithAccelerator(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
