@@ -2,6 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <chrono>
 #include <memory>
 #include <stdexcept>
@@ -41,6 +42,26 @@ LoadedCell& autoCell(CellCache& cache, AcceleratorChooser& chooser, const SceneS
     cache.rebuildAccelerator(cell, better->candidate.spec);
   }
   return cell;
+}
+
+// A more cell's batches are a piece of its pending work, cut by the
+// coordinator to fill a small lease: in the photon pass often one light's
+// photons of a room that has a dozen. Chosen for that piece, the cell got a
+// grid that then traced the rest of its emission piece by piece (on
+// soda-hall a fifth of the photon pass's rays, at 1.5x bvh's time per ray).
+// When the piece emits, the cell is taken to have every light's photons
+// still to emit, each light at this one's share: an overestimate late in the
+// pass costs a dearer build, an underestimate a slower structure for the
+// rays the cell has left.
+int64_t pendingWorkOfMoreCell(const SceneStore& scene, uint32_t cellId,
+                              capnp::List<wire::RayBatch>::Reader batches) {
+  uint64_t photonsOfLight = 0;
+  for (auto batch : batches)
+    if (batch.isEmit()) photonsOfLight = std::max(photonsOfLight, batch.getEmit().getPhotonsOfLight());
+  if (photonsOfLight == 0) return 0;
+  int64_t lights = 0;
+  for (const AreaLight& light : scene.lights()) lights += light.cell == cellId;
+  return int64_t(photonsOfLight) * std::max<int64_t>(1, lights);   // no lamps (daylight): the one emitter
 }
 
 LoadedCell& cellWithAccelerator(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
@@ -109,6 +130,10 @@ LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assig
   lease.photonJob = photonJobOf(assign);
   lease.renderPhase = assign.getPhase() == wire::Phase::RENDER;
   lease.accel = lease.renderPhase ? lease.parameters.renderAccel : lease.parameters.accel;
+  if (lease.accel == "auto" && !lease.renderPhase)
+    for (auto more : assign.getMoreCells())
+      if (const int64_t pending = pendingWorkOfMoreCell(*lease.scene, more.getCell(), more.getBatches()))
+        lease.morePendingWork.emplace_back(more.getCell(), pending);
   lease.cell = &cellWithAccelerator(cache, chooser, lease, cellId, assign.getCellWork(), lease.renderPhase);
   if (lease.renderPhase) {
     lease.indirect = cache.indirectLight(lease.mapKey(cellId));
@@ -123,6 +148,8 @@ LoadedLease loadLease(CellCache& cache, AcceleratorChooser& chooser, wire::Assig
 
 LoadedCell& loadMoreCell(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease, uint32_t cellId,
                          int64_t work) {
+  for (const auto& [cell, pending] : lease.morePendingWork)
+    if (cell == cellId) work = std::max(work, pending);
   return cellWithAccelerator(cache, chooser, lease, cellId, work, false);
 }
 

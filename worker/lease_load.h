@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "common/transport/cell_kernel.h"
 #include "proto/wire.capnp.h"
@@ -36,6 +38,9 @@ struct LoadedLease {
   const IndirectLight* indirect = nullptr;   // its photon map (render phase)
   int64_t irradiancePoints = 0;    // precomputed by this lease
   int64_t irradianceMicroseconds = 0;
+  // `--accel auto`, photon pass: the pending work each more cell is expected
+  // to have, beyond the piece the lease holds (pendingWorkOfMoreCell).
+  std::vector<std::pair<uint32_t, int64_t>> morePendingWork;
   PhotonMapKey mapKey(uint32_t cell) const { return {photonJob, cell, photonMapBuild(parameters)}; }
 };
 

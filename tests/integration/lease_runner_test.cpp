@@ -16,6 +16,7 @@
 #include "common/scene/store/scene_store.h"
 #include "common/transport/photon_record.h"
 #include "tests/integration/service_harness.h"
+#include "worker/lease_load.h"
 #include "worker/lease_runner.h"
 
 namespace portico {
@@ -121,6 +122,32 @@ TEST_F(LeaseRunner, OneLeaseOfSeveralCellsDepositsWhatALeasePerCellDoes) {
   for (auto counter : all->getRoot<wire::Envelope>().getResult().getCounters())
     if (std::string(counter.getName().cStr()) == "leases.extra_cells") extraCells = size_t(counter.getValue());
   EXPECT_EQ(extraCells, 2u);
+}
+
+// `--accel auto`: a more cell comes with a piece of its emission; it is
+// chosen for every light's photons of its cell (each at the piece's light's
+// share), not for the piece.
+TEST_F(LeaseRunner, AutoChoosesAnEmittingMoreCellForEveryLightOfIt) {
+  ASSERT_GE(emissions_.size(), 3u);
+  const std::vector<Emission> used(emissions_.begin(), emissions_.begin() + 3);
+  capnp::MallocMessageBuilder message;
+  auto assign = message.initRoot<wire::Assign>();
+  fillAssign(assign, store_.string(), used, 500);
+  assign.getSpec().setAccel("auto");
+  CellCache cache(uint64_t(1) << 30);
+  AcceleratorChooser chooser(CostModel::builtIn());
+  const LoadedLease lease = loadLease(cache, chooser, assign.asReader(), std::nullopt, store_.string());
+  const SceneStore scene = SceneStore::open(store_.string());
+  ASSERT_EQ(lease.morePendingWork.size(), used.size() - 1);
+  for (size_t i = 1; i < used.size(); ++i) {
+    int64_t lights = 0;
+    for (const AreaLight& light : scene.lights()) lights += light.cell == used[i].cell;
+    EXPECT_EQ(lease.morePendingWork[i - 1].first, used[i].cell);
+    EXPECT_EQ(lease.morePendingWork[i - 1].second, 500 * lights);
+  }
+
+  assign.getSpec().setAccel("grid");   // a fixed structure needs no estimate
+  EXPECT_TRUE(loadLease(cache, chooser, assign.asReader(), std::nullopt, store_.string()).morePendingWork.empty());
 }
 
 TEST_F(LeaseRunner, ABadCellAmongTheMoreCellsIsTheOneBlamed) {
