@@ -54,23 +54,22 @@ inline uint32_t packetCount(uint32_t child) { return ((child >> 28) & 7) + 1; }
 constexpr int kBvhForcedMedianDepth = 40;
 constexpr int kBvhMaxDepth = kBvhForcedMedianDepth + 33;
 
-// Allocator of the tree's arrays. An array of 512 KiB or more is rounded
-// up to whole 2 MiB pages, aligned to them, and asks for transparent huge
+// Allocator of the tree's arrays. An array of 4 MiB or more is rounded up
+// to whole 2 MiB pages, aligned to them, and asks for transparent huge
 // pages (madvise): a ray's nodes and leaves lie anywhere in the tree, and
-// each 4 KiB page it touches would cost a TLB miss, and past the reach of
-// the processor's second-level TLB (2 048 entries of 4 KiB on Zen 3) a page
-// walk. 500k-triangle trees (29 MiB) trace photon rays ~20 % faster so;
-// 100k-triangle ones (a 0.7 MiB node array) 2-5 % (`portico bench accel`
-// ratios to Embree). The rounding costs at most 4x of an array just past
-// 512 KiB, and nothing beyond 2 MiB rounded away. Smaller arrays stay on
+// past the reach of the processor's second-level TLB (2 048 entries of 4 KiB
+// on Zen 3) every one of them would cost a page walk too; 500k-triangle
+// trees (29 MiB) trace photon rays ~20 % faster so. Smaller arrays stay on
 // 4 KiB pages: a worker's many small cells keep reusing freed memory
 // (common/util/heap_reuse.h) rather than having the kernel zero fresh 2 MiB
-// pages (grid_traversal.h: LargeArrayAllocator).
+// pages (from 512 KiB, 100k-triangle trees trace 2-5 % faster in `portico
+// bench accel`, but the octagon's photon pass builds its cells' trees in
+// twice the time: grid_traversal.h: LargeArrayAllocator).
 template <typename T>
 struct BvhArrayAllocator {
   using value_type = T;
   static constexpr size_t kHugePage = size_t(2) << 20;
-  static constexpr size_t kHugeFrom = size_t(512) << 10;
+  static constexpr size_t kHugeFrom = size_t(4) << 20;
   static constexpr std::align_val_t kCacheLine{64};
 
   BvhArrayAllocator() = default;
