@@ -357,10 +357,9 @@ struct SideTest {
 // the next: a fresh page costs a fault and the kernel's zeroing, ~10 % of a
 // 500k-triangle build when all are fresh, and a worker builds cell after
 // cell. Kept only after builds of up to kKeptReferences triangles (about
-// 72 MiB of it used); a larger build's scratch is freed with it. The references are uninitialised, from
-// 2 MiB on aligned to 2 MiB and on transparent huge pages: one fault per 2
-// MiB when they are fresh.
-constexpr size_t kHugePage = size_t(2) << 20;
+// 72 MiB of it used); a larger build's scratch is freed with it. The
+// references are uninitialised, and from 2 MiB on whole huge pages
+// (bvh_memory): one fault per 2 MiB when they are fresh.
 constexpr size_t kKeptReferences = size_t(2) << 20;
 struct BuildScratch {
   PrimitiveReference* references = nullptr;
@@ -369,16 +368,17 @@ struct BuildScratch {
   std::vector<std::pair<uint32_t, uint32_t>> leafRanges;
 
   ~BuildScratch() { release(); }
-  static std::align_val_t alignmentFor(size_t bytes) {
-    return bytes < kHugePage ? std::align_val_t{32} : std::align_val_t{kHugePage};
-  }
+  static bool onHugePages(size_t bytes) { return bytes >= bvh_memory::kHugePage; }
   PrimitiveReference* referencesFor(size_t count) {
     if (count <= capacity) return references;
     release();
     size_t bytes = std::max<size_t>(count, 1) * sizeof(PrimitiveReference);
-    if (bytes >= kHugePage) bytes = (bytes + kHugePage - 1) / kHugePage * kHugePage;   // whole huge pages, all ours
-    references = static_cast<PrimitiveReference*>(::operator new(bytes, alignmentFor(bytes)));
-    if (bytes >= kHugePage) madvise(references, bytes, MADV_HUGEPAGE);   // a hint: failure only costs speed
+    if (onHugePages(bytes)) {
+      bytes = bvh_memory::hugePageBytes(bytes);   // whole huge pages, all ours
+      references = static_cast<PrimitiveReference*>(bvh_memory::allocateHugePages(bytes));
+    } else {
+      references = static_cast<PrimitiveReference*>(::operator new(bytes, std::align_val_t{32}));
+    }
     capacity = bytes / sizeof(PrimitiveReference);
     return references;
   }
@@ -389,7 +389,11 @@ struct BuildScratch {
     if (capacity > kKeptReferences) release();
   }
   void release() {
-    if (references) ::operator delete(references, alignmentFor(capacity * sizeof(PrimitiveReference)));
+    const size_t bytes = capacity * sizeof(PrimitiveReference);
+    if (references && onHugePages(bytes))
+      bvh_memory::freeHugePages(references, bytes);
+    else if (references)
+      ::operator delete(references, std::align_val_t{32});
     references = nullptr;
     capacity = 0;
     std::vector<uint32_t>().swap(leafPrimitives);

@@ -65,10 +65,25 @@ constexpr int kBvhMaxDepth = kBvhForcedMedianDepth + 33;
 // pages (from 512 KiB, 100k-triangle trees trace 2-5 % faster in `portico
 // bench accel`, but the octagon's photon pass builds its cells' trees in
 // twice the time: grid_traversal.h: LargeArrayAllocator).
+namespace bvh_memory {
+constexpr size_t kHugePage = size_t(2) << 20;
+// `bytes` rounded up to whole huge pages: what allocateHugePages takes.
+inline size_t hugePageBytes(size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
+// hugePageBytes(bytes) aligned to 2 MiB, on transparent huge pages (a hint:
+// failure only costs speed); freed by freeHugePages with the same bytes.
+inline void* allocateHugePages(size_t bytes) {
+  void* pointer = ::operator new(hugePageBytes(bytes), std::align_val_t{kHugePage});
+  madvise(pointer, hugePageBytes(bytes), MADV_HUGEPAGE);
+  return pointer;
+}
+inline void freeHugePages(void* pointer, size_t bytes) noexcept {
+  ::operator delete(pointer, hugePageBytes(bytes), std::align_val_t{kHugePage});
+}
+}  // namespace bvh_memory
+
 template <typename T>
 struct BvhArrayAllocator {
   using value_type = T;
-  static constexpr size_t kHugePage = size_t(2) << 20;
   static constexpr size_t kHugeFrom = size_t(4) << 20;
   static constexpr std::align_val_t kCacheLine{64};
 
@@ -76,21 +91,17 @@ struct BvhArrayAllocator {
   template <typename U>
   BvhArrayAllocator(const BvhArrayAllocator<U>&) noexcept {}
 
-  static size_t hugeBytes(size_t bytes) { return (bytes + kHugePage - 1) / kHugePage * kHugePage; }
-
   T* allocate(size_t count) {
     const size_t bytes = count * sizeof(T);
     if (bytes < kHugeFrom) return static_cast<T*>(::operator new(bytes, kCacheLine));
-    void* pointer = ::operator new(hugeBytes(bytes), std::align_val_t{kHugePage});
-    madvise(pointer, hugeBytes(bytes), MADV_HUGEPAGE);   // a hint: failure only costs speed
-    return static_cast<T*>(pointer);
+    return static_cast<T*>(bvh_memory::allocateHugePages(bytes));
   }
   void deallocate(T* pointer, size_t count) noexcept {
     const size_t bytes = count * sizeof(T);
     if (bytes < kHugeFrom)
       ::operator delete(pointer, kCacheLine);
     else
-      ::operator delete(pointer, hugeBytes(bytes), std::align_val_t{kHugePage});
+      bvh_memory::freeHugePages(pointer, bytes);
   }
   template <typename U>
   bool operator==(const BvhArrayAllocator<U>&) const noexcept { return true; }

@@ -124,7 +124,7 @@ inline bool testLeaf8(const grid_traversal::TrianglePacket* packets, uint32_t ch
                       const WatertightRay& frame, const Ray& ray, Hit& best) {
   const grid_traversal::TrianglePacket* packet = packets + bvh_child::firstPacket(child);
   const grid_traversal::TrianglePacket* const end = packet + bvh_child::packetCount(child);
-  if (bvh_child::packetCount(child) > 2) prefetchLeafTail(packets, child);   // the second pair's lines
+  if (end - packet > 2) prefetchLeafTail(packet, end);   // the second pair's lines
   for (; packet < end; packet += 2) {
     const bool pair = packet + 1 != end;
     const PacketLanes8 lanes = packetLanes8<AnyHit>(*packet, pair ? packet[1] : *packet, packetRay, best.t);

@@ -132,11 +132,9 @@ struct SseBoxes {
 // Starts the cache misses of a leaf's lines past its first 256 bytes: a
 // leaf of four packets spans ten lines, and the loads of its second pair
 // would otherwise wait for the first pair's test (its branches mispredict).
-inline void prefetchLeafTail(const grid_traversal::TrianglePacket* packets, uint32_t child) {
-  const char* const first = reinterpret_cast<const char*>(packets + bvh_child::firstPacket(child));
-  const char* const end =
-      reinterpret_cast<const char*>(packets + bvh_child::firstPacket(child) + bvh_child::packetCount(child));
-  for (const char* line = first + 256; line < end; line += 64) __builtin_prefetch(line);
+inline void prefetchLeafTail(const grid_traversal::TrianglePacket* first, const grid_traversal::TrianglePacket* end) {
+  const char* const last = reinterpret_cast<const char*>(end);
+  for (const char* line = reinterpret_cast<const char*>(first) + 256; line < last; line += 64) __builtin_prefetch(line);
 }
 
 // Where a child's node or first packet starts.
@@ -161,7 +159,10 @@ inline void prefetchChild(const BvhNode<Width>* nodes, const grid_traversal::Tri
   __builtin_prefetch(address + 64);
   __builtin_prefetch(address + 128);
   __builtin_prefetch(address + 192);
-  if (bvh_child::isLeaf(child) && bvh_child::packetCount(child) > 1) prefetchLeafTail(packets, child);
+  if (bvh_child::isLeaf(child) && bvh_child::packetCount(child) > 1) {
+    const grid_traversal::TrianglePacket* const first = packets + bvh_child::firstPacket(child);
+    prefetchLeafTail(first, first + bvh_child::packetCount(child));
+  }
 }
 
 // Nearest hit (or, with AnyHit, any hit) of the ray in the tree, from the
