@@ -11,7 +11,7 @@
 // origin + tX * direction of a hit it reports lies within a few float ulps
 // of the ray origin's distance to X (so within eps = c * u * R of X, R being
 // the largest distance from the origin to the root box, per axis). The
-// boxes are tested as slabs grown by margin = R / 2^16 + |origin| / 2^20
+// boxes are tested as slabs grown by margin = R / 2^18 + |origin| / 2^20
 // (traversal_margin.h), far above eps plus the rounding
 // of the slab arithmetic (origin +- margin rounded once per ray, then one
 // subtraction and one multiplication per plane: a few ulps of R and of the

@@ -8,7 +8,7 @@
 // its distance to the ray origin from X (and so within eps = c * u * R of it,
 // R being the largest distance from the origin to the root box, per axis).
 // The traversal therefore treats every plane, the root box's faces included,
-// as a slab of half-width margin = R / 2^16 + |origin| / 2^20, far above eps
+// as a slab of half-width margin = R / 2^18 + |origin| / 2^20, far above eps
 // plus the rounding of the traversal's own arithmetic (whose terms are at
 // most a few ulps of R and of the origin's coordinates, the latter from
 // precomputing margin - origin once per ray): the ray is in a child over the whole

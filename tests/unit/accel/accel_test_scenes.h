@@ -4,7 +4,9 @@
 // rays of every kind an accelerator must get right.
 #pragma once
 
+#include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -250,6 +252,48 @@ inline std::vector<Ray> testRays(const TestMesh& mesh, int count, uint32_t seed,
         ray.tMax = ray.tMin + 3 * unit(random);
         break;
       }
+    }
+    rays.push_back(ray);
+  }
+  return rays;
+}
+
+// Rays that meet a triangle at a grazing angle: aimed at a point of a
+// random triangle (inside it, or on an edge) from a direction tilted out of
+// the triangle's plane by 1e-1 down to 1e-7 radians, starting before the
+// point or on a surface just off it (as bounced photons leave surfaces).
+// Where the watertight test's rounding is worst (nearly edge-on hits), so
+// the tests that grow the hierarchies' boxes by a margin
+// (common/accel/traversal_margin.h) are checked here.
+inline std::vector<Ray> grazingRays(const TestMesh& mesh, int count, uint32_t seed) {
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<float> unit(0, 1), symmetric(-1, 1);
+  std::vector<Ray> rays;
+  const size_t triangles = mesh.triangleCount();
+  for (int i = 0; i < count && triangles > 0; ++i) {
+    const uint32_t* t = &mesh.indices[3 * (random() % triangles)];
+    const Vec3 a = mesh.vertex(t[0]), b = mesh.vertex(t[1]), c = mesh.vertex(t[2]);
+    const Vec3 normal = cross(b - a, c - a);
+    if (!(dot(normal, normal) > 0)) continue;
+    const Vec3 n = normalize(normal);
+    float r = unit(random), s = unit(random);
+    if (random() % 4 == 0) s = 0;   // on an edge
+    if (r + s > 1) r = 1 - r, s = 1 - s;
+    const Vec3 target = a + (b - a) * r + (c - a) * s;
+    // A direction in the plane, tilted out of it.
+    Vec3 inPlane = (b - a) * symmetric(random) + (c - a) * symmetric(random);
+    if (!(dot(inPlane, inPlane) > 0)) inPlane = b - a;
+    inPlane = normalize(inPlane - n * dot(inPlane, n));
+    const float tilt = std::pow(10.0f, -1.0f - 6.0f * unit(random)) * (random() % 2 ? 1.0f : -1.0f);
+    const Vec3 direction = normalize(inPlane + n * tilt);
+    const float reach = length(b - a) + length(c - a);
+    Ray ray;
+    if (i % 3 == 2) {
+      // Off the surface along its normal, then along the plane.
+      const float offset = 2e-5f * std::max({1.0f, std::abs(target.x), std::abs(target.y), std::abs(target.z)});
+      ray = {target + n * (tilt > 0 ? offset : -offset), direction};
+    } else {
+      ray = {target - direction * (reach * (0.01f + 2 * unit(random))), direction};
     }
     rays.push_back(ray);
   }

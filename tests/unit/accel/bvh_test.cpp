@@ -26,6 +26,7 @@ using accel_test::sameBits;
 using accel_test::TestMesh;
 
 const char* const kBvhSpecs[] = {"bvh:width=4", "bvh:width=8"};
+constexpr int kGrazingRays = 6000;
 
 std::unique_ptr<Accelerator> buildBvh(const TestMesh& mesh, const std::string& spec) {
   return buildAccelerator(parseAcceleratorSpec(spec), mesh.view());
@@ -163,6 +164,28 @@ TEST(Bvh, MatchesBruteForceFarFromTheWorldOrigin) {
   accel_test::addRandomTriangles(mesh, 300, random);
   accel_test::moveFarFromTheOrigin(mesh);
   expectSameAsBruteForce(mesh, 10000, 600);
+}
+
+// Nearly edge-on hits, where the watertight test rounds most: in a
+// furnished hall at building coordinates, among long thin triangles, and
+// far from the world's origin; both widths, AVX2 and SSE.
+TEST(Bvh, MatchesBruteForceOnGrazingRays) {
+  std::mt19937 random(11);
+  TestMesh thin;
+  accel_test::addLongThinTriangles(thin, 200, random);
+  accel_test::addRoomOfBoxes(thin, random);
+  TestMesh far = mixedScene(12);
+  accel_test::moveFarFromTheOrigin(far);
+  const TestMesh hall = accel_test::furnishedHall(10000, 13);
+  uint32_t seed = 1100;
+  for (const TestMesh* mesh : std::initializer_list<const TestMesh*>{&hall, &thin, &far}) {
+    const auto four = buildBvh(*mesh, "bvh:width=4"), eight = buildBvh(*mesh, "bvh:width=8");
+    const std::vector<Ray> rays = accel_test::grazingRays(*mesh, kGrazingRays, ++seed);
+    expectSameAsBruteForce(*mesh, {four.get(), eight.get()}, rays, 0.3);
+    useBvhAvx2(false);
+    expectSameAsBruteForce(*mesh, {eight.get()}, rays, 0.3);
+    useBvhAvx2(true);
+  }
 }
 
 TEST(Bvh, MatchesBruteForceWithNonFiniteTriangles) {

@@ -244,6 +244,24 @@ TEST(KdTree, MatchesBruteForceFarFromTheWorldOrigin) {
   for (const char* spec : kKdSpecs) expectSameAsBruteForce(mesh, spec, 10000, 600);
 }
 
+// Nearly edge-on hits (accel_test::grazingRays), where the watertight test
+// rounds most, against the margin the traversal grows its slabs by.
+TEST(KdTree, MatchesBruteForceOnGrazingRays) {
+  std::mt19937 random(21);
+  KdTestMesh thin;
+  addLongThinTriangles(thin, 200, random);
+  accel_test::addRoomOfBoxes(thin, random);
+  KdTestMesh far = mixedScene(22);
+  accel_test::moveFarFromTheOrigin(far);
+  const KdTestMesh hall = accel_test::furnishedHall(10000, 23);
+  uint32_t seed = 2100;
+  for (const KdTestMesh* mesh : std::initializer_list<const KdTestMesh*>{&hall, &thin, &far})
+    for (const char* spec : kKdSpecs) {
+      SCOPED_TRACE(spec);
+      expectSameAsBruteForce(*mesh, buildTree(*mesh, spec), accel_test::grazingRays(*mesh, 4000, ++seed), 0.3);
+    }
+}
+
 TEST(KdTree, HandlesFlatBounds) {
   // A floor: every vertex at z = 1, so the root box has no thickness.
   KdTestMesh floor;
