@@ -4,7 +4,10 @@
 #include <signal.h>
 #include <stdlib.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
@@ -40,8 +43,14 @@ bool interrupted() { return interruptedFlag != 0; }
 
 LocalServices::LocalServices(const LocalRunOptions& local) {
   if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
-  char pattern[] = "/tmp/portico-render-XXXXXX";
-  if (!mkdtemp(pattern)) throw std::runtime_error("cannot create a temporary directory under /tmp");
+  // Under $TMPDIR, else /tmp: jobs.db and the job's
+  // photon files go there, hundreds of megabytes for a large pass.
+  const char* const tmpdir = std::getenv("TMPDIR");
+  const std::filesystem::path temp = tmpdir && *tmpdir ? tmpdir : "/tmp";
+  std::string pattern = (temp / "portico-render-XXXXXX").string();
+  if (!mkdtemp(pattern.data()))
+    throw std::runtime_error(fmt::format("cannot create a temporary directory under {}: {}", temp.string(),
+                                         std::strerror(errno)));
   work_ = pattern;
   coordinatorLog_ = (work_ / "coordinator.log").string();
   const std::string endpointFile = (work_ / "endpoint").string();

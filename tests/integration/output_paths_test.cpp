@@ -47,6 +47,35 @@ TEST_F(Outputs, BadPathsAreRefusedAtSubmitNamingTheProblemAndNothingIsCreated) {
   EXPECT_EQ(cluster.status(0)["jobs"].size(), 0u);
 }
 
+// `portico render` keeps its services' folder (jobs.db, the photon files)
+// under $TMPDIR, and names a TMPDIR it cannot use.
+TEST_F(Outputs, RenderRunsItsServicesUnderTmpdir) {
+  const fs::path dir = dir_ / "tmpdir", temp = dir / "temp";
+  fs::create_directories(temp);
+  const std::vector<std::string> render{kBin + "portico", "render", store_.string(), "-o", (dir / "x.exr").string(),
+                                        "--workers", "1", "--photons", "2000", "--spp", "1", "--width", "8",
+                                        "--height", "8", "--keep-logs"};
+  ::setenv("TMPDIR", temp.c_str(), 1);
+  int code = -1;
+  captureOutput(render, dir, "render", &code);
+  ::setenv("TMPDIR", (dir / "missing").c_str(), 1);
+  int missingCode = -1;
+  captureOutput(render, dir, "render-missing", &missingCode);
+  ::unsetenv("TMPDIR");
+
+  ASSERT_EQ(code, 0) << readFile(dir / "render.log");
+  const std::string log = readFile(dir / "render.log"), kept = "logs and jobs.db kept in ";
+  const size_t at = log.find(kept);
+  ASSERT_NE(at, std::string::npos) << log;
+  const fs::path folder = log.substr(at + kept.size(), log.find('\n', at) - at - kept.size());
+  EXPECT_EQ(folder.parent_path(), temp) << log;
+  EXPECT_TRUE(fs::exists(folder / "jobs.db")) << folder;
+  EXPECT_NE(missingCode, 0);
+  EXPECT_NE(readFile(dir / "render-missing.log").find("cannot create a temporary directory under " + (dir / "missing").string()),
+            std::string::npos)
+      << readFile(dir / "render-missing.log");
+}
+
 TEST_F(Outputs, AnImageThatCouldNotBeWrittenIsKeptAndFetchedWithTheSameBits) {
   const fs::path dir = dir_ / "recover";
   LocalCluster cluster(dir, 0);   // no worker yet: the job waits while its directory goes

@@ -38,6 +38,23 @@ TEST(Crc32c, AgreesWithTheDefinitionAtEveryLengthAndAlignment) {
     }
 }
 
+// Lengths around the hardware path's blocks of three streams (3 x 4096 and
+// 3 x 256 bytes), where the streams' CRCs are combined.
+TEST(Crc32c, AgreesWithTheDefinitionOnLongInputsAcrossStreamBlocks) {
+  std::mt19937 random(11);
+  std::string bytes(3 * 4096 * 2 + 3 * 256 * 3 + 64, '\0');
+  for (char& c : bytes) c = char(random());
+  for (size_t length : {size_t(767), size_t(768), size_t(769), size_t(3 * 4096 - 1), size_t(3 * 4096),
+                        size_t(3 * 4096 + 8), size_t(3 * 4096 + 3 * 256 + 7), size_t(6 * 4096 + 1),
+                        bytes.size() - 5})
+    for (size_t start : {size_t(0), size_t(3)}) {
+      const std::string piece = bytes.substr(start, length);
+      EXPECT_EQ(crc32c(piece.data(), piece.size()), crcByDefinition(piece)) << start << " " << length;
+      const size_t split = length / 3 + 1;
+      EXPECT_EQ(crc32c(piece.data() + split, length - split, crc32c(piece.data(), split)), crcByDefinition(piece));
+    }
+}
+
 TEST(Crc32c, ContinuesAcrossPieces) {
   const std::string text = "the photons a job deposits, and the rays queued between cells";
   for (size_t split = 0; split <= text.size(); ++split)
