@@ -184,6 +184,24 @@ FileExtent AppendFiles::append(Key key, std::string_view bytes) {
   return extent;
 }
 
+int64_t AppendFiles::reserve(Key key, int64_t size, std::string_view head) {
+  if (size <= 0 || size % kDirectAlignment != 0 || int64_t(head.size()) > kDirectAlignment)
+    throw std::invalid_argument(fmt::format("{}: cannot set aside {} bytes with a head of {}", pathOf(key).string(),
+                                            size, head.size()));
+  OpenFile& file = open(key);
+  const int64_t offset = alignUp(file.end);
+  // Through the page cache: the worker reads it within milliseconds (a
+  // direct write would send it to the device and the worker's read after
+  // it). Its block is its own, so no block is both cached and written
+  // directly.
+  char block[kDirectAlignment] = {};
+  std::memcpy(block, head.data(), head.size());
+  writeAll(key, file.descriptor, block, sizeof block, offset);
+  // Advanced whether or not the caller's transaction commits, as append.
+  file.end = offset + size;
+  return offset;
+}
+
 std::string AppendFiles::readUnchecked(Key key, const FileExtent& extent) {
   OpenFile& file = open(key);
   if (extent.offset < 0 || extent.size < 0 || extent.offset + extent.size > file.end)

@@ -96,6 +96,12 @@ class AppendFiles {
   // Writes the batch at the end of the file; throws DiskWriteError naming
   // the file when the disk is full or failing, std::runtime_error otherwise.
   FileExtent append(Key key, std::string_view bytes);
+  // Sets `size` bytes (a multiple of kDirectAlignment) aside at the next
+  // aligned offset, for another process to write (deposit regions,
+  // coordinator/deposit_regions.h), writes `head` (at most one block,
+  // padded with zeros) at their start, and returns their offset. Throws as
+  // append does.
+  int64_t reserve(Key key, int64_t size, std::string_view head);
   // The batch at `extent`; throws DamagedFileError naming the file when it
   // is missing, short, or fails its CRC.
   std::string read(Key key, const FileExtent& extent);

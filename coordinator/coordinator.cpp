@@ -487,6 +487,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   std::vector<std::pair<uint32_t, std::vector<QueuedBatch>>> moreCells;
   LeaseRecord opened;
   int64_t leaseWork = 0;
+  std::optional<DepositRegionGrant> region;
   try {
     sql::Transaction tx(store_.database());
     opened = store_.openLease(*chosen, worker.identity, worker.nextLeaseWork(options_.maxLeaseWork), wallMs(), batches);
@@ -502,6 +503,17 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
             moreCells.emplace_back(c.cell, std::move(extra));
             return added;
           });
+    if (opened.id && chosen->phase == 0 && options_.depositRegions) {
+      DepositRegionGrant grant;
+      for (size_t i = 0; i < grant.nonce.size(); i += 8) {
+        const uint64_t random = nonceSource_();
+        for (size_t b = 0; b < 8; ++b) grant.nonce[i + b] = uint8_t(random >> (8 * b));
+      }
+      grant.size = depositRegionBytes(leaseWork, 1 + moreCells.size());
+      grant.offset = store_.reserveDepositRegion(chosen->job, grant.size,
+                                                 deposit_region::encodeHead(chosen->job, opened.id, grant.nonce));
+      region = grant;
+    }
     tx.commit();
   } catch (const DamagedFileError& e) {
     // Queued rays lost under a committed row (an operating-system crash, or
@@ -530,6 +542,13 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
       to.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
     }
   };
+  if (region) {
+    auto target = assign.initDepositRegion();
+    target.setPath(std::filesystem::absolute(store_.photonFile(chosen->job)).string());
+    target.setOffset(uint64_t(region->offset));
+    target.setSize(uint64_t(region->size));
+    depositRegions_[lease] = *region;
+  }
   copyBatches(batches, assign.initBatches(static_cast<unsigned>(batches.size())));
   if (!moreCells.empty()) {
     auto more = assign.initMoreCells(static_cast<unsigned>(moreCells.size()));
@@ -562,6 +581,11 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
 
 void Coordinator::onResult(const std::string& identity, wire::Result::Reader result) {
   const uint64_t leaseId = result.getLease();
+  std::optional<DepositRegionGrant> region;
+  if (auto granted = depositRegions_.find(leaseId); granted != depositRegions_.end()) {
+    region = granted->second;
+    depositRegions_.erase(granted);
+  }
   auto lease = store_.lease(leaseId);
   // The worker's lease slot was freed, and refilled, as the Result arrived (runRound).
   // Results are idempotent: one for an unknown, closed or foreign lease is dropped.
@@ -592,6 +616,11 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
         store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
                         net::flatToString(batch));   // rays: packing gains little, costs a pass each way
       }
+      int64_t regionBytes = 0, resultBytes = 0;
+      for (const RegionDeposit& d : regionDeposits(leaseId, region ? &*region : nullptr, result, cellCount)) {
+        store_.addPhotonsAt(lease->job, d.cell, d.extent);
+        regionBytes += d.extent.size;
+      }
       for (auto deposits : result.getDeposits()) {
         if (deposits.getCell() >= cellCount)
           throw std::runtime_error(fmt::format("result for lease {} deposits photons in cell {}, which does not exist",
@@ -603,7 +632,10 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
                                                leaseId, records.size()));
         store_.addPhotons(lease->job, deposits.getCell(), records.size() / sizeof(PhotonRecord),
                           std::string_view(reinterpret_cast<const char*>(records.begin()), records.size()));
+        resultBytes += int64_t(records.size());
       }
+      if (regionBytes > 0) store_.addCounter(lease->job, kPhotonBytesFromWorkersCounter, regionBytes);
+      if (resultBytes > 0) store_.addCounter(lease->job, kPhotonBytesFromResultsCounter, resultBytes);
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;
         for (auto pixel : result.getFilm())
@@ -690,6 +722,7 @@ void Coordinator::recordResultCounters(const std::string& identity, const LeaseR
 
 void Coordinator::onFailure(const std::string& identity, wire::Failure::Reader failure) {
   const uint64_t leaseId = failure.getLease();
+  depositRegions_.erase(leaseId);
   auto lease = store_.lease(leaseId);
   if (auto worker = workers_.find(identity); worker != workers_.end()) {
     worker->second.leases.erase(leaseId);

@@ -10,6 +10,8 @@
 #include <string>
 #include <set>
 #include <optional>
+#include <random>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 #include <zmq.hpp>
@@ -18,6 +20,7 @@
 #include "common/net/role.h"
 #include "common/util/log_throttle.h"
 #include "common/scene/store/scene_store.h"
+#include "coordinator/deposit_regions.h"
 #include "coordinator/job_store.h"
 #include "coordinator/router_security.h"
 #include "coordinator/worker_registry.h"
@@ -40,6 +43,10 @@ struct CoordinatorOptions {
   // Fault injection for recovery tests: every Nth transaction of the main
   // loop (Coordinator::inRound) that applies Results fails to commit (0: never).
   int64_t failCommitsEvery = 0;
+  // Photon leases come with a deposit region of the job's photon file, which
+  // workers that can open it write their deposits into themselves
+  // (coordinator/deposit_regions.h); false: every deposit comes in its Result.
+  bool depositRegions = true;
 };
 
 class Coordinator {
@@ -174,6 +181,10 @@ class Coordinator {
   // The leases whose Results arrived this round, as they were sent (the
   // lease log's sent time, work and more cells), until onResult logs them.
   std::map<uint64_t, WorkerInfo::LeaseInFlight> arrivedLeases_;
+  // Each photon lease's deposit region until its Result or Failure arrives
+  // (coordinator/deposit_regions.h), and the source of their nonces.
+  std::unordered_map<uint64_t, DepositRegionGrant> depositRegions_;
+  std::mt19937_64 nonceSource_{std::random_device{}()};
   // The coordinator's own peak resident memory, read at most every 100 ms
   // (a Result's transaction records it in the job's statistics).
   uint64_t peakResident();

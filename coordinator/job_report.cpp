@@ -188,6 +188,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["disk"] = {{"photon_file_bytes", files.photons},
                    {"batch_file_bytes", files.batches},
                    {"job_bytes", files.photons + files.batches},
+                   {"photon_bytes_from_workers", get(counters, std::string(kPhotonBytesFromWorkersCounter))},
+                   {"photon_bytes_from_results", get(counters, std::string(kPhotonBytesFromResultsCounter))},
                    {"jobs_db_bytes", store.databaseBytes()}};
   stats["leases"] = get(counters, "leases.completed");
   // Photon-pass leases that carried more cells than their own, and how many.

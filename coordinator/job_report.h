@@ -22,6 +22,11 @@ inline constexpr std::string_view kCoordinatorPeakResidentCounter = "memory.peak
 // cost per lease).
 inline constexpr std::string_view kCoordinatorCpuAtSubmitCounter = "time.coordinator_cpu_at_submit_us";
 inline constexpr std::string_view kCoordinatorCpuAtLastResultCounter = "time.coordinator_cpu_at_last_result_us";
+// Photon bytes the workers wrote into the job's photon file themselves
+// (deposit regions, coordinator/deposit_regions.h), and those that came in
+// Results for the coordinator to write.
+inline constexpr std::string_view kPhotonBytesFromWorkersCounter = "disk.photon_bytes_from_workers";
+inline constexpr std::string_view kPhotonBytesFromResultsCounter = "disk.photon_bytes_from_results";
 
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);

@@ -7,6 +7,7 @@
 #include <fmt/ranges.h>
 
 #include <sqlite3.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -40,7 +41,14 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
     : db_(path, sql::Database::Mode::ReadWriteCreate),
       photons_(path + "-photons", AppendFiles::Naming::PerJob, "photon batch",
                [this](AppendFiles::Key file) {
-                 auto& s = db_.prepare("SELECT COALESCE(MAX(file_offset + file_size), 0) FROM photons WHERE job = ?");
+                 // Past every recorded batch and every deposit region handed out
+                 // (a worker may still write into one: deposit_regions.h); a
+                 // migration before schema 11 reads files without regions.
+                 auto& s = db_.prepare(
+                     db_.userVersion() >= 11
+                         ? "SELECT MAX(COALESCE((SELECT MAX(file_offset + file_size) FROM photons WHERE job = ?1), 0), "
+                           "COALESCE((SELECT photon_region_end FROM jobs WHERE id = ?1), 0))"
+                         : "SELECT COALESCE(MAX(file_offset + file_size), 0) FROM photons WHERE job = ?1");
                  s.bind(1, int64_t(file.first));
                  const int64_t end = s.step() ? s.columnInt(0) : 0;
                  s.reset();
@@ -315,6 +323,9 @@ constexpr const char* kSchemaVersion9 = R"sql(
 // in rows logged before), so that the cluster model knows every cell a
 // lease touched.
 constexpr const char* kSchemaVersion10 = "ALTER TABLE lease_log ADD COLUMN more_cell_work TEXT";
+// Version 11: the end of the last deposit region set aside in each job's
+// photon file (coordinator/deposit_regions.h).
+constexpr const char* kSchemaVersion11 = "ALTER TABLE jobs ADD COLUMN photon_region_end INTEGER NOT NULL DEFAULT 0";
 
 // LeaseLogEntry::moreCellWork as its column holds it, and back.
 std::string moreCellWorkText(const std::vector<std::pair<uint32_t, int64_t>>& cells) {
@@ -360,6 +371,7 @@ void JobStore::migrate() {
   step(8, [&] { db_.exec(kSchemaVersion8); });
   step(9, [&] { db_.exec(kSchemaVersion9); });
   step(10, [&] { db_.exec(kSchemaVersion10); });
+  step(11, [&] { db_.exec(kSchemaVersion11); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -808,7 +820,9 @@ JobStore::JobFileBytes JobStore::jobFileBytes(uint64_t job) const {
     const auto n = fs::file_size(path, error);
     return error ? int64_t(0) : int64_t(n);
   };
-  bytes.photons = size(photons_.pathOf({job, 0}));
+  struct stat photonFile {};
+  if (::stat(photons_.pathOf({job, 0}).c_str(), &photonFile) == 0)
+    bytes.photons = std::min<int64_t>(int64_t(photonFile.st_size), int64_t(photonFile.st_blocks) * 512);
   for (const AppendFiles::Key& key : batches_.filesOnDisk())
     if (key.first == job) bytes.batches += size(batches_.pathOf(key));
   return bytes;
@@ -899,6 +913,22 @@ void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::strin
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bind(4, extent.offset).bind(5, extent.size);
   s.bind(6, int64_t(extent.crc));
   s.run();
+}
+
+void JobStore::addPhotonsAt(uint64_t job, uint32_t cell, const FileExtent& extent) {
+  auto& s = db_.prepare(
+      "INSERT INTO photons(job, cell, count, payload, file_offset, file_size, file_crc) VALUES (?, ?, ?, x'', ?, ?, ?)");
+  s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, extent.size / int64_t(sizeof(PhotonRecord)));
+  s.bind(4, extent.offset).bind(5, extent.size).bind(6, int64_t(extent.crc));
+  s.run();
+}
+
+int64_t JobStore::reserveDepositRegion(uint64_t job, int64_t size, std::string_view head) {
+  const int64_t offset = photons_.reserve({job, 0}, size, head);
+  auto& s = db_.prepare("UPDATE jobs SET photon_region_end = MAX(photon_region_end, ?) WHERE id = ?");
+  s.bind(1, offset + size).bind(2, int64_t(job));
+  s.run();
+  return offset;
 }
 
 std::vector<std::string> JobStore::photonBatches(uint64_t job, uint32_t cell) {

@@ -97,7 +97,7 @@ struct LeaseLogEntry {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 10;
+  static constexpr int kSchemaVersion = 11;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -162,7 +162,8 @@ class JobStore {
   std::map<uint32_t, int64_t> pendingWorkByCell(uint64_t job, int phase, size_t limit);
   void dropJobWork(uint64_t job);                   // cancel/fail: batches and leases
   // Back to the start of the photon pass: the job's work, photons, film,
-  // render passes and counters dropped (its photon file cut to nothing),
+  // render passes and counters dropped (its photon file cut back to the
+  // end of the last deposit region handed out),
   // state photons, a photon pass of its own (no longer anyone else's, nor
   // complete); the counter kPhotonPassRestarts alone is kept, and
   // incremented. The caller queues the emission again, in the same
@@ -183,12 +184,22 @@ class JobStore {
   // place into jobs.db with the caller's transaction: a view into a Result
   // will do.
   void addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload);
+  // Photons a worker wrote into its lease's deposit region
+  // (coordinator/deposit_regions.h): only their place goes into jobs.db.
+  void addPhotonsAt(uint64_t job, uint32_t cell, const FileExtent& extent);
+  // Sets `size` bytes of the job's photon file aside for a worker to write a
+  // lease's deposits into, with `head` at their start, and returns their
+  // offset; the end of the region is kept with the caller's transaction, and
+  // the file never resumes before it (not after a restart of the
+  // coordinator or of the photon pass either).
+  int64_t reserveDepositRegion(uint64_t job, int64_t size, std::string_view head);
   // In the order they were added; throws naming the file when one is damaged.
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
   std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf({job, 0}); }
   std::filesystem::path batchFile(uint64_t job, uint32_t segment) const { return batches_.pathOf({job, segment}); }
-  // The job's bytes on disk beside jobs.db: its photon file and its ray
-  // batch segments (jobs.db itself is shared by every job).
+  // The job's bytes on disk beside jobs.db: its photon file (the blocks it
+  // holds: deposit regions leave holes where nothing was written) and its
+  // ray batch segments (jobs.db itself is shared by every job).
   struct JobFileBytes {
     int64_t photons = 0, batches = 0;
   };

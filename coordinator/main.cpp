@@ -48,10 +48,15 @@ int main(int argc, char** argv) {
                  "tcp:// uses this user's keys (~/.config/portico/keys or $PORTICO_KEYS, written on first use) "
                  "and ipc:// admits only this user and root")
       ->check(CLI::ExistingDirectory);
+  bool noDepositRegions = false;
+  app.add_flag("--no-deposit-regions", noDepositRegions,
+               "workers send every deposit in their Results, even those that could write them into the job's "
+               "photon file themselves (docs/architecture.md, deposit regions)");
   app.add_option("--fail-commits-every", options.failCommitsEvery,
                  "fault injection: every Nth transaction applying Results fails to commit, as on a full disk");
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  options.depositRegions = !noDepositRegions;
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
   // Every Result is unpacked into fresh segments and its batches re-packed:

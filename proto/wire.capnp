@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 13;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky)
+const protocolVersion :UInt32 = 14;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves)
 
 enum Phase {
   photons @0;
@@ -44,6 +44,24 @@ struct Ray {
 struct CellPhotons {
   cell @0 :UInt32;
   records @1 :Data;        # 16-byte photon records on the cell's lattice (common/transport/photon_record.h)
+  # Or, in a Result with regionNonce, written by the worker into its lease's
+  # deposit region (records empty): where, how many bytes, their CRC-32C.
+  fileOffset @2 :UInt64;
+  fileSize @3 :UInt64;
+  fileCrc @4 :UInt32;
+}
+
+# Photon pass: a stretch of the job's photon file (coordinator/append_files.h)
+# where a worker that shares the coordinator's file system writes its
+# lease's deposits itself, instead of sending them: the coordinator then
+# stores where they lie, not the bytes (coordinator/deposit_regions.h). Its
+# first block holds a nonce the worker reads and returns (Result.regionNonce),
+# which shows that the worker opened the coordinator's file, not one of its
+# own of the same name.
+struct DepositRegion {
+  path @0 :Text;           # the job's photon file, absolute
+  offset @1 :UInt64;       # the region's first byte (4 KiB aligned): the nonce block
+  size @2 :UInt64;         # bytes, the nonce block included
 }
 
 # Work generators: compact descriptions the worker expands itself, so a job
@@ -231,6 +249,9 @@ struct Assign {
   # same photon settings). Workers cache photon maps under it, so a reused
   # pass reuses their cached maps too.
   photonJob @10 :UInt64;
+  # Photon pass, when the job's photon file allows it: where the worker may
+  # write this lease's deposits (see DepositRegion); absent otherwise.
+  depositRegion @11 :DepositRegion;
 }
 
 struct CellBatches {
@@ -244,6 +265,9 @@ struct Result {
   crossings @2 :List(CellRays);
   deposits @3 :List(CellPhotons);
   film @4 :List(PixelSum);
+  # The nonce read from the lease's deposit region, when some deposits were
+  # written there (their CellPhotons carry fileSize > 0); empty otherwise.
+  regionNonce @5 :Data;
 }
 
 struct Failure {

@@ -1,5 +1,7 @@
 #include "worker/lease_result.h"
 
+#include "worker/deposit_region_writer.h"
+
 #include <fmt/format.h>
 
 #include <chrono>
@@ -28,13 +30,25 @@ void encodeCrossings(const KernelOutputs& out, wire::Result::Builder result) {
   }
 }
 
-void encodeDeposits(const KernelOutputs& out, wire::Result::Builder result) {
+void encodeDeposits(wire::Assign::Reader assign, const KernelOutputs& out, wire::Result::Builder result) {
+  std::optional<DepositRegionWriter::Written> written;
+  if (assign.hasDepositRegion() && !out.deposits.empty())
+    written = depositRegionWriter().write(assign.getDepositRegion(), assign.getJob(), assign.getLease(), out.deposits);
+  if (written)
+    result.setRegionNonce(capnp::Data::Reader(written->nonce.data(), written->nonce.size()));
   auto deposits = result.initDeposits(static_cast<unsigned>(out.deposits.size()));
   unsigned d = 0;
   for (const auto& [cell, records] : out.deposits) {
     deposits[d].setCell(cell);
-    deposits[d].setRecords(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()),
-                                               records.size() * sizeof(PhotonRecord)));
+    if (written && written->extents[d]) {
+      const DepositRegionWriter::Extent& extent = *written->extents[d];
+      deposits[d].setFileOffset(extent.offset);
+      deposits[d].setFileSize(extent.size);
+      deposits[d].setFileCrc(extent.crc);
+    } else {
+      deposits[d].setRecords(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(records.data()),
+                                                 records.size() * sizeof(PhotonRecord)));
+    }
     ++d;
   }
 }
@@ -93,13 +107,13 @@ void encodeCounters(const KernelOutputs& out, const LeaseFigures& figures, wire:
 }
 }  // namespace
 
-std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(uint64_t lease, const KernelOutputs& out,
+std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(wire::Assign::Reader assign, const KernelOutputs& out,
                                                           const LeaseFigures& figures) {
   auto message = std::make_unique<capnp::MallocMessageBuilder>();
   auto result = message->initRoot<wire::Envelope>().initResult();
-  result.setLease(lease);
+  result.setLease(assign.getLease());
   encodeCrossings(out, result);
-  encodeDeposits(out, result);
+  encodeDeposits(assign, out, result);
   encodeFilm(out, result);
   encodeCounters(out, figures, result);
   return message;

@@ -27,7 +27,10 @@ struct LeaseFigures {
   ThreadTimes startedTimes;   // the tracing thread's, then
 };
 
-std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(uint64_t lease, const KernelOutputs& out,
+// The deposits of a photon lease with a deposit region go into the job's
+// photon file where this worker can write it (worker/deposit_region_writer.h),
+// the rest, and every other lease's, into the Result.
+std::unique_ptr<capnp::MallocMessageBuilder> encodeResult(wire::Assign::Reader assign, const KernelOutputs& out,
                                                           const LeaseFigures& figures);
 
 }  // namespace portico

@@ -36,7 +36,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   figures.moreCells = int64_t(assign.getMoreCells().size());
   figures.started = started;
   figures.startedTimes = startedTimes;
-  auto message = encodeResult(assign.getLease(), traced.out, figures);
+  auto message = encodeResult(assign, traced.out, figures);
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
                 assign.getLease(), assign.getCell(), assign.getBatches().size(), traced.out.counters.photonDeposits,
                 traced.out.crossings.size(), traced.out.film.sums().size(),

@@ -1,5 +1,7 @@
 #include "worker/worker_session.h"
 
+#include "worker/deposit_region_writer.h"
+
 #include <capnp/message.h>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
@@ -325,12 +327,17 @@ void WorkerSession::sendFinishedLeases() {
     finished.swap(chain_.finished);
   }
   for (FinishedLease& done : finished) {
+    // Its deposits written into the job's photon file (deposit_region_writer.h)
+    // are on disk before its Result names them.
+    std::string writeError;
+    const bool written = depositRegionWriter().finish(done.lease, writeError);
     if (done.stopped) {
       spdlog::info("lease {} stopped midway", done.lease);
       continue;
     }
     try {
       if (!done.error.empty()) throw std::runtime_error(done.error);
+      if (!written) throw std::runtime_error("its deposits could not be written into the job's photon file: " + writeError);
       if (options_.crashAfterLeases > 0 && leasesReported_ + 1 >= options_.crashAfterLeases) {
         // Fault injection: die holding a finished lease, as a crash
         // mid-lease would; the coordinator must requeue it.
@@ -375,6 +382,8 @@ void WorkerSession::abandonLeases() {
   if (tracing_.valid()) tracing_.wait();
   preparing_.reset();
   std::lock_guard lock(chain_.mutex);
+  std::string ignored;
+  for (const FinishedLease& done : chain_.finished) depositRegionWriter().finish(done.lease, ignored);
   chain_.finished.clear();
   chain_.abandon = false;
   chain_.running = false;

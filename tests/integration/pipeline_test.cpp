@@ -99,6 +99,57 @@ TEST_F(Pipeline, TracingCrossingsInHeldCellsChangesNoBit) {
   EXPECT_EQ(std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)), 0);
 }
 
+// Workers that share the coordinator's file system write their deposits
+// into the job's photon file themselves (coordinator/deposit_regions.h).
+// The same job with every deposit sent in Results (--no-deposit-regions),
+// and with one worker that cannot see the photon file (in a mount namespace
+// where a tmpfs hides the cluster's folder) beside one that can, gives the
+// same bits.
+TEST_F(Pipeline, DepositsWrittenByWorkersIntoThePhotonFileChangeNoBit) {
+  const uint64_t photons = 60000;
+  nlohmann::json regions, results, mixed;
+  {
+    LocalCluster cluster(dir_ / "regions", 2);
+    regions = cluster.render(store_, dir_ / "regions.exr", photons, 2);
+  }
+  {
+    LocalCluster cluster(dir_ / "results", 2, {}, ClusterOptions{.coordinatorExtra = {"--no-deposit-regions"}});
+    results = cluster.render(store_, dir_ / "results.exr", photons, 2);
+  }
+  const bool namespaces = runCommand({"/usr/bin/unshare", "-m", "/bin/true"}, dir_ / "unshare.log") == 0;
+  if (namespaces) {
+    const fs::path hidden = dir_ / "mixed";
+    LocalCluster cluster(hidden, 1);
+    cluster.addWorker({}, [&](std::vector<std::string> argv) {
+      std::string command = "mount -t tmpfs none '" + hidden.string() + "' && exec";
+      for (const std::string& a : argv) command += " '" + a + "'";
+      return std::vector<std::string>{"/usr/bin/unshare", "-m", "/bin/sh", "-c", command};
+    });
+    mixed = cluster.render(store_, dir_ / "mixed.exr", photons, 2);
+    ASSERT_EQ(mixed.value("state", ""), "done") << mixed.dump(2);
+  }
+  ASSERT_EQ(regions.value("state", ""), "done") << regions.dump(2);
+  ASSERT_EQ(results.value("state", ""), "done") << results.dump(2);
+  const auto regionStats = nlohmann::json::parse(readFile(dir_ / "regions.exr.json"));
+  const auto resultStats = nlohmann::json::parse(readFile(dir_ / "results.exr.json"));
+  expectConservation(regionStats);
+  EXPECT_EQ(regionStats["photons"], resultStats["photons"]);
+  const auto bytesOf = [](const nlohmann::json& stats, const char* key) { return stats["disk"][key].get<int64_t>(); };
+  const int64_t depositBytes = regionStats["photons"]["deposits"].get<int64_t>() * 16;
+  EXPECT_GT(bytesOf(regionStats, "photon_bytes_from_workers"), depositBytes / 2);
+  EXPECT_EQ(bytesOf(regionStats, "photon_bytes_from_workers") + bytesOf(regionStats, "photon_bytes_from_results"),
+            bytesOf(resultStats, "photon_bytes_from_results"));
+  EXPECT_EQ(bytesOf(resultStats, "photon_bytes_from_workers"), 0);
+  EXPECT_EQ(differingFloats(dir_ / "regions.exr", dir_ / "results.exr"), 0u);
+  if (!namespaces) GTEST_SKIP() << "cannot create a mount namespace here (unshare -m): " << readFile(dir_ / "unshare.log");
+  const auto mixedStats = nlohmann::json::parse(readFile(dir_ / "mixed.exr.json"));
+  EXPECT_EQ(mixedStats["photons"], resultStats["photons"]);
+  EXPECT_GT(bytesOf(mixedStats, "photon_bytes_from_workers"), 0);
+  EXPECT_GT(bytesOf(mixedStats, "photon_bytes_from_results"), 0);
+  EXPECT_NE(readFile(dir_ / "mixed" / "worker-1.log").find("deposits go in the results"), std::string::npos);
+  EXPECT_EQ(differingFloats(dir_ / "regions.exr", dir_ / "mixed.exr"), 0u);
+}
+
 TEST_F(Pipeline, WorkersThatCrashMidLeaseChangeNoBit) {
   const uint64_t photons = 60000;
   nlohmann::json reference, crashed;
