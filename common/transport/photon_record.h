@@ -10,10 +10,12 @@
 // - power as shared-exponent RGB, direction (into the surface, along its
 //   lit side's normal: StoredPhoton) in octahedral coordinates.
 //
-// Every deposit passes through the coordinator (and its sockets, files and
-// checksums) once per table it lands in: a 24-byte record of floats makes
-// every one of those copies half as large again (the coordinator's
-// photon-pass CPU is 8 % lower with 16 bytes).
+// Every deposit is written to its job's photon file once per table it
+// lands in (by its worker, or by the coordinator from the worker's Result:
+// coordinator/deposit_regions.h) and read once per build of that cell's
+// map: a 24-byte record of floats makes every one of those copies half as
+// large again (the coordinator's photon-pass CPU was 8 % lower with 16
+// bytes, when every record passed through it).
 // Records are little-endian PODs, appended to a cell's table batch by batch;
 // a map sorts them, so arrival order never matters.
 #pragma once
