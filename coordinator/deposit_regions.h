@@ -19,8 +19,9 @@
 // lie (CellPhotons.fileOffset, fileSize, fileCrc) with the nonce
 // (Result.regionNonce). The coordinator records those extents as it records
 // the batches it writes itself, in the Result's transaction. A worker that
-// cannot (another machine, another user, a full region) sends the records
-// in the Result as before; one Result may hold both.
+// cannot (another machine, another user, a full region, a write that
+// failed) sends the records in the Result as before; one Result may hold
+// both.
 //
 // What keeps it safe.
 // - Only extents inside the lease's own region, after its head, not

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <new>
+#include <stdexcept>
 
 #include "common/util/crc32c.h"
 
@@ -173,6 +174,7 @@ std::optional<DepositRegionWriter::Written> DepositRegionWriter::write(
   auto pending = std::make_shared<PendingWrite>();
   pending->path = path;
   pending->file = file;
+  pending->used = used;
   pending->bytes = roundUp(used);
   pending->offset = offset + kBlock;
   Buffer buffer = takeBuffer(pending->bytes);
@@ -217,16 +219,21 @@ void DepositRegionWriter::writerLoop() {
       warnOnce(pending->path, "deposits go in the results from now on: " + pending->error, true);
     }
     pending->done = true;
-    if (auto it = buffers_.find(pending.get()); it != buffers_.end()) {
-      if (spareBuffers_.size() < kMostSpareBuffers) spareBuffers_.emplace_back(roundUp(pending->bytes), std::move(it->second));
-      buffers_.erase(it);
-    }
-    pending->buffer = nullptr;
+    if (error.empty()) recycle(*pending);   // a failed write's records stay for finish
     changed_.notify_all();
   }
 }
 
-bool DepositRegionWriter::finish(uint64_t lease, std::string& error) {
+// Under mutex_: the write's buffer back to the spares (or freed).
+void DepositRegionWriter::recycle(PendingWrite& pending) {
+  if (auto it = buffers_.find(&pending); it != buffers_.end()) {
+    if (spareBuffers_.size() < kMostSpareBuffers) spareBuffers_.emplace_back(roundUp(pending.bytes), std::move(it->second));
+    buffers_.erase(it);
+  }
+  pending.buffer = nullptr;
+}
+
+bool DepositRegionWriter::finish(uint64_t lease, std::string& error, Unwritten* unwritten) {
   std::unique_lock lock(mutex_);
   auto it = pending_.find(lease);
   if (it == pending_.end()) return true;
@@ -234,7 +241,27 @@ bool DepositRegionWriter::finish(uint64_t lease, std::string& error) {
   pending_.erase(it);
   changed_.wait(lock, [&] { return pending->done; });
   error = pending->error;
+  if (!error.empty() && unwritten && pending->buffer) {
+    unwritten->firstOffset = pending->offset;
+    unwritten->bytes.assign(pending->buffer, pending->used);
+  }
+  recycle(*pending);
   return error.empty();
+}
+
+void sendDepositsInResult(wire::Result::Builder result, const DepositRegionWriter::Unwritten& unwritten) {
+  for (auto deposits : result.getDeposits()) {
+    if (deposits.getFileSize() == 0) continue;
+    const uint64_t at = deposits.getFileOffset() - unwritten.firstOffset, size = deposits.getFileSize();
+    if (deposits.getFileOffset() < unwritten.firstOffset || at > unwritten.bytes.size() ||
+        size > unwritten.bytes.size() - at)
+      throw std::logic_error("a deposit extent outside its lease's failed write");
+    deposits.setRecords(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(unwritten.bytes.data() + at), size));
+    deposits.setFileOffset(0);
+    deposits.setFileSize(0);
+    deposits.setFileCrc(0);
+  }
+  result.disownRegionNonce();
 }
 
 DepositRegionWriter& depositRegionWriter() {

@@ -59,11 +59,18 @@ class DepositRegionWriter {
   // (each logged once per file).
   std::optional<Written> write(wire::DepositRegion::Reader region, uint64_t job, uint64_t lease,
                                const std::map<uint32_t, std::vector<PhotonRecord>>& deposits);
+  // The records of a write that failed, for the Result instead: the bytes
+  // that were to be written from file offset `firstOffset` on.
+  struct Unwritten {
+    uint64_t firstOffset = 0;
+    std::string bytes;
+  };
   // Waits until the lease's write (if it has one) is on disk: true, or
-  // false with `error` when it failed (the lease is then failed, and its
-  // retry sends its deposits in the Result). Call before sending the
-  // lease's Result, once per lease that was traced.
-  bool finish(uint64_t lease, std::string& error);
+  // false with `error` when it failed (a full disk, a failing one), and
+  // then its records in `unwritten`, to send in the Result
+  // (sendDepositsInResult). Call before sending the lease's Result, once
+  // per lease that was traced.
+  bool finish(uint64_t lease, std::string& error, Unwritten* unwritten = nullptr);
 
  private:
   struct OpenFile {
@@ -75,7 +82,8 @@ class DepositRegionWriter {
     std::string path;
     std::shared_ptr<OpenFile> file;
     char* buffer = nullptr;
-    size_t bytes = 0;
+    size_t used = 0;    // bytes of records
+    size_t bytes = 0;   // written: used, padded to whole blocks
     uint64_t offset = 0;
     bool done = false;
     std::string error;   // when it failed
@@ -87,6 +95,7 @@ class DepositRegionWriter {
                                                        uint64_t lease);
   static std::string writeAll(OpenFile& file, const char* data, size_t size, uint64_t offset);
   Buffer takeBuffer(size_t bytes);
+  void recycle(PendingWrite& pending);
   void writerLoop();
   void warnOnce(const std::string& path, const std::string& message, bool warning);
 
@@ -101,6 +110,10 @@ class DepositRegionWriter {
   std::thread writer_;
   bool stopping_ = false;
 };
+
+// Puts a Result's deposits that were to be in its region back in the
+// Result (records, no file extent, no nonce): after a write that failed.
+void sendDepositsInResult(wire::Result::Builder result, const DepositRegionWriter::Unwritten& unwritten);
 
 // The worker's writer, shared by its leases.
 DepositRegionWriter& depositRegionWriter();

@@ -329,15 +329,17 @@ void WorkerSession::sendFinishedLeases() {
   for (FinishedLease& done : finished) {
     // Its deposits written into the job's photon file (deposit_region_writer.h)
     // are on disk before its Result names them.
+    // A write that failed (a full disk) sends them in the Result instead.
     std::string writeError;
-    const bool written = depositRegionWriter().finish(done.lease, writeError);
+    DepositRegionWriter::Unwritten unwritten;
+    const bool written = depositRegionWriter().finish(done.lease, writeError, &unwritten);
     if (done.stopped) {
       spdlog::info("lease {} stopped midway", done.lease);
       continue;
     }
     try {
       if (!done.error.empty()) throw std::runtime_error(done.error);
-      if (!written) throw std::runtime_error("its deposits could not be written into the job's photon file: " + writeError);
+      if (!written) sendDepositsInResult(done.message->getRoot<wire::Envelope>().getResult(), unwritten);
       if (options_.crashAfterLeases > 0 && leasesReported_ + 1 >= options_.crashAfterLeases) {
         // Fault injection: die holding a finished lease, as a crash
         // mid-lease would; the coordinator must requeue it.

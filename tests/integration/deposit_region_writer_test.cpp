@@ -6,11 +6,15 @@
 
 #include <capnp/message.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -135,6 +139,61 @@ TEST_F(DepositRegionWriterTest, ARegionThatIsNotThisLeasesOrAFileThatDoesNotOpen
   EXPECT_FALSE(writer.write(headOnly->getRoot<wire::DepositRegion>().asReader(), 1, 5, deposits));
   // Nothing was written past the head.
   EXPECT_EQ(fs::file_size(file_), uint64_t(kBlock));
+}
+
+// A write that fails (here: past the process's file size limit, as on a
+// full disk) gives its records back, and they go in the Result instead.
+TEST_F(DepositRegionWriterTest, AFailedWriteSendsItsRecordsInTheResult) {
+  writeHead(0, 1, 5);
+  const std::map<uint32_t, std::vector<PhotonRecord>> deposits{{2, records(200, 2)}, {4, records(300, 4)}};
+  auto target = region(file_, 0, 4 * kBlock);
+  DepositRegionWriter writer;
+  std::optional<DepositRegionWriter::Written> written;
+  std::string error;
+  DepositRegionWriter::Unwritten unwritten;
+  bool ok = true;
+  {
+    rlimit saved{};
+    ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+    const auto oldHandler = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit small = saved;
+    small.rlim_cur = rlim_t(kBlock + 1000);
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+    written = writer.write(target->getRoot<wire::DepositRegion>().asReader(), 1, 5, deposits);
+    if (written) ok = writer.finish(5, error, &unwritten);
+    ::setrlimit(RLIMIT_FSIZE, &saved);
+    std::signal(SIGXFSZ, oldHandler);
+  }
+  ASSERT_TRUE(written);
+  EXPECT_FALSE(ok);
+  EXPECT_NE(error.find(file_.string()), std::string::npos) << error;
+
+  // The Result as encoded with the extents, then with the records back in it.
+  capnp::MallocMessageBuilder message;
+  auto result = message.initRoot<wire::Result>();
+  result.setRegionNonce(capnp::Data::Reader(written->nonce.data(), written->nonce.size()));
+  auto list = result.initDeposits(2);
+  size_t index = 0;
+  for (const auto& [cell, cellRecords] : deposits) {
+    list[unsigned(index)].setCell(cell);
+    list[unsigned(index)].setFileOffset(written->extents[index]->offset);
+    list[unsigned(index)].setFileSize(written->extents[index]->size);
+    list[unsigned(index)].setFileCrc(written->extents[index]->crc);
+    ++index;
+  }
+  sendDepositsInResult(result, unwritten);
+  EXPECT_EQ(result.getRegionNonce().size(), 0u);
+  index = 0;
+  for (const auto& [cell, cellRecords] : deposits) {
+    auto d = result.getDeposits()[unsigned(index++)];
+    EXPECT_EQ(d.getFileSize(), 0u);
+    EXPECT_EQ(std::string(reinterpret_cast<const char*>(d.getRecords().begin()), d.getRecords().size()),
+              std::string(reinterpret_cast<const char*>(cellRecords.data()), cellRecords.size() * sizeof(PhotonRecord)));
+  }
+  // The file is not used again by this writer: the next lease sends its records.
+  writeHead(8 * kBlock, 1, 6);
+  auto next = region(file_, 8 * kBlock, 2 * kBlock);
+  EXPECT_FALSE(writer.write(next->getRoot<wire::DepositRegion>().asReader(), 1, 6, deposits));
 }
 
 // The file was replaced since the writer opened it (a job's file removed
