@@ -14,6 +14,7 @@
 #include "common/accel/brute_force.h"
 #include "common/accel/bvh_traverse_avx2.h"
 #include "common/accel/triangle_intersect.h"
+#include "common/triangle_box_overlap.h"
 #include "tests/unit/accel/accel_test_scenes.h"
 
 namespace portico {
@@ -169,6 +170,45 @@ TEST(Bvh, MatchesBruteForceFarFromTheWorldOrigin) {
 // Nearly edge-on hits, where the watertight test rounds most: in a
 // furnished hall at building coordinates, among long thin triangles, and
 // far from the world's origin; both widths, AVX2 and SSE.
+// A voxel cell (scene import --grid): every triangle of a furnished hall
+// that touches one voxel, whole, so the cell's triangles reach past the
+// voxel; rays start inside the voxel and on its faces, as a cell's rays do.
+TEST(Bvh, MatchesBruteForceInAVoxelCell) {
+  const TestMesh hall = accel_test::furnishedHall(30000, 17);
+  const Bounds3 bounds = hall.bounds();
+  const Vec3 size = bounds.diagonal() * (1.0f / 3.0f);
+  for (const Vec3& corner : {Vec3(0, 0, 0), Vec3(1, 0, 1), Vec3(2, 0, 1)}) {
+    const Bounds3 voxel{bounds.lo + size * corner, bounds.lo + size * (corner + Vec3(1, 3, 1))};
+    TestMesh cell;
+    for (size_t t = 0; t < hall.triangleCount(); ++t) {
+      const Vec3 a = hall.vertex(hall.indices[3 * t]), b = hall.vertex(hall.indices[3 * t + 1]),
+                 c = hall.vertex(hall.indices[3 * t + 2]);
+      if (triangleOverlapsBox(a, b, c, voxel, 1e-4f)) cell.addTriangle(a, b, c);
+    }
+    ASSERT_GT(cell.triangleCount(), 100u);
+    // Rays from inside the voxel, some from its faces.
+    std::mt19937 random(uint32_t(corner.x * 7 + corner.z));
+    std::uniform_real_distribution<float> unit(0, 1), symmetric(-1, 1);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 2500; ++i) {
+      Vec3 origin = voxel.lo + (voxel.hi - voxel.lo) * Vec3(unit(random), unit(random), unit(random));
+      if (i % 3 == 0) {
+        const int axis = int(random() % 3);
+        origin[axis] = random() % 2 ? voxel.lo[axis] : voxel.hi[axis];
+      }
+      Vec3 direction;
+      do direction = {symmetric(random), symmetric(random), symmetric(random)};
+      while (dot(direction, direction) < 1e-4f);
+      rays.push_back(Ray{origin, direction});
+    }
+    const auto four = buildBvh(cell, "bvh:width=4"), eight = buildBvh(cell, "bvh:width=8");
+    expectSameAsBruteForce(cell, {four.get(), eight.get()}, rays, 0.3);
+    useBvhAvx2(false);
+    expectSameAsBruteForce(cell, {eight.get()}, rays, 0.3);
+    useBvhAvx2(true);
+  }
+}
+
 TEST(Bvh, MatchesBruteForceOnGrazingRays) {
   std::mt19937 random(11);
   TestMesh thin;
