@@ -18,6 +18,14 @@ CellEvent CellTracer::trace(const Ray& ray) const {
     event.primitive = hit.primitive;
     event.u = hit.u;
     event.v = hit.v;
+    // The hit point and normal come from the mesh's vertices next
+    // (interiorHitPoint): start their cache misses now, beside the portal
+    // tests, rather than after them.
+    const MeshView& mesh = cell_.mesh();
+    const uint32_t* corners = mesh.indices + 3 * size_t(hit.primitive);
+    __builtin_prefetch(mesh.positions + 3 * size_t(corners[0]));
+    __builtin_prefetch(mesh.positions + 3 * size_t(corners[1]));
+    __builtin_prefetch(mesh.positions + 3 * size_t(corners[2]));
   }
   portals_.leaveBy(ray, event);
   return event;

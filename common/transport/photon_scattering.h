@@ -74,7 +74,14 @@ inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint6
   const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
   const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;
   scatter.deposited = true;
-  scatter.deposit = {point, -normal, photon.weight, photon.pathId, photon.depth};
+  // Member by member, not from a braced temporary: GCC built the temporary
+  // with narrow stores and copied it with 16-byte loads, each waiting for
+  // the stores it overlapped (~5 % of the function's samples each).
+  scatter.deposit.position = point;
+  scatter.deposit.direction = -normal;
+  scatter.deposit.power = photon.weight;
+  scatter.deposit.pathId = photon.pathId;
+  scatter.deposit.bounce = photon.depth;
   const float survival = std::min(1.0f, maxComponent(albedo));
   const uint32_t bounce = photon.depth;
   if (randomUniform(seed, RandomStream::Photon, photon.pathId, bounce, dim::Roulette) >= survival ||
