@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "common/util/crc32c.h"
+#include "common/util/file_at.h"
 
 namespace portico {
 
@@ -108,32 +109,12 @@ void AppendFiles::dropDirect(OpenFile& file) {
 }
 
 bool AppendFiles::writeAll(Key key, int descriptor, const char* data, size_t size, int64_t offset) {
-  size_t written = 0;
-  while (written < size) {
-    const ssize_t n = ::pwrite(descriptor, data + written, size - written, off_t(offset + int64_t(written)));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0 && errno == EINVAL && written == 0) return false;   // a direct transfer refused
-    if (n <= 0) {
-      const int code = n < 0 ? errno : ENOSPC;   // no progress: nothing more fits
-      throwWriteError(code, fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(), size,
-                                        offset, std::strerror(code)));
-    }
-    written += size_t(n);
-  }
-  return true;
-}
-
-size_t AppendFiles::readAll(int descriptor, char* out, size_t size, int64_t offset, int& error) {
-  size_t done = 0;
-  error = 0;
-  while (done < size) {
-    const ssize_t n = ::pread(descriptor, out + done, size - done, off_t(offset + int64_t(done)));
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) error = errno;
-    if (n <= 0) break;
-    done += size_t(n);
-  }
-  return done;
+  int code = 0;
+  const size_t written = writeAt(descriptor, data, size, offset, code);
+  if (written == size) return true;
+  if (written == 0 && code == EINVAL) return false;   // a direct transfer refused
+  throwWriteError(code, fmt::format("{}: cannot write {} bytes at offset {} ({})", pathOf(key).string(), size, offset,
+                                    std::strerror(code)));
 }
 
 int64_t AppendFiles::end(Key key) const {
@@ -215,12 +196,12 @@ std::string AppendFiles::readUnchecked(Key key, const FileExtent& extent) {
     // Whole blocks into the aligned buffer (the file may end inside the last).
     const size_t blocks = size_t(alignUp(extent.size));
     char* buffer = staging(blocks);
-    got = std::min(readAll(file.directDescriptor, buffer, blocks, extent.offset, error), bytes.size());
+    got = std::min(readAt(file.directDescriptor, buffer, blocks, extent.offset, error), bytes.size());
     std::memcpy(bytes.data(), buffer, got);
     read = error != EINVAL;
     if (!read) dropDirect(file);   // refused: the page cache then
   }
-  if (!read) got = readAll(file.descriptor, bytes.data(), bytes.size(), extent.offset, error);
+  if (!read) got = readAt(file.descriptor, bytes.data(), bytes.size(), extent.offset, error);
   if (got < bytes.size())
     throw DamagedFileError(fmt::format("{}: {} at offset {} ({} bytes) cannot be read ({})", pathOf(key).string(),
                                        what_, extent.offset, extent.size,

@@ -133,9 +133,6 @@ class AppendFiles {
   char* staging(size_t bytes);
   // False when a direct transfer was refused before any byte (EINVAL).
   bool writeAll(Key key, int descriptor, const char* data, size_t size, int64_t offset);
-  // Reads [offset, offset + size) into `out`; fewer bytes at the end of the
-  // file or on an error (`error`: its errno, else 0).
-  static size_t readAll(int descriptor, char* out, size_t size, int64_t offset, int& error);
 
   std::filesystem::path directory_;
   Naming naming_;

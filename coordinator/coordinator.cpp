@@ -290,7 +290,10 @@ void Coordinator::undoRound() {
 void Coordinator::requeueUntracedLeases() {
   for (const LeaseRecord& lease : store_.openLeases()) {
     auto worker = workers_.find(lease.worker);
-    if (worker == workers_.end() || !worker->second.leases.count(lease.id)) store_.requeueLease(lease.id);
+    if (worker == workers_.end() || !worker->second.leases.count(lease.id)) {
+      store_.requeueLease(lease.id);
+      depositRegions_.erase(lease.id);
+    }
   }
 }
 
@@ -1016,6 +1019,7 @@ void Coordinator::releaseWorker(const std::string& identity, const std::string& 
       store_.addCounter(lease.job, "leases.lost", 1);
       tx.commit();
     }
+    depositRegions_.erase(lease.id);   // its Result, if one still comes, is dropped
     spdlog::warn("lease {} (job {} cell {}, attempt {}) requeued: worker {} {}", lease.id, lease.job, lease.cell,
                  lease.attempt, it->second.name, reason);
     // Workers die of other things than their cell (a kill from outside,

@@ -12,6 +12,8 @@
 #include <cctype>
 #include <vector>
 
+#include "common/util/file_at.h"
+
 namespace portico {
 
 namespace {
@@ -113,12 +115,8 @@ void serveFileChunk(const std::set<std::string>& stores, wire::FetchFile::Reader
   const uint64_t offset = std::min<uint64_t>(request.getOffset(), total);
   const size_t length = size_t(std::min<uint64_t>(kFileChunkBytes, total - offset));
   auto data = chunk.initData(unsigned(length));
-  size_t done = 0;
-  while (done < length) {
-    const ssize_t n = ::pread(file.fd, data.begin() + done, length - done, off_t(offset + done));
-    if (n <= 0) break;
-    done += size_t(n);
-  }
+  int readError = 0;
+  const size_t done = readAt(file.fd, data.begin(), length, int64_t(offset), readError);
   if (done != length) chunk.setError(fmt::format("{}: short read at byte {}", full, offset + done));
 }
 

@@ -907,19 +907,18 @@ std::map<std::string, int64_t> JobStore::counters(uint64_t job) {
 }
 
 void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload) {
-  const FileExtent extent = photons_.append({job, 0}, payload);
+  recordPhotons(job, cell, count, photons_.append({job, 0}, payload));
+}
+
+void JobStore::addPhotonsAt(uint64_t job, uint32_t cell, const FileExtent& extent) {
+  recordPhotons(job, cell, extent.size / int64_t(sizeof(PhotonRecord)), extent);
+}
+
+void JobStore::recordPhotons(uint64_t job, uint32_t cell, int64_t count, const FileExtent& extent) {
   auto& s = db_.prepare(
       "INSERT INTO photons(job, cell, count, payload, file_offset, file_size, file_crc) VALUES (?, ?, ?, x'', ?, ?, ?)");
   s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, count).bind(4, extent.offset).bind(5, extent.size);
   s.bind(6, int64_t(extent.crc));
-  s.run();
-}
-
-void JobStore::addPhotonsAt(uint64_t job, uint32_t cell, const FileExtent& extent) {
-  auto& s = db_.prepare(
-      "INSERT INTO photons(job, cell, count, payload, file_offset, file_size, file_crc) VALUES (?, ?, ?, x'', ?, ?, ?)");
-  s.bind(1, int64_t(job)).bind(2, int64_t(cell)).bind(3, extent.size / int64_t(sizeof(PhotonRecord)));
-  s.bind(4, extent.offset).bind(5, extent.size).bind(6, int64_t(extent.crc));
   s.run();
 }
 

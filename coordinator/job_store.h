@@ -224,6 +224,8 @@ class JobStore {
   int64_t takeUnleased(const PendingCell& cell, int64_t maxWork, std::vector<QueuedBatch>& batches, uint32_t& attempt);
   void markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches, int64_t work);
   void rechecksumPhotonFiles();
+  // A photon batch's row: where its `count` records lie in the job's file.
+  void recordPhotons(uint64_t job, uint32_t cell, int64_t count, const FileExtent& extent);
   bool photonFileHoldsItsBatches(uint64_t job);
   uint32_t batchSegment(uint64_t job);
   void retireBatchSegment(uint64_t job, uint32_t segment);

@@ -13,6 +13,7 @@
 #include <stdexcept>
 
 #include "common/util/crc32c.h"
+#include "common/util/file_at.h"
 
 namespace portico {
 
@@ -38,10 +39,6 @@ DepositRegionWriter::~DepositRegionWriter() {
   }
   changed_.notify_all();
   if (writer_.joinable()) writer_.join();
-  for (auto& [path, file] : files_) {
-    closeFile(file->descriptor);
-    closeFile(file->direct);
-  }
 }
 
 void DepositRegionWriter::warnOnce(const std::string& path, const std::string& message, bool warning) {
@@ -80,40 +77,23 @@ std::optional<deposit_region::Nonce> DepositRegionWriter::readHead(const OpenFil
                                                                    uint64_t job, uint64_t lease) {
   // Through the page cache, where the coordinator wrote it.
   char head[deposit_region::kHeadBytes];
-  size_t done = 0;
-  while (done < sizeof head) {
-    const ssize_t n = ::pread(file.descriptor, head + done, sizeof head - done, off_t(offset + done));
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) return std::nullopt;
-    done += size_t(n);
-  }
+  int error = 0;
+  if (readAt(file.descriptor, head, sizeof head, int64_t(offset), error) != sizeof head) return std::nullopt;
   return deposit_region::nonceOf(std::string_view(head, sizeof head), job, lease);
 }
 
 // An empty string, or what went wrong.
 std::string DepositRegionWriter::writeAll(OpenFile& file, const char* data, size_t size, uint64_t offset) {
   int code = 0;
-  for (int* descriptor : {&file.direct, &file.descriptor}) {
-    if (*descriptor < 0) continue;
-    size_t written = 0;
-    code = 0;
-    while (written < size) {
-      const ssize_t n = ::pwrite(*descriptor, data + written, size - written, off_t(offset + written));
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        code = n < 0 ? errno : ENOSPC;   // no progress: nothing more fits
-        break;
-      }
-      written += size_t(n);
-    }
+  if (file.direct >= 0) {
+    const size_t written = writeAt(file.direct, data, size, int64_t(offset), code);
     if (written == size) return {};
-    if (descriptor == &file.direct && written == 0 && code == EINVAL) {
-      closeFile(file.direct);   // direct transfers refused: the page cache from now on
-      continue;
-    }
-    break;
+    if (written != 0 || code != EINVAL)
+      return fmt::format("cannot write {} bytes at offset {} ({})", size, offset, std::strerror(code));
+    closeFile(file.direct);   // direct transfers refused: the page cache from now on
   }
-  return fmt::format("cannot write {} bytes at offset {} ({})", size, offset, std::strerror(code ? code : EIO));
+  if (writeAt(file.descriptor, data, size, int64_t(offset), code) == size) return {};
+  return fmt::format("cannot write {} bytes at offset {} ({})", size, offset, std::strerror(code));
 }
 
 DepositRegionWriter::Buffer DepositRegionWriter::takeBuffer(size_t bytes) {

@@ -2,19 +2,25 @@
 
 #include <stdlib.h>
 
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <stdexcept>
 #include <system_error>
-#include <vector>
 
 namespace portico {
 
-TemporaryDirectory::TemporaryDirectory(const std::string& prefix) {
-  const std::string pattern = "/tmp/" + prefix + "-XXXXXX";
-  std::vector<char> name(pattern.begin(), pattern.end());
-  name.push_back('\0');
-  if (!::mkdtemp(name.data())) throw std::runtime_error("cannot create a temporary directory " + pattern);
-  path_ = name.data();
+std::filesystem::path makeTemporaryDirectory(const std::string& prefix) {
+  const char* const tmpdir = std::getenv("TMPDIR");
+  const std::filesystem::path parent = tmpdir && *tmpdir ? tmpdir : "/tmp";
+  std::string name = (parent / (prefix + "-XXXXXX")).string();
+  if (!::mkdtemp(name.data()))
+    throw std::runtime_error("cannot create a temporary directory under " + parent.string() + ": " +
+                             std::strerror(errno));
+  return name;
 }
+
+TemporaryDirectory::TemporaryDirectory(const std::string& prefix) : path_(makeTemporaryDirectory(prefix)) {}
 
 TemporaryDirectory::~TemporaryDirectory() {
   if (keep_) return;

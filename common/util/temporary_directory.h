@@ -1,5 +1,5 @@
-// A directory under /tmp for one run's scratch files, removed with
-// everything in it when the object goes (unless kept).
+// A directory under $TMPDIR (else /tmp) for one run's scratch files,
+// removed with everything in it when the object goes (unless kept).
 #pragma once
 
 #include <filesystem>
@@ -7,9 +7,13 @@
 
 namespace portico {
 
+// Creates $TMPDIR/<prefix>-XXXXXX (mode 0700), else under /tmp; throws
+// std::runtime_error naming the parent and the reason when it cannot.
+std::filesystem::path makeTemporaryDirectory(const std::string& prefix);
+
 class TemporaryDirectory {
  public:
-  // Creates /tmp/<prefix>-XXXXXX; throws std::runtime_error when it cannot.
+  // makeTemporaryDirectory(prefix).
   explicit TemporaryDirectory(const std::string& prefix);
   ~TemporaryDirectory();
   TemporaryDirectory(const TemporaryDirectory&) = delete;

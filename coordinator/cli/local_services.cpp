@@ -4,14 +4,13 @@
 #include <signal.h>
 #include <stdlib.h>
 
-#include <cerrno>
 #include <chrono>
-#include <cstring>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <thread>
+
+#include "common/util/temporary_directory.h"
 
 namespace portico::cli {
 
@@ -43,15 +42,9 @@ bool interrupted() { return interruptedFlag != 0; }
 
 LocalServices::LocalServices(const LocalRunOptions& local) {
   if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
-  // Under $TMPDIR, else /tmp: jobs.db and the job's
-  // photon files go there, hundreds of megabytes for a large pass.
-  const char* const tmpdir = std::getenv("TMPDIR");
-  const std::filesystem::path temp = tmpdir && *tmpdir ? tmpdir : "/tmp";
-  std::string pattern = (temp / "portico-render-XXXXXX").string();
-  if (!mkdtemp(pattern.data()))
-    throw std::runtime_error(fmt::format("cannot create a temporary directory under {}: {}", temp.string(),
-                                         std::strerror(errno)));
-  work_ = pattern;
+  // Under $TMPDIR, else /tmp: jobs.db and the job's photon files go there,
+  // hundreds of megabytes for a large pass.
+  work_ = makeTemporaryDirectory("portico-render");
   coordinatorLog_ = (work_ / "coordinator.log").string();
   const std::string endpointFile = (work_ / "endpoint").string();
 
