@@ -54,7 +54,12 @@ $SUDO apt-get "${apt_opts[@]}" install -y -qq --no-install-recommends "${package
 # this script, where `portico` looks for it.
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 if [ ! -x "$repo/.venv/bin/python3" ]; then python3 -m venv "$repo/.venv"; fi
-"$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "ifcopenshell==0.9.0.post1" "numpy>=1.24"
+# Radiance (PyPI's pyradiance ships its programs: oconv, rtrace, gensky, ...
+# in pyradiance/bin, their library in pyradiance/lib for RAYPATH) checks
+# portico's illuminance: `scene export FILE.rad`, the comparison tests and
+# `bench analyze` (docs/radiance.md).
+"$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "ifcopenshell==0.9.0.post1" "numpy>=1.24" \
+  "pyradiance==1.3.1"
 
 if [ "$mitsuba" = 1 ]; then
   venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"

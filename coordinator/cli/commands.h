@@ -16,6 +16,9 @@ namespace portico::cli {
 // Options shared by `render` and `submit`: what the job computes, with the
 // job's own defaults (common/job/job_settings.h).
 void addRenderOptions(CLI::App& command, JobSettings& options);
+// Their daylight: --sun, --sun-time (and its place), --sky, --sun-irradiance,
+// --turbidity (docs/daylight.md); also `scene export FILE.rad`'s sky.
+void addDaylightOptions(CLI::App& command, DaylightSettings& daylight);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.

@@ -91,15 +91,20 @@ void addInfo(CLI::App& scene, CommandTable& table) {
 void addExport(CLI::App& scene, CommandTable& table) {
   struct Options {
     std::string store, output;
+    DaylightSettings daylight;
   };
   auto o = std::make_shared<Options>();
-  auto* exportCommand = scene.add_subcommand("export", "write a scene store as glTF (.glb, .gltf) or OBJ + MTL");
+  auto* exportCommand =
+      scene.add_subcommand("export", "write a scene store as glTF (.glb, .gltf), OBJ + MTL, or a Radiance scene (.rad)");
   exportCommand->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   exportCommand
       ->add_option("-o,--output", o->output,
-                   "file to write: FILE.glb, FILE.gltf (FILE.bin beside it) or FILE.obj (FILE.mtl beside it)")
+                   "file to write: FILE.glb, FILE.gltf (FILE.bin beside it), FILE.obj (FILE.mtl beside it) or FILE.rad "
+                   "(Radiance; with --sky/--sun, the daylight as FILE.sky.rad beside it)")
       ->required();
-  table.add(exportCommand, [o] { return runSceneExport(o->store, o->output); });
+  // Render's daylight options, for the Radiance export's sky file.
+  addDaylightOptions(*exportCommand, o->daylight);
+  table.add(exportCommand, [o] { return runSceneExport(o->store, o->output, o->daylight); });
 }
 
 void addPlan(CLI::App& scene, CommandTable& table) {

@@ -12,6 +12,7 @@
 #include "common/scene/store/scene_store.h"
 #include "coordinator/cli/export_groups.h"
 #include "coordinator/cli/scene_export_gltf.h"
+#include "coordinator/cli/scene_export_radiance.h"
 
 namespace portico::cli {
 
@@ -45,7 +46,7 @@ ExportSummary exportStoreObj(const std::string& directory, const std::string& ob
   namespace fs = std::filesystem;
   if (fs::path(objPath).extension() != ".obj")
     throw std::runtime_error(
-        fmt::format("{}: export writes Wavefront OBJ (+ MTL) or glTF; name the file *.obj, *.glb or *.gltf", objPath));
+        fmt::format("{}: export writes Wavefront OBJ (+ MTL), glTF or Radiance; name the file *.obj, *.glb, *.gltf or *.rad", objPath));
   const SceneStore store = SceneStore::open(directory);
   const std::string mtlPath = fs::path(objPath).replace_extension(".mtl").string();
   writeMtl(store, mtlPath);
@@ -82,7 +83,17 @@ ExportSummary exportStoreObj(const std::string& directory, const std::string& ob
   return summary;
 }
 
-int runSceneExport(const std::string& store, const std::string& output) {
+int runSceneExport(const std::string& store, const std::string& output, const DaylightSettings& daylight) {
+  if (isRadiancePath(output)) {
+    const ExportSummary s = exportStoreRadiance(store, output, daylight);
+    std::cout << fmt::format("{}: {} triangles as {} polygons, {} materials, bounds ({}, {}, {}) - ({}, {}, {}){}\n",
+                             output, s.triangles, s.polygons, s.materials, s.bounds.lo.x, s.bounds.lo.y, s.bounds.lo.z,
+                             s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z,
+                             s.skyFile.empty() ? "" : "; daylight in " + s.skyFile);
+    return 0;
+  }
+  if (daylight.any())
+    throw std::runtime_error(fmt::format("{}: --sky and --sun are for a Radiance export (FILE.rad) only", output));
   const ExportSummary s = isGltfPath(output) ? exportStoreGltf(store, output) : exportStoreObj(store, output);
   std::cout << fmt::format("{}: {} triangles, bounds ({}, {}, {}) - ({}, {}, {})\n", output, s.triangles, s.bounds.lo.x,
                            s.bounds.lo.y, s.bounds.lo.z, s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z);

@@ -3,12 +3,14 @@
 // export_groups.h, so that `portico scene import FILE.obj` takes them back
 // as lights), every material's albedo as Kd and emission as Ke; portals and
 // cameras as comments. For Blender, any viewer, and other renderers.
-// FILE.glb and FILE.gltf go to the glTF writer (scene_export_gltf.h).
+// FILE.glb and FILE.gltf go to the glTF writer (scene_export_gltf.h),
+// FILE.rad to the Radiance writer (scene_export_radiance.h).
 #pragma once
 
 #include <cstdint>
 #include <string>
 
+#include "common/job/job_settings.h"
 #include "common/math.h"
 
 namespace portico::cli {
@@ -16,12 +18,17 @@ namespace portico::cli {
 struct ExportSummary {
   uint64_t triangles = 0;
   Bounds3 bounds;
+  uint64_t polygons = 0;     // Radiance: polygons written (a lamp quad is one)
+  uint32_t materials = 0;    // Radiance: material definitions written
+  std::string skyFile;       // Radiance: the daylight file written, if any
 };
 
 // Throws std::runtime_error naming the file when it cannot be written or
 // the extension is not .obj.
 ExportSummary exportStoreObj(const std::string& store, const std::string& objPath);
 
-int runSceneExport(const std::string& store, const std::string& output);
+// `daylight` (--sky, --sun, ...) is for a Radiance export only: refused
+// with another format.
+int runSceneExport(const std::string& store, const std::string& output, const DaylightSettings& daylight = {});
 
 }  // namespace portico::cli

@@ -1,0 +1,78 @@
+"""Radiance as the tests and tools find it: the programs of PyPI's `pyradiance`
+(installed into the sources' .venv by deploy/install-deps.sh), else Radiance
+on PATH. Its programs need RAYPATH to hold its lib/ (skybright.cal, ...)."""
+import glob, os, shutil, subprocess
+
+SOURCE_DIR = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+
+
+def find_radiance(source_dir=SOURCE_DIR):
+    """(bin directory, lib directory) of a Radiance installation, or None."""
+    for package in sorted(glob.glob(os.path.join(source_dir, ".venv", "lib", "python3*", "site-packages", "pyradiance"))):
+        if os.access(os.path.join(package, "bin", "rtrace"), os.X_OK):
+            return os.path.join(package, "bin"), os.path.join(package, "lib")
+    rtrace = shutil.which("rtrace")
+    if rtrace:
+        return os.path.dirname(rtrace), os.environ.get("RAYPATH", "")
+    return None
+
+
+def environment(radiance):
+    """os.environ with the Radiance programs first on PATH and its lib/ on RAYPATH."""
+    bin_dir, lib_dir = radiance
+    env = dict(os.environ)
+    env["PATH"] = bin_dir + os.pathsep + env.get("PATH", "")
+    env["RAYPATH"] = os.pathsep.join(p for p in (".", lib_dir, env.get("RAYPATH", "")) if p)
+    return env
+
+
+def version(radiance):
+    """'RADIANCE 6.0a ...' as rtrace -version says it."""
+    out = subprocess.run(["rtrace", "-version"], env=environment(radiance), capture_output=True, text=True)
+    return (out.stdout or out.stderr).strip()
+
+
+def oconv(radiance, files, octree):
+    with open(octree, "wb") as out:
+        subprocess.run(["oconv", *files], env=environment(radiance), stdout=out, check=True)
+
+
+def rtrace_irradiance(radiance, octree, options, sensors):
+    """rtrace -h -I OPTIONS OCTREE with `sensors` ((x, y, z, dx, dy, dz) each) on
+    its input: the irradiance R, G, B (W/m^2) of each sensor."""
+    text = "".join(" ".join(f"{v:.9g}" for v in s) + "\n" for s in sensors)
+    out = subprocess.run(["rtrace", "-h", "-I", *options, octree], input=text, env=environment(radiance),
+                         capture_output=True, text=True, check=True)
+    rows = [tuple(float(v) for v in line.split()) for line in out.stdout.splitlines() if line.strip()]
+    if len(rows) != len(sensors):
+        raise RuntimeError(f"rtrace gave {len(rows)} values for {len(sensors)} sensors: {out.stderr.strip()}")
+    return rows
+
+
+def lux(rgb):
+    """portico's lux: 179 lm/W x Rec. 709 Y (common/analysis/sensor.h)."""
+    return 179.0 * (0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2])
+
+
+def read_pts(path):
+    sensors = []
+    with open(path) as f:
+        for line in f:
+            words = line.split("#", 1)[0].split()
+            if words:
+                sensors.append(tuple(float(w) for w in words[:6]))
+    return sensors
+
+
+def read_reference(path):
+    """A radiance_reference.csv: its rows as dicts of floats (index an int)."""
+    rows = []
+    with open(path) as f:
+        lines = [l for l in f if not l.startswith("#")]
+    header = lines[0].strip().split(",")
+    for line in lines[1:]:
+        values = line.strip().split(",")
+        row = {k: float(v) for k, v in zip(header, values)}
+        row["index"] = int(row["index"])
+        rows.append(row)
+    return rows
