@@ -21,19 +21,10 @@ bin_dir, source_dir = sys.argv[1], sys.argv[2]
 sys.path.insert(0, os.path.join(source_dir, "tests", "tools"))
 import radiance_tools as rt
 
-radiance = rt.find_radiance(source_dir)
-if radiance is None:
-    print("SKIPPED: Radiance is not installed (deploy/install-deps.sh puts pyradiance into .venv)")
-    sys.exit(77)
+radiance = rt.radiance_or_skip(source_dir)
+check = rt.Checks()
 portico = os.path.join(bin_dir, "portico")
 scenes = os.path.join(source_dir, "tests", "scenes")
-failures = []
-
-
-def check(condition, what):
-    print(("ok: " if condition else "FAILED: ") + what)
-    if not condition:
-        failures.append(what)
 
 
 def run(*command):
@@ -142,5 +133,4 @@ with tempfile.TemporaryDirectory() as work:
                               "overcast"], capture_output=True, text=True)
     check(refused.returncode != 0 and ".rad" in refused.stderr, f"--sky with an OBJ export refused: {refused.stderr.strip()}")
 
-print(f"{len(failures)} failed" if failures else "all passed")
-sys.exit(1 if failures else 0)
+check.finish()

@@ -1,7 +1,7 @@
 """Radiance as the tests and tools find it: the programs of PyPI's `pyradiance`
 (installed into the sources' .venv by deploy/install-deps.sh), else Radiance
 on PATH. Its programs need RAYPATH to hold its lib/ (skybright.cal, ...)."""
-import glob, os, shutil, subprocess
+import glob, os, shutil, subprocess, sys
 
 SOURCE_DIR = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 
@@ -15,6 +15,31 @@ def find_radiance(source_dir=SOURCE_DIR):
     if rtrace:
         return os.path.dirname(rtrace), os.environ.get("RAYPATH", "")
     return None
+
+
+def radiance_or_skip(source_dir=SOURCE_DIR):
+    """find_radiance(), or the test ends here as skipped (exit 77, ctest's SKIP_RETURN_CODE)."""
+    radiance = find_radiance(source_dir)
+    if radiance is None:
+        print("SKIPPED: Radiance is not installed (deploy/install-deps.sh puts pyradiance into .venv)")
+        sys.exit(77)
+    return radiance
+
+
+class Checks:
+    """A test's checks: each printed ok or FAILED; finish() exits 1 if any failed."""
+
+    def __init__(self):
+        self.failures = []
+
+    def __call__(self, condition, what):
+        print(("ok: " if condition else "FAILED: ") + what)
+        if not condition:
+            self.failures.append(what)
+
+    def finish(self):
+        print(f"{len(self.failures)} failed" if self.failures else "all passed")
+        sys.exit(1 if self.failures else 0)
 
 
 def environment(radiance):
@@ -62,6 +87,19 @@ def read_pts(path):
             if words:
                 sensors.append(tuple(float(w) for w in words[:6]))
     return sensors
+
+
+def read_results(path):
+    """A `portico analyze` results CSV: its rows as dicts, numbers as floats (an empty reading NaN)."""
+    import csv
+    rows = []
+    with open(path) as f:
+        for row in csv.DictReader(f):
+            for key, value in row.items():
+                if key != "room":
+                    row[key] = float(value) if value != "" else float("nan")
+            rows.append(row)
+    return rows
 
 
 def read_reference(path):

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "coordinator/cli/bench/bench_accel.h"
+#include "coordinator/cli/bench/bench_analyze.h"
 #include "coordinator/cli/bench/bench_calibrate.h"
 #include "coordinator/cli/bench/bench_cluster.h"
 #include "coordinator/cli/bench/bench_paper.h"
@@ -170,6 +171,37 @@ void addCluster(CLI::App& bench, CommandTable& table) {
   table.add(command, [o] { return runBenchCluster(*o); });
 }
 
+void addAnalyze(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchAnalyzeOptions>();
+  auto* command = bench.add_subcommand(
+      "analyze", "lighting analysis: sensor error against time beside Radiance's rtrace -I on a reference scene, or "
+                 "every room of generated buildings (docs/radiance.md)");
+  command->add_option("SCENE_DIR", o->sceneDirectory,
+                      "folder of scene.json and sensors.pts (render_args.txt, radiance_reference.csv if any)")
+      ->check(CLI::ExistingDirectory);
+  command->add_option("--radiance-settings", o->radianceSettings, "rtrace options per rung, rungs separated by ';'")
+      ->capture_default_str();
+  command->add_option("--radiance-reference", o->radianceReference,
+                      "rtrace options of Radiance's converged reference, when SCENE_DIR has no radiance_reference.csv")
+      ->capture_default_str();
+  command->add_option("--portico-settings", o->porticoSettings,
+                      "portico analyze arguments per rung, rungs separated by ';'")
+      ->capture_default_str();
+  command->add_option("--portico-reference", o->porticoReference, "portico analyze arguments of its converged reference")
+      ->capture_default_str();
+  command->add_option("--workers", o->workers, "workers of each portico analyze")->capture_default_str();
+  command->add_option("--csv", o->csv, "write one row per rung (or per building)");
+  command->add_option("--plot", o->plot, "write a PNG: each program's error against seconds");
+  command->add_option("--buildings", o->buildings,
+                      "the scale run instead: generated buildings, PRESET[:FLOORS] comma-separated (tower:10,octagon)");
+  command->add_option("--stores", o->storeDirectory,
+                      "with --buildings: generate the stores here and reuse them when present (default: a temporary "
+                      "folder)");
+  command->add_option("--analyze-args", o->analyzeArguments, "with --buildings: more portico analyze arguments");
+  command->add_option("--memory", o->memory, "with --buildings: each worker's memory budget")->capture_default_str();
+  table.add(command, [o] { return runBenchAnalyze(*o); });
+}
+
 }  // namespace
 
 void addBenchCommands(CLI::App& app, CommandTable& table) {
@@ -177,6 +209,7 @@ void addBenchCommands(CLI::App& app, CommandTable& table) {
   bench->require_subcommand(1);
   addAccel(*bench, table);
   addQuality(*bench, table);
+  addAnalyze(*bench, table);
   addPipeline(*bench, table);
   addPaper(*bench, table);
   addCalibrate(*bench, table);
