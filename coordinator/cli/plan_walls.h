@@ -5,13 +5,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/scene/store/mesh_slice.h"
 #include "common/scene/store/scene_store.h"
 
 namespace portico::cli {
-
-struct PlanSegment {
-  float x0, z0, x1, z1;
-};
 
 // The segments where the triangles of `cells` cross the plane y = height.
 // Triangles lying in the plane (floors, ceilings) give none.

@@ -1,4 +1,4 @@
-// The options and arguments of `portico scene generate|import|info|export|plan`.
+// The options and arguments of `portico scene generate|import|info|export|plan|grid`.
 #include <CLI/CLI.hpp>
 
 #include <memory>
@@ -9,6 +9,7 @@
 #include "coordinator/cli/command_table.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/scene_export.h"
+#include "coordinator/cli/work_plane_grid_command.h"
 
 namespace portico::cli {
 
@@ -123,6 +124,22 @@ void addPlan(CLI::App& scene, CommandTable& table) {
   table.add(plan, [o] { return runScenePlan(o->store, o->plan); });
 }
 
+void addGrid(CLI::App& scene, CommandTable& table) {
+  struct Options {
+    std::string store, output;
+    WorkPlaneGridOptions grid;
+    bool verbose = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* grid = scene.add_subcommand(
+      "grid", "write the work-plane grid of `analyze --grid auto` as a Radiance .pts file, without measuring it");
+  grid->add_option("STORE", o->store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  grid->add_option("-o,--output", o->output, ".pts file to write: one `x y z dx dy dz` line per point")->required();
+  addWorkPlaneGridOptions(*grid, o->grid);
+  grid->add_flag("--rooms", o->verbose, "list every room: its cell, floor, floor area and points");
+  table.add(grid, [o] { return runSceneGrid(o->store, o->output, o->grid, o->verbose); });
+}
+
 }  // namespace
 
 void addSceneCommands(CLI::App& app, CommandTable& table) {
@@ -133,6 +150,7 @@ void addSceneCommands(CLI::App& app, CommandTable& table) {
   addInfo(*scene, table);
   addExport(*scene, table);
   addPlan(*scene, table);
+  addGrid(*scene, table);
 }
 
 }  // namespace portico::cli

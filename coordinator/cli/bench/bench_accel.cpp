@@ -36,7 +36,7 @@
 #include "common/scene/generator/furnished_hall.h"
 #include "coordinator/cli/bench/accel_measure.h"
 #include "coordinator/cli/bench/bench_plot.h"
-#include "coordinator/cli/bench/csv_field.h"
+#include "common/util/csv_field.h"
 
 namespace portico::cli {
 

@@ -28,7 +28,7 @@
 #include "common/util/temporary_directory.h"
 #include "coordinator/cli/bench/accel_measure.h"
 #include "coordinator/cli/bench/bench_calibrate.h"
-#include "coordinator/cli/bench/csv_field.h"
+#include "common/util/csv_field.h"
 
 namespace portico::cli {
 

@@ -14,7 +14,7 @@
 
 #include "common/util/child_process.h"
 #include "coordinator/cli/bench/bench_plot.h"
-#include "coordinator/cli/bench/csv_field.h"
+#include "common/util/csv_field.h"
 
 namespace portico::cli {
 namespace {

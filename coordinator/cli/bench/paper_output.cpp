@@ -10,7 +10,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "coordinator/cli/bench/csv_field.h"
+#include "common/util/csv_field.h"
 
 namespace portico::cli::paper {
 

@@ -1,6 +1,6 @@
-#include "coordinator/cli/bench/csv_field.h"
+#include "common/util/csv_field.h"
 
-namespace portico::cli {
+namespace portico {
 
 std::string csvField(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;
@@ -9,4 +9,4 @@ std::string csvField(const std::string& text) {
   return quoted + "\"";
 }
 
-}  // namespace portico::cli
+}  // namespace portico

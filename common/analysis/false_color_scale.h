@@ -1,0 +1,38 @@
+// The false-colour scale of portico's lighting pictures (work-plane plans
+// in lux, luminance images in cd/m^2), in the manner of Radiance's
+// `falsecolor`: a linear scale from 0 to a maximum, coloured along a
+// spectrum from dark violet through blue, cyan, green and yellow to red;
+// values above the maximum take its colour. The legend labels `steps`
+// equal intervals.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace portico {
+
+using Rgb8 = std::array<uint8_t, 3>;
+
+struct FalseColorScale {
+  double maximum = 1000;   // the value coloured red; > 0
+  int steps = 8;           // legend intervals
+  std::string unit = "lx";
+
+  // The colour of `value` (clamped to [0, maximum]; NaN as 0).
+  Rgb8 colorOf(double value) const;
+  // The legend's values: 0, maximum / steps, ..., maximum.
+  std::vector<double> legendValues() const;
+  // A legend value as printed: "0", "125", "62.5", "1.5k" for 1500 and up.
+  static std::string label(double value);
+};
+
+// The colour at t in [0, 1] along the spectrum.
+Rgb8 spectrumColor(double t);
+
+// The smallest "round" number (1, 2, 2.5 or 5 times a power of ten) at or
+// above `value`: the maximum of an automatic scale; 1 when value <= 0.
+double roundScaleMaximum(double value);
+
+}  // namespace portico
