@@ -11,6 +11,7 @@
 
 #include "common/analysis/result_paths.h"
 #include "common/scene/store/floor_levels.h"
+#include "coordinator/cli/false_color_legend.h"
 #include "coordinator/cli/plan_walls.h"
 
 namespace portico::cli {
@@ -22,9 +23,6 @@ constexpr float kSliceHeight = 1.5f;      // metres above the floor, as `scene p
 constexpr double kUpFacing = 0.9;         // sensors with dy at least this are on the plan
 constexpr int kMargin = 16;               // pixels round the plan
 constexpr int kHeaderHeight = kTextHeight + 2 * 8;
-constexpr int kLegendWidth = 150;
-constexpr int kLegendBarWidth = 28;
-constexpr int kLegendStepHeight = 40;     // pixels per legend interval
 constexpr double kMaxPixels = 36e6;
 
 Color toColor(const Rgb8& c) { return {c[0], c[1], c[2]}; }
@@ -97,7 +95,7 @@ class FloorPlanDrawer {
     for (const PlanSegment& s : sliceCells(store_, cells_, floors_.levels[floor_] + kSliceHeight))
       canvas.line(frame_.px(s.x0), frame_.py(s.z0), frame_.px(s.x1), frame_.py(s.z1), kWallColor, 2, false);
     for (int64_t id : rooms) drawRoomOutline(canvas, store_.cells()[size_t(id)]);
-    drawLegend(canvas);
+    drawLegend(canvas, width_ - kLegendWidth + 16, frame_.top, scale_);
     return plan;
   }
 
@@ -115,10 +113,9 @@ class FloorPlanDrawer {
     frame_.top = kHeaderHeight + kMargin;
     frame_.minX = extent_.lo.x;
     frame_.minZ = extent_.lo.z;
-    const int legendHeight = kLegendStepHeight * scale_.steps + 2 * kTextHeight + 24;
     width_ = std::max(int(std::ceil(extentX * frame_.scale)) + 2 * kMargin + kLegendWidth,
                       textWidth(fmt::format("floor 00  y = -000.00 m  {}", options_.title)) + 2 * kMargin);
-    height_ = std::max(int(std::ceil(extentZ * frame_.scale)), legendHeight) + frame_.top + kMargin;
+    height_ = std::max(int(std::ceil(extentZ * frame_.scale)), legendHeight(scale_)) + frame_.top + kMargin;
   }
 
   void drawRoomOutline(Canvas& canvas, const CellInfo& cell) {
@@ -133,24 +130,6 @@ class FloorPlanDrawer {
     if (width + 8 < x1 - x0 && kTextHeight + 8 < y1 - y0) {
       canvas.fill(x0 + 2, y0 + 2, x0 + width + 5, y0 + kTextHeight + 5, kWhite);
       canvas.text(x0 + 4, y0 + 4, cell.name, kBlack);
-    }
-  }
-
-  // A vertical bar, the maximum at the top, labelled at each step.
-  void drawLegend(Canvas& canvas) {
-    const int left = width_ - kLegendWidth + 16, top = frame_.top + kTextHeight + 12;
-    const int barHeight = kLegendStepHeight * scale_.steps;
-    canvas.text(left, frame_.top, scale_.unit, kBlack);
-    for (int y = 0; y <= barHeight; ++y) {
-      const Color color = toColor(scale_.colorOf(scale_.maximum * double(barHeight - y) / barHeight));
-      canvas.fill(left, top + y, left + kLegendBarWidth - 1, top + y, color);
-    }
-    const std::vector<double> values = scale_.legendValues();
-    for (size_t k = 0; k < values.size(); ++k) {
-      const int y = top + barHeight - int(k) * kLegendStepHeight;
-      canvas.line(left + kLegendBarWidth, y, left + kLegendBarWidth + 5, y, kBlack, 1, false);
-      const std::string label = FalseColorScale::label(values[k]) + (k + 1 == values.size() ? "+" : "");
-      canvas.text(left + kLegendBarWidth + 9, y - kTextHeight / 2, label, kBlack);
     }
   }
 
