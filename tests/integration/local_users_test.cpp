@@ -3,7 +3,8 @@
 // through a store's symbolic link, nor write where it may not, nor shut
 // the coordinator down, whether the coordinator listens on tcp:// (no
 // --keys: the per-user keys) or on ipc://. Skipped where the test cannot
-// switch to another uid (not root, or no setpriv).
+// switch to another uid (not root, or no setpriv), or where uid nobody
+// cannot reach the temporary folder (a TMPDIR inside a private folder).
 #include <capnp/message.h>
 #include <grp.h>
 #include <gtest/gtest.h>
@@ -36,6 +37,20 @@ class LocalUsers : public ::testing::Test {
     if (::access("/usr/bin/setpriv", X_OK) != 0) GTEST_SKIP() << "needs /usr/bin/setpriv (util-linux)";
     dir_ = makeTempDirectory(std::string("local-users-") +
                              ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    // nobody enters it (the tests' files say what it may read and write), whatever the umask.
+    fs::permissions(dir_, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                              fs::perms::others_read | fs::perms::others_exec);
+    // The programs nobody runs, copied where it can reach them: the build
+    // folder may lie in a private folder (a clone in root's 0700 home, or in
+    // a folder of mktemp -d), which only root may enter.
+    bin_ = dir_ / "bin";
+    fs::create_directories(bin_);
+    for (const char* program : {"portico", "portico-worker", "portico_image_formats.so"})
+      fs::copy_file(kBin + program, bin_ / program);
+    const fs::path probe = bin_ / "portico";
+    if (forkAsNobody([&] { return ::access(probe.c_str(), X_OK) == 0 ? 0 : 1; }) != 0)
+      GTEST_SKIP() << "uid nobody cannot reach " << dir_ << ": the temporary folder (TMPDIR) lies in a folder "
+                   << "only its owner may enter";
     // The coordinator's per-user keys (root's), here rather than in ~/.config.
     ::setenv("PORTICO_KEYS", (dir_ / "root-keys").c_str(), 1);
     std::ofstream(dir_ / "secret.txt") << kSecret;
@@ -54,6 +69,9 @@ class LocalUsers : public ::testing::Test {
     for (const auto& entry : fs::recursive_directory_iterator(home_)) (void)::lchown(entry.path().c_str(), kNobody, kNogroup);
     ASSERT_EQ(::chown(home_.c_str(), kNobody, kNogroup), 0);
   }
+
+  // A program of nobody's, as it runs it: the copy it can reach.
+  std::string program(const std::string& name) const { return (bin_ / name).string(); }
 
   // `argv` run as uid nobody, its per-user keys in its own home.
   std::vector<std::string> asNobody(const std::vector<std::string>& argv) const {
@@ -105,7 +123,7 @@ class LocalUsers : public ::testing::Test {
     return false;
   }
 
-  fs::path dir_, home_;
+  fs::path dir_, home_, bin_;
 };
 
 TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoordinatorWithoutKeys) {
@@ -120,12 +138,12 @@ TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoor
   int code = -1;
 
   // Submitting the linked store, then fetching its cells as a worker with a disk cache.
-  captureOutput(asNobody({kBin + "portico", "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
+  captureOutput(asNobody({program("portico"), "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
                           (home_ / "linked-store").string(), "-o", (home_ / "linked.png").string()}),
                 dir_, "submit-linked", &code);
   EXPECT_NE(code, 0) << readFile(dir_ / "submit-linked.log");
   {
-    ChildProcess worker(asNobody({kBin + "portico-worker", "--connect", cluster.endpoint(), "--name", "intruder",
+    ChildProcess worker(asNobody({program("portico-worker"), "--connect", cluster.endpoint(), "--name", "intruder",
                                   "--cache-dir", (home_ / "cache").string(), "--memory", "256MiB"}),
                         (dir_ / "intruder.log").string());
     std::this_thread::sleep_for(std::chrono::seconds(3));
@@ -136,7 +154,7 @@ TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoor
   // Writing where only root may: a worker of root's renders whatever is accepted.
   cluster.addWorker({});
   const std::string submitted =
-      captureOutput(asNobody({kBin + "portico", "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
+      captureOutput(asNobody({program("portico"), "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
                               (home_ / "store").string(), "-o", (dir_ / "root-only" / "x" / "y.png").string(),
                               "--photons", "2000", "--spp", "1", "--width", "32", "--height", "24"}),
                     dir_, "submit-root-only", &code);
@@ -145,9 +163,9 @@ TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoor
   EXPECT_FALSE(fs::exists(dir_ / "root-only" / "x")) << "directories created on behalf of uid nobody";
 
   // With keys of its own, it is refused all the same.
-  ASSERT_EQ(runCommand(asNobody({kBin + "portico", "keys", "generate", (home_ / "keys").string()}), dir_ / "keys.log"), 0)
+  ASSERT_EQ(runCommand(asNobody({program("portico"), "keys", "generate", (home_ / "keys").string()}), dir_ / "keys.log"), 0)
       << readFile(dir_ / "keys.log");
-  captureOutput(asNobody({kBin + "portico", "status", "--coordinator", cluster.endpoint(), "--timeout", "2"}), dir_,
+  captureOutput(asNobody({program("portico"), "status", "--coordinator", cluster.endpoint(), "--timeout", "2"}), dir_,
                 "status-own-keys", &code);
   EXPECT_NE(code, 0);
   EXPECT_NE(readFile(dir_ / "status-own-keys.log").find("wrong --keys, or coordinator down"), std::string::npos)
@@ -155,7 +173,7 @@ TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoor
 
   // Shutdown: the coordinator goes on serving.
   shutdownAsNobody(cluster.endpoint());
-  captureOutput(asNobody({kBin + "portico", "shutdown", "--coordinator", cluster.endpoint()}), dir_, "shutdown", &code);
+  captureOutput(asNobody({program("portico"), "shutdown", "--coordinator", cluster.endpoint()}), dir_, "shutdown", &code);
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   EXPECT_NO_THROW(cluster.status(0)) << readFile(dir_ / "cluster" / "coordinator.log");
   const std::string log = readFile(dir_ / "cluster" / "coordinator.log");
@@ -175,11 +193,13 @@ TEST_F(LocalUsers, AnIpcCoordinatorWithoutKeysAdmitsOnlyItsOwnUser) {
   // And a socket anyone may write to (libzmq leaves it to the umask).
   fs::permissions(open / "coordinator.sock", fs::perms::all);
   int code = -1;
-  captureOutput(asNobody({kBin + "portico", "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
+  captureOutput(asNobody({program("portico"), "submit", "--coordinator", cluster.endpoint(), "--timeout", "3",
                           (home_ / "store").string(), "-o", (home_ / "out.png").string(), "--photons", "2000",
                           "--spp", "1"}),
                 dir_, "submit", &code);
   EXPECT_NE(code, 0) << readFile(dir_ / "submit.log");
+  // Refused by the coordinator, not by the file system: the command ran and got no answer.
+  EXPECT_NE(readFile(dir_ / "submit.log").find("no answer from"), std::string::npos) << readFile(dir_ / "submit.log");
   shutdownAsNobody(cluster.endpoint());
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   // Root, and the coordinator's own worker, are served.
@@ -195,7 +215,7 @@ TEST_F(LocalUsers, AnOutputDirectoryTheSubmittingUserMayNotWriteIsRefusedBeforeA
   giveHomeToNobody();
   int code = -1;
   // No coordinator listens there: the client refuses before it connects.
-  captureOutput(asNobody({kBin + "portico", "submit", "--coordinator", "ipc://" + (dir_ / "none.sock").string(),
+  captureOutput(asNobody({program("portico"), "submit", "--coordinator", "ipc://" + (dir_ / "none.sock").string(),
                           (home_ / "store").string(), "-o", dir_.string() + "/y.png"}),
                 dir_, "submit", &code);
   EXPECT_NE(code, 0);
