@@ -8,8 +8,8 @@
 #   deploy/install-deps.sh --fuzz     also clang and libFuzzer, for tests/fuzz (docs/fuzzing.md)
 #   deploy/install-deps.sh --mitsuba  also Mitsuba 3 and Dr.Jit (PyPI) in a virtual environment at
 #                                     $MITSUBA_VENV (default ~/.local/share/portico/mitsuba-venv) and
-#                                     Debian's libllvm19, for the side-by-side measurements of
-#                                     docs/image-quality.md (shared/tools/mitsuba_ladder.py)
+#                                     Debian's libllvm19, for `portico bench quality --mitsuba`
+#                                     (python/portico_mitsuba; docs/image-quality.md)
 set -euo pipefail
 
 mitsuba=0
@@ -65,5 +65,5 @@ if [ "$mitsuba" = 1 ]; then
   venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
   "$venv/bin/pip" install -q mitsuba==3.9.1 drjit==1.5.0 numpy
-  echo "Mitsuba 3 in $venv: run with $venv/bin/python and DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
+  echo "Mitsuba 3 in $venv: portico bench quality SCENE_DIR --mitsuba renders with it (docs/image-quality.md)"
 fi

@@ -26,7 +26,7 @@ struct ImageComparison {
   int blocksOverLimit = 0;
   double worstBlockError = 0;
   // Root mean square of the checked blocks' relative errors (the "block
-  // RMSE" of shared/tools/mitsuba_ladder.py).
+  // RMSE" of `portico bench quality`, for portico's images and Mitsuba's).
   double blockRmse = 0;
 };
 

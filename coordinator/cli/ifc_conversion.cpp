@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "coordinator/cli/python_modules.h"
+
 extern char** environ;
 
 namespace portico::cli {
@@ -51,9 +53,7 @@ std::string convertIfc(const std::string& ifc, const std::string& outDirectory, 
     throw std::runtime_error(fmt::format("{}: reading IFC needs IfcOpenShell in {} (run deploy/install-deps.sh, or set "
                                          "PORTICO_PYTHON to a python3 that has ifcopenshell)",
                                          ifc, python));
-  const std::string modules = std::string(PORTICO_SOURCE_DIR) + "/python";
-  const char* previous = std::getenv("PYTHONPATH");
-  setenv("PYTHONPATH", previous && *previous ? (modules + ":" + previous).c_str() : modules.c_str(), 1);
+  addProjectModulesToPythonPath();
   std::vector<std::string> arguments{python,    "-m",         "portico_ifc",   ifc,
                                      outDirectory, "--lights", options.lights, "--outdoors",
                                      options.outdoors};

@@ -25,4 +25,10 @@ PY
 mkdir "$work/noref" && cp "$scenes/cornell_closed/scene.json" "$work/noref/"
 if "$bin/portico" bench quality "$work/noref" 2> "$work/err.txt"; then echo "accepted a scene without reference"; exit 1; fi
 grep -q "no reference.exr" "$work/err.txt"
+# --mitsuba without Mitsuba is refused, naming the interpreter looked for, before a row is printed.
+if "$bin/portico" bench quality "$scenes/cornell_closed" --settings "--spp 1 --photons 1000" --mitsuba \
+    --mitsuba-python "$work/no-such-venv/bin/python" > "$work/out2.txt" 2> "$work/err2.txt"; then
+  echo "--mitsuba ran without Mitsuba"; exit 1
+fi
+grep -q "no Mitsuba 3 in $work/no-such-venv/bin/python" "$work/err2.txt" || { cat "$work/err2.txt"; exit 1; }
 echo "bench quality smoke: ok"

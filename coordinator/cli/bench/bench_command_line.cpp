@@ -54,7 +54,16 @@ void addQuality(CLI::App& bench, CommandTable& table) {
   benchQualityCommand->add_option("--settings", o->settings,
                                   "portico render arguments per rung, rungs separated by ';'")
       ->capture_default_str();
-  benchQualityCommand->add_option("--workers", o->workers, "workers of each render")->capture_default_str();
+  benchQualityCommand->add_option("--workers", o->workers, "workers of each render (and Mitsuba's threads)")
+      ->capture_default_str();
+  benchQualityCommand->add_flag("--mitsuba", o->mitsuba,
+                                "also render the scene with Mitsuba 3's path tracer, in the same run "
+                                "(deploy/install-deps.sh --mitsuba installs it)");
+  benchQualityCommand->add_option("--mitsuba-spp", o->mitsubaSpp, "Mitsuba's sample counts, comma-separated")
+      ->capture_default_str();
+  benchQualityCommand->add_option("--mitsuba-python", o->mitsubaPython,
+                                  "a python with mitsuba and drjit (default: $MITSUBA_VENV/bin/python, else "
+                                  "~/.local/share/portico/mitsuba-venv/bin/python)");
   benchQualityCommand->add_option("--csv", o->csv, "write one row per setting");
   benchQualityCommand->add_option("--plot", o->plot, "write a PNG: block RMSE and worst block against seconds");
   table.add(benchQualityCommand, [o] { return runBenchQuality(*o); });

@@ -15,6 +15,7 @@
 #include "common/util/child_process.h"
 #include "coordinator/cli/bench/bench_plot.h"
 #include "common/util/csv_field.h"
+#include "coordinator/cli/bench/mitsuba_ladder.h"
 
 namespace portico::cli {
 namespace {
@@ -56,6 +57,21 @@ void parseComparison(const std::string& text, Rung& rung) {
   rung.worstBlock = std::stod(match[3]) / 100;
 }
 
+// Scores `image` against the reference with portico-compare, which exits 1
+// when a block is over the reference test's limit: a rung of a ladder may
+// well be; its line is what counts here.
+void score(const std::string& compare, const fs::path& image, const fs::path& reference, const fs::path& log,
+           Rung& rung) {
+  ChildProcess comparison({compare, image.string(), reference.string()}, log.string());
+  comparison.wait();
+  parseComparison(readFile(log), rung);
+}
+
+std::string csvRow(const Rung& r) {
+  return fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(r.settings), r.seconds, r.meanError, r.worstBlock,
+                     r.blockRmse);
+}
+
 }  // namespace
 
 int runBenchQuality(const BenchQualityOptions& options) {
@@ -85,24 +101,29 @@ int runBenchQuality(const BenchQualityOptions& options) {
     const auto started = std::chrono::steady_clock::now();
     runChild(argv, work / fmt::format("render-{}.log", i), "portico render " + ladder[i]);
     rung.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    // portico-compare exits 1 when a block is over the reference test's
-    // limit: a rung of a ladder may well be; its line is what counts here.
-    const fs::path compareLog = work / fmt::format("compare-{}.log", i);
-    ChildProcess comparison({compare, image.string(), reference.string()}, compareLog.string());
-    comparison.wait();
-    parseComparison(readFile(compareLog), rung);
-    std::cout << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(rung.settings), rung.seconds, rung.meanError,
-                             rung.worstBlock, rung.blockRmse)
-              << std::flush;
+    score(compare, image, reference, work / fmt::format("compare-{}.log", i), rung);
+    std::cout << csvRow(rung) << std::flush;
     rungs.push_back(rung);
+  }
+
+  // Mitsuba in the same run, on as many threads as portico has workers.
+  std::vector<Rung> mitsubaRungs;
+  if (options.mitsuba) {
+    const std::string python = options.mitsubaPython.empty() ? defaultMitsubaPython() : options.mitsubaPython;
+    for (const MitsubaRender& render :
+         renderWithMitsuba(options.sceneDirectory, options.mitsubaSpp, options.workers, python, work / "mitsuba")) {
+      Rung rung{fmt::format("mitsuba path --spp {}", render.spp), render.seconds};
+      score(compare, render.image, reference, work / fmt::format("compare-mitsuba-{}.log", render.spp), rung);
+      std::cout << csvRow(rung) << std::flush;
+      mitsubaRungs.push_back(rung);
+    }
   }
 
   if (!options.csv.empty()) {
     std::ofstream out(options.csv);
     out << "settings,seconds,mean_err,worst_block,rel_rmse_blocks\n";
-    for (const Rung& r : rungs)
-      out << fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(r.settings), r.seconds, r.meanError, r.worstBlock,
-                         r.blockRmse);
+    for (const Rung& r : rungs) out << csvRow(r);
+    for (const Rung& r : mitsubaRungs) out << csvRow(r);
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write", options.csv));
   }
   if (!options.plot.empty()) {
@@ -116,6 +137,13 @@ int runBenchQuality(const BenchQualityOptions& options) {
       worst.x.push_back(r.seconds), worst.y.push_back(r.worstBlock);
     }
     panel.series = {rmse, worst};
+    if (!mitsubaRungs.empty()) {
+      PlotSeries mitsuba;
+      mitsuba.label = "Mitsuba", mitsuba.color = {44, 160, 44};
+      panel.xLabel = "seconds (portico: command, Mitsuba: render)";
+      for (const Rung& r : mitsubaRungs) mitsuba.x.push_back(r.seconds), mitsuba.y.push_back(r.blockRmse);
+      panel.series.push_back(mitsuba);
+    }
     writePlotPng(options.plot, {panel});
   }
   fs::remove_all(work);

@@ -2,9 +2,11 @@
 // scene (scene.json with reference.exr beside it). Imports the scene once,
 // renders it with each setting of a ladder through `portico render` (the
 // whole command timed, start-up included), scores each image with
-// `portico-compare` and prints one CSV row per setting with the columns of
-// shared/tools/mitsuba_ladder.py: seconds, mean error, worst block, block
-// RMSE (16x16 blocks, those under 5 % of the image mean skipped).
+// `portico-compare` and prints one CSV row per setting: seconds, mean
+// error, worst block, block RMSE (16x16 blocks, those under 5 % of the
+// image mean skipped). With --mitsuba, Mitsuba 3's path tracer renders the
+// same scene at each of --mitsuba-spp in the same run (mitsuba_ladder.h),
+// scored the same way, one row each.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +18,10 @@ struct BenchQualityOptions {
   std::string sceneDirectory;
   // `portico render` arguments per rung, rungs separated by ';'.
   std::string settings = "--spp 4 --gather 2;--spp 8 --gather 4;--spp 16 --gather 4;--spp 32 --gather 8";
-  uint32_t workers = 2;
+  uint32_t workers = 2;   // and Mitsuba's threads
+  bool mitsuba = false;
+  std::string mitsubaSpp = "16,64,256";
+  std::string mitsubaPython;   // empty: defaultMitsubaPython()
   std::string csv;
   std::string plot;
 };

@@ -14,10 +14,13 @@ Usage (from this folder, about 2 minutes on 2 threads):
   DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 \
     nice ~/.local/share/portico/mitsuba-venv/bin/python render_reference.py [--spp 4096] [--threads 2]
 """
-import argparse, json, os
+import argparse, json, os, sys
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+# The scene as `portico bench quality --mitsuba` renders it (python/portico_mitsuba).
+sys.path.insert(0, os.path.join(HERE, "..", "..", "..", "python"))
+from portico_mitsuba.scene import scene_dict  # noqa: E402
 
 # sRGB bytes of the 4 x 4 tiles, row 0 at the image's top.
 PALETTE = [
@@ -36,34 +39,6 @@ def tiles_image():
     return image
 
 
-def scene_dict(mi, sc, spp):
-    cam = sc["camera"]
-    d = {
-        "type": "scene",
-        "integrator": {"type": "path", "max_depth": -1, "hide_emitters": False},
-        "sensor": {
-            "type": "perspective", "fov": cam["fov_y_deg"], "fov_axis": "y",
-            "near_clip": 0.001, "far_clip": 1000.0,
-            "to_world": mi.ScalarTransform4f().look_at(origin=cam["origin"], target=cam["target"], up=cam["up"]),
-            "sampler": {"type": "independent", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": cam["width"], "height": cam["height"], "pixel_format": "rgb",
-                     "component_format": "float32", "rfilter": {"type": "box"}, "sample_border": False},
-        },
-    }
-    for i, o in enumerate(sc["objects"]):
-        if "_texture" in o:
-            reflectance = {"type": "bitmap", "filename": os.path.join(HERE, o["_texture"]),
-                           "filter_type": "bilinear", "wrap_mode": "repeat", "raw": False}
-        else:
-            reflectance = {"type": "rgb", "value": o["albedo"]}
-        shape = {"type": "obj", "filename": os.path.join(HERE, o["obj"]), "face_normals": True,
-                 "bsdf": {"type": "diffuse", "reflectance": reflectance}}
-        if o.get("emission") is not None:
-            shape["emitter"] = {"type": "area", "radiance": {"type": "rgb", "value": o["emission"]}}
-        d[f"shape_{i:02d}_{o['name']}"] = shape
-    return d
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--spp", type=int, default=4096)
@@ -76,7 +51,7 @@ def main():
     dr.set_thread_count(a.threads)
     mi.Bitmap(tiles_image()).write(os.path.join(HERE, "tiles.png"))
     sc = json.load(open(os.path.join(HERE, "scene.json")))
-    scene = mi.load_dict(scene_dict(mi, sc, a.pass_spp))
+    scene = mi.load_dict(scene_dict(mi, HERE, sc, a.pass_spp))
     passes = max(1, a.spp // a.pass_spp)
     total = None
     for p in range(passes):

@@ -1,0 +1,75 @@
+"""Renders a reference scene with Mitsuba 3's path tracer at increasing sample counts.
+
+Usage: python -m portico_mitsuba SCENE_DIR OUT_DIR [--spp 16,64,256] [--threads 2]
+                                 [--variant llvm_ad_rgb] [--max-depth -1]
+
+Renders SCENE_DIR/scene.json (tests/scenes' format) once per sample count
+into OUT_DIR/mitsuba-SPP.exr and prints one CSV row per render,
+`spp,seconds,image`: the render's wall time on THREADS threads, the scene's
+loading and the first JIT compilation excluded (a warm-up render of 1 spp
+comes first). Each render is seeded with its spp, so rows are independent.
+`portico bench quality SCENE_DIR --mitsuba` runs this and scores the images
+against SCENE_DIR/reference.exr as it scores its own.
+
+Needs Mitsuba 3 and Dr.Jit (deploy/install-deps.sh --mitsuba: a virtual
+environment at ~/.local/share/portico/mitsuba-venv) and, for the LLVM
+variants, DRJIT_LIBLLVM_PATH naming Debian's libLLVM 19.
+"""
+import argparse
+import json
+import os
+import sys
+import time
+
+from portico_mitsuba.scene import UnsupportedScene, check_supported, scene_dict
+
+
+def main():
+    ap = argparse.ArgumentParser(prog="python -m portico_mitsuba")
+    ap.add_argument("scene_dir")
+    ap.add_argument("out_dir")
+    ap.add_argument("--spp", default="16,64,256", help="sample counts, comma-separated")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--variant", default="llvm_ad_rgb")
+    ap.add_argument("--max-depth", type=int, default=-1, help="-1: unbounded, as the references")
+    a = ap.parse_args()
+    try:
+        counts = [int(s) for s in a.spp.split(",")]
+    except ValueError:
+        sys.exit(f"--spp {a.spp}: not a comma-separated list of sample counts")
+    if not counts or min(counts) < 1:
+        sys.exit(f"--spp {a.spp}: sample counts must be at least 1")
+    scene_json = os.path.join(a.scene_dir, "scene.json")
+    try:
+        with open(scene_json) as f:
+            sc = json.load(f)
+        check_supported(a.scene_dir, sc)
+    except (OSError, json.JSONDecodeError, UnsupportedScene) as e:
+        sys.exit(f"{scene_json}: {e}" if not isinstance(e, UnsupportedScene) else str(e))
+
+    # Imported once the scene is known to be one this ladder renders: the
+    # refusal needs neither Mitsuba nor numpy.
+    import numpy as np
+    import mitsuba as mi
+    mi.set_variant(a.variant)
+    import drjit as dr
+    dr.set_thread_count(a.threads)
+    os.makedirs(a.out_dir, exist_ok=True)
+    print("spp,seconds,image", flush=True)
+    warmed = False
+    for spp in counts:
+        scene = mi.load_dict(scene_dict(mi, a.scene_dir, sc, spp, a.max_depth))
+        if not warmed:  # the first render compiles the kernels: not counted
+            dr.eval(mi.render(scene, spp=1, seed=999))
+            warmed = True
+        started = time.perf_counter()
+        # Copied out inside the timing: Dr.Jit evaluates lazily, and asynchronously.
+        pixels = np.array(mi.render(scene, spp=spp, seed=spp), dtype=np.float32)[..., :3]
+        seconds = time.perf_counter() - started
+        path = os.path.join(a.out_dir, f"mitsuba-{spp}.exr")
+        mi.Bitmap(pixels, pixel_format=mi.Bitmap.PixelFormat.RGB).write(path)
+        print(f"{spp},{seconds:.3f},{path}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
