@@ -478,7 +478,7 @@ class PhaseSimulation {
     const double cost = perLease() / 2 + chooseSeconds;
     prediction_.coordinatorBusySeconds += cost;
     const uint64_t lease = (*nextLease_)++;
-    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, {}});
+    info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, {}, {}});
     for (const auto& [cell, piece] : cells) info.cells.use(kModelJob, cell, cachedBytesOf(record_.cells, cell));
     ModelLease modelLease = leaseOf(w, lease, cells);
     modelLease.work = work;

@@ -1,6 +1,7 @@
 #include "coordinator/coordinator.h"
 
 #include <capnp/message.h>
+#include <fmt/chrono.h>
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <set>
 
+#include "common/net/endpoint_scope.h"
 #include "common/net/job_spec_wire.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/trace_counters.h"
@@ -26,6 +28,7 @@
 #include "coordinator/peer_rights.h"
 #include "coordinator/photon_reuse.h"
 #include "coordinator/render_passes.h"
+#include "coordinator/result_check.h"
 
 namespace portico {
 
@@ -41,6 +44,11 @@ constexpr uint32_t kLeaseOwnCell = 0xffffffff;   // Failure.failedCell's default
 int64_t wallMs() {
   return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+// A wall-clock time in status and errors: "2026-12-07 18:02:11 UTC".
+std::string utcTime(int64_t wallMs) {
+  return fmt::format("{:%Y-%m-%d %H:%M:%S} UTC", fmt::gmtime(std::time_t(wallMs / 1000)));
 }
 
 // Checked before jobs.db is opened: a refused start leaves nothing behind.
@@ -64,6 +72,7 @@ Coordinator::Coordinator(CoordinatorOptions options)
       maxFrameBytes_(net::maxCoordinatorFrameBytes(options_.maxLeaseWork)) {
   router_.set(zmq::sockopt::linger, 0);
   router_.set(zmq::sockopt::router_mandatory, false);
+  if (net::isIpv6Endpoint(options_.listen)) router_.set(zmq::sockopt::ipv6, true);
   security_ = std::make_unique<RouterSecurity>(zmq_, router_, options_.listen, options_.keysDirectory, maxFrameBytes_);
   router_.bind(bindableEndpoint(options_.listen));
   endpoint_ = router_.get(zmq::sockopt::last_endpoint);
@@ -97,6 +106,8 @@ void Coordinator::run() {
     }
     runRound();
   }
+  // Replies still queued (a Shutdown's acknowledgement) get a moment to leave.
+  router_.set(zmq::sockopt::linger, 1000);
   spdlog::info("coordinator stopping");
 }
 
@@ -196,6 +207,7 @@ void Coordinator::runRound() {
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
       lastHeartbeatMs_ = now;
       checkLiveness();
+      checkStores();
       for (auto& [identity, worker] : workers_) {
         capnp::MallocMessageBuilder message;
         message.initRoot<wire::Envelope>().setHeartbeat();
@@ -246,6 +258,8 @@ bool Coordinator::inRound(const std::function<void()>& work) {
     diskBackoffMs_ = 0;
     diskFailures_ = 0;
     diskPausedUntilMs_ = 0;
+    diskRoundsUndone_ = 0;
+    diskTroubleWhat_.clear();
   }
   for (Outgoing& out : outbox_) transmit(out.identity, out.frame);
   outbox_.clear();
@@ -313,6 +327,8 @@ void Coordinator::noteDiskTrouble(const std::string& what) {
   diskBackoffMs_ = std::clamp<int64_t>(diskBackoffMs_ * 2, 250, 8000);
   diskPausedUntilMs_ = nowMs() + diskBackoffMs_;
   ++diskFailures_;
+  if (diskRoundsUndone_++ == 0) diskTroubleSinceMs_ = wallMs();
+  diskTroubleWhat_ = what;
   if (diskFailures_ == 1 || nowMs() - diskLoggedMs_ >= 10000) {
     diskLoggedMs_ = nowMs();
     spdlog::error("cannot write jobs.db or its files ({}); nothing is lost: the round is undone, its work "
@@ -358,10 +374,15 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
       case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
       case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
       case wire::Envelope::GOODBYE: onGoodbye(identity); break;
-      case wire::Envelope::SHUTDOWN:
+      case wire::Envelope::SHUTDOWN: {
         spdlog::info("shutdown requested by {}", shortId(identity));
         stopping_ = true;
+        // Acknowledged, so that `portico shutdown` tells a stop from a refusal or silence.
+        capnp::MallocMessageBuilder ack;
+        ack.initRoot<wire::Envelope>().setShutdown();
+        send(identity, ack);
         break;
+      }
       default:
         spdlog::warn("dropped a message from {}: unexpected type {}", shortId(identity), int(envelope.which()));
     }
@@ -456,6 +477,7 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
 void Coordinator::dispatch() {
   if (nowMs() < diskPausedUntilMs_) return;   // the disk refused the last round's writes
   for (auto& [identity, worker] : workers_) {
+    if (!refusalsByWorker_.empty() && sidelined(worker)) continue;
     for (size_t k = 0; k < WorkerInfo::kMostLeasesInFlight && worker.wantsLease(); ++k) {
       const Assignment assigned = assignWork(worker);
       if (assigned == Assignment::NothingLeft) return;
@@ -475,11 +497,26 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     });
   }
   if (candidates.empty()) return Assignment::NothingLeft;
+  // Cells one of whose Results from this worker was refused go to others.
+  if (!refusedResults_.empty()) {
+    std::erase_if(candidates, [&](const PendingCell& c) { return leftToOthers(worker, c.job, c.cell); });
+    if (candidates.empty()) return Assignment::NothingForThisWorker;
+  }
+  // A job whose store could not be loaded waits for it (checkStores).
+  if (!storeTrouble_.empty()) {
+    std::erase_if(candidates,
+                  [&](const PendingCell& c) { return storeTrouble_.count(c.job) && !jobs_.count(c.job); });
+    if (candidates.empty()) return Assignment::NothingLeft;
+  }
   JobContext* job;
   try {
     job = &context(candidates.front().job);
   } catch (const std::exception& e) {
-    failJob(candidates.front().job, e.what());
+    if (const auto directory = storeDirectoryOf(candidates.front().job);
+        directory && ::access((*directory + "/scene.db").c_str(), R_OK) != 0)
+      noteStoreTrouble(candidates.front().job, fmt::format("{}/scene.db: {}", *directory, std::strerror(errno)));
+    else
+      failJob(candidates.front().job, e.what());
     return Assignment::Assigned;
   }
   const auto& cells = job->scene->cells();
@@ -539,10 +576,16 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   if (chosen->phase == 1) assign.getSpec().setSeed(passSeed(job->reader().getSeed(), job->renderPass));
   assign.setLeaseWork(leaseWork);
   assign.setCellWork(std::max(chosen->work, leaseWork));
-  const auto copyBatches = [](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
+  // What the lease asks for is summed as its batches are copied: its Result must add up to it.
+  LeaseExpectation expected;
+  expected.phase = chosen->phase;
+  const uint32_t spp = job->reader().getSpp();
+  const auto copyBatches = [&](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
     for (size_t i = 0; i < from.size(); ++i) {
       net::MessageReader reader(from[i].payload.data(), from[i].payload.size());   // packed or flat
-      to.setWithCaveats(static_cast<unsigned>(i), reader.root<wire::RayBatch>());
+      const auto batch = reader.root<wire::RayBatch>();
+      expected.add(batch, spp);
+      to.setWithCaveats(static_cast<unsigned>(i), batch);
     }
   };
   if (region) {
@@ -561,7 +604,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
-  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}};
+  WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}, expected};
   for (const auto& [cell, extra] : moreCells) {
     int64_t work = 0;
     for (const QueuedBatch& batch : extra) work += batch.work;
@@ -605,14 +648,12 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     sql::Transaction tx(store_.database());
     store_.completeLease(leaseId);
     if (active) {
-      for (auto counter : result.getCounters())
-        if (std::string_view(counter.getName().cStr()) == kFilmOutOfRangeCounter && counter.getValue() != 0)
-          throw FilmRangeError();
+      const auto sent = arrivedLeases_.find(leaseId);
+      checkResultCounts(sent != arrivedLeases_.end() ? &sent->second.expected : nullptr, lease->phase, result);
       const size_t cellCount = context->scene->cells().size();
       for (auto crossing : result.getCrossings()) {
         if (crossing.getCell() >= cellCount)
-          throw std::runtime_error(fmt::format("result for lease {} sends rays to cell {}, which does not exist",
-                                               leaseId, crossing.getCell()));
+          throw BadResultError(fmt::format("it sends rays to cell {}, which does not exist", crossing.getCell()));
         // One first segment that holds the whole copy: no growth, no second segment.
         capnp::MallocMessageBuilder batch(uint(crossing.getRays().totalSize().wordCount + 8));
         batch.initRoot<wire::RayBatch>().setRays(crossing.getRays());
@@ -620,19 +661,23 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
                         net::flatToString(batch));   // rays: packing gains little, costs a pass each way
       }
       int64_t regionBytes = 0, resultBytes = 0;
-      for (const RegionDeposit& d : regionDeposits(leaseId, region ? &*region : nullptr, result, cellCount)) {
+      std::vector<RegionDeposit> inRegion;
+      try {
+        inRegion = regionDeposits(leaseId, region ? &*region : nullptr, result, cellCount);
+      } catch (const std::runtime_error& e) {
+        throw BadResultError(e.what());
+      }
+      for (const RegionDeposit& d : inRegion) {
         store_.addPhotonsAt(lease->job, d.cell, d.extent);
         regionBytes += d.extent.size;
       }
       for (auto deposits : result.getDeposits()) {
         if (deposits.getCell() >= cellCount)
-          throw std::runtime_error(fmt::format("result for lease {} deposits photons in cell {}, which does not exist",
-                                               leaseId, deposits.getCell()));
+          throw BadResultError(fmt::format("it deposits photons in cell {}, which does not exist", deposits.getCell()));
         auto records = deposits.getRecords();
         if (records.size() == 0) continue;
         if (records.size() % sizeof(PhotonRecord) != 0)
-          throw std::runtime_error(fmt::format("result for lease {} holds a photon table of {} bytes, not whole records",
-                                               leaseId, records.size()));
+          throw BadResultError(fmt::format("it holds a photon table of {} bytes, not whole records", records.size()));
         store_.addPhotons(lease->job, deposits.getCell(), records.size() / sizeof(PhotonRecord),
                           std::string_view(reinterpret_cast<const char*>(records.begin()), records.size()));
         resultBytes += int64_t(records.size());
@@ -641,32 +686,97 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
       if (resultBytes > 0) store_.addCounter(lease->job, kPhotonBytesFromResultsCounter, resultBytes);
       if (result.getFilm().size() > 0) {
         std::unordered_map<uint32_t, FixedRgb> sums;
-        for (auto pixel : result.getFilm())
+        auto spec = context->reader();
+        const uint64_t pixelCount = uint64_t(spec.getWidth()) * spec.getHeight();
+        for (auto pixel : result.getFilm()) {
+          checkFilmValue(pixel, pixelCount);
           if (!sums[pixel.getPixel()].addWithinRange(FixedRgb{pixel.getR(), pixel.getG(), pixel.getB()}))
             throw FilmRangeError();
-        auto spec = context->reader();
-        store_.addFilm(lease->job, sums, uint64_t(spec.getWidth()) * spec.getHeight());
+        }
+        store_.addFilm(lease->job, sums, pixelCount);
       }
       recordResultCounters(identity, *lease, result);
     }
     tx.commit();
+  } catch (const BadResultError& e) {
+    // Nothing of it was kept (the transaction rolled back): its lease is
+    // traced again, by another worker where there is one.
+    refuseResult(identity, *lease, e.what());
+    return;
   } catch (const FilmRangeError& e) {
-    // Deterministic: every retry would overflow the same pixel.
-    failJob(lease->job, fmt::format("cell {}: {}", lease->cell, e.what()));
+    // Beyond the film's range: a bad worker, or a scene far too bright,
+    // which every worker would agree on (refuseResult).
+    refuseResult(identity, *lease, e.what());
     return;
   } catch (const std::exception& e) {
     // A full disk is not the cell's fault: the round is undone and the
     // lease requeued (inRound).
     if (isDiskTrouble(e)) throw;
-    // Nothing of a malformed result was kept (the transaction rolled back);
-    // its batches go back to the queue, and a cell that keeps producing
-    // bad results fails its job like any failing cell.
+    // Nothing of it was kept (the transaction rolled back); its batches go
+    // back to the queue, and a cell that keeps failing fails its job like
+    // any failing cell.
     spdlog::error("rejected the result of lease {}: {}", leaseId, e.what());
     recordCellFailure(*lease, fmt::format("cell {}: {}", lease->cell, e.what()));
     return;
   }
+  refusedResults_.erase({lease->job, lease->cell});
   retries_.erase({lease->job, lease->cell});
   if (active) advanceIfPhaseDone(lease->job);
+}
+
+void Coordinator::refuseResult(const std::string& identity, const LeaseRecord& lease, const std::string& reason) {
+  const auto worker = workers_.find(identity);
+  const std::string name = worker != workers_.end() ? worker->second.name : shortId(identity);
+  ++refusalsByWorker_[name];
+  std::vector<Refusal>& refusals = refusedResults_[{lease.job, lease.cell}];
+  refusals.push_back({name, reason});
+  {
+    sql::Transaction tx(store_.database());
+    store_.requeueLease(lease.id);
+    store_.addCounter(lease.job, "results.refused", 1);
+    tx.commit();
+  }
+  delayRetry(lease.job, lease.cell);
+  spdlog::error("rejected the result of lease {} (job {} cell {}) from worker {}: {}; its work is traced again{}",
+                lease.id, lease.job, lease.cell, name, reason,
+                worker != workers_.end() && leftToOthers(worker->second, lease.job, lease.cell)
+                    ? " by another worker"
+                    : "");
+  // Another worker's refused Result for the cell: they agree.
+  for (const Refusal& earlier : refusals)
+    if (earlier.worker != name) {
+      failJob(lease.job, fmt::format("cell {}: {} (the Results of workers {} and {} alike: each was refused)",
+                                     lease.cell, reason, earlier.worker, name));
+      return;
+    }
+  if (int64_t(refusals.size()) >= options_.maxCellFailures)
+    failJob(lease.job, fmt::format("cell {}: {} (the Result of worker {} refused {} times, with no other worker to "
+                                   "trace it)",
+                                   lease.cell, reason, name, refusals.size()));
+}
+
+bool Coordinator::leftToOthers(const WorkerInfo& worker, uint64_t job, uint32_t cell) const {
+  const auto refused = refusedResults_.find({job, cell});
+  if (refused == refusedResults_.end()) return false;
+  const auto refusedFrom = [&](const std::string& name) {
+    return std::any_of(refused->second.begin(), refused->second.end(),
+                       [&](const Refusal& r) { return r.worker == name; });
+  };
+  if (!refusedFrom(worker.name)) return false;
+  return std::any_of(workers_.begin(), workers_.end(), [&](const auto& other) {
+    return other.second.ready && !refusedFrom(other.second.name) && !sidelined(other.second);
+  });
+}
+
+bool Coordinator::sidelined(const WorkerInfo& worker) const {
+  const auto count = [&](const WorkerInfo& w) {
+    const auto found = refusalsByWorker_.find(w.name);
+    return found == refusalsByWorker_.end() ? 0 : found->second;
+  };
+  if (count(worker) < kRefusalsBeforeSidelined) return false;
+  return std::any_of(workers_.begin(), workers_.end(), [&](const auto& other) {
+    return other.second.ready && count(other.second) < kRefusalsBeforeSidelined;
+  });
 }
 
 uint64_t Coordinator::peakResident() {
@@ -745,6 +855,7 @@ void Coordinator::recordCellFailure(const LeaseRecord& lease, const std::string&
   // A store the coordinator cannot read either (unmounted, moved away) is
   // not the cell's fault: the lease waits, uncounted, for it to come back.
   if (const auto unreadable = storeUnreadable(lease.job, cell)) {
+    noteStoreTrouble(lease.job, *unreadable);
     {
       sql::Transaction tx(store_.database());
       store_.requeueLease(lease.id);
@@ -794,6 +905,70 @@ std::optional<std::string> Coordinator::storeUnreadable(uint64_t job, uint32_t c
     return std::string(e.what());
   }
   return std::nullopt;
+}
+
+std::optional<std::string> Coordinator::storeDirectoryOf(uint64_t jobId) {
+  if (auto cached = jobs_.find(jobId); cached != jobs_.end()) return cached->second.scene->directory();
+  auto job = store_.job(jobId);
+  if (!job) return std::nullopt;
+  net::PackedReader reader(job->spec.data(), job->spec.size());
+  return std::string(reader.root<wire::JobSpec>().getStore().cStr());
+}
+
+void Coordinator::noteStoreTrouble(uint64_t job, const std::string& reason) {
+  const auto [trouble, added] = storeTrouble_.try_emplace(job, StoreTrouble{wallMs(), reason});
+  trouble->second.reason = reason;
+  if (added)
+    spdlog::warn("job {}: its store cannot be read ({}); the job waits for it, at most {} s (--store-gone-timeout)",
+                 job, reason, options_.storeGoneTimeoutMs / 1000.0);
+}
+
+void Coordinator::checkStores() {
+  for (const JobRecord& job : store_.jobs(true)) {
+    std::optional<std::string> directory;
+    try {
+      directory = storeDirectoryOf(job.id);
+    } catch (const std::exception&) {
+    }
+    if (!directory) continue;
+    const std::string sceneDb = *directory + "/scene.db";
+    if (::access(sceneDb.c_str(), R_OK) == 0) {
+      if (storeTrouble_.erase(job.id)) spdlog::info("job {}: its store can be read again", job.id);
+      continue;
+    }
+    noteStoreTrouble(job.id, fmt::format("{}: {}", sceneDb, std::strerror(errno)));
+    const StoreTrouble& trouble = storeTrouble_.at(job.id);
+    if (wallMs() - trouble.sinceMs >= options_.storeGoneTimeoutMs)
+      failJob(job.id, fmt::format("store {} cannot be read since {} ({}): the job waited {} s for it "
+                                  "(--store-gone-timeout)",
+                                  *directory, utcTime(trouble.sinceMs), trouble.reason,
+                                  options_.storeGoneTimeoutMs / 1000.0));
+  }
+}
+
+std::vector<std::string> Coordinator::waitingReasons(uint64_t job) const {
+  std::vector<std::string> reasons;
+  if (diskRoundsUndone_ > 0) {
+    const std::string directory =
+        std::filesystem::absolute(options_.database).parent_path().lexically_normal().string();
+    const bool full = diskTroubleWhat_.find("full") != std::string::npos ||
+                      diskTroubleWhat_.find("No space") != std::string::npos;
+    reasons.push_back(fmt::format("{} on {}: jobs.db or its files cannot be written since {} ({}); {} rounds "
+                                  "undone, leasing resumes by itself once they can",
+                                  full ? "disk full" : "disk trouble", directory, utcTime(diskTroubleSinceMs_),
+                                  diskTroubleWhat_, diskRoundsUndone_));
+  }
+  if (auto trouble = storeTrouble_.find(job); trouble != storeTrouble_.end())
+    reasons.push_back(fmt::format("store cannot be read since {} ({}); the job fails at {} unless it comes back "
+                                  "(--store-gone-timeout)",
+                                  utcTime(trouble->second.sinceMs), trouble->second.reason,
+                                  utcTime(trouble->second.sinceMs + options_.storeGoneTimeoutMs)));
+  for (auto it = refusedResults_.lower_bound({job, 0}); it != refusedResults_.end() && it->first.first == job; ++it)
+    if (!it->second.empty())
+      reasons.push_back(fmt::format("cell {}: the Result of worker {} was refused ({}); traced again",
+                                    it->first.second, it->second.back().worker, it->second.back().reason));
+  if (workers_.empty()) reasons.push_back("no worker is connected");
+  return reasons;
 }
 
 // A job that ended (cancelled, failed) has its leases dropped; the workers
@@ -919,6 +1094,14 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
   auto answer = reply.initRoot<wire::Envelope>().initSubmitReply();
   try {
     JobSettings settings = jobSettingsFromWire(submit.getSpec());
+    // A relative path would be read against the coordinator's working
+    // directory, not the client's: clients resolve them (fillSubmit).
+    for (const auto& [what, path] : {std::pair<const char*, const std::string&>{"scene store", settings.store},
+                                     {"output", settings.output}})
+      if (!std::filesystem::path(path).is_absolute())
+        throw std::invalid_argument(fmt::format("{} '{}' is a relative path: a Submit names absolute paths (the "
+                                                "coordinator's working directory is not the client's)",
+                                                what, path));
     // The store as the coordinator resolves it, once: what it serves and
     // workers read is that directory, whatever its path's links become.
     std::error_code unresolved;
@@ -978,13 +1161,30 @@ void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
       sendError(identity, fmt::format("job {} does not exist", jobId));
       return;
     }
-    status = jobStatus(store_, *job, context(job->id).reader(), now);
+    // A job whose store cannot be loaded still has a status: its spec as stored.
+    std::optional<net::PackedReader> stored;
+    wire::JobSpec::Reader spec;
+    try {
+      spec = context(job->id).reader();
+    } catch (const std::exception&) {
+      spec = stored.emplace(job->spec.data(), job->spec.size()).root<wire::JobSpec>();
+    }
+    status = jobStatus(store_, *job, spec, now);
+    if (isActive(job->state))
+      if (const auto reasons = waitingReasons(job->id); !reasons.empty()) {
+        status["waiting"] = reasons;
+        status.erase("eta_s");   // it would only grow
+      }
   } else {
     status["jobs"] = nlohmann::json::array();
     for (const JobRecord& job : store_.jobs(false))
       status["jobs"].push_back({{"job", job.id}, {"state", std::string(toString(job.state))}, {"error", job.error}});
   }
   status["workers"] = workersStatus(workers_, nowMs());
+  for (auto& worker : status["workers"]) {
+    const auto refused = refusalsByWorker_.find(worker.value("name", ""));
+    worker["refused_results"] = refused == refusalsByWorker_.end() ? 0 : refused->second;
+  }
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initStatusReply().setJson(status.dump());
   send(identity, message);
@@ -1002,6 +1202,7 @@ void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Rea
     store_.dropJobWork(job->id);
     store_.setJobState(job->id, JobState::Cancelled, wallMs(), "cancelled by the user");
     tx.commit();
+    forgetEndedJob(job->id);
     spdlog::info("job {} cancelled", job->id);
   }
   replyStatus(identity, job->id);
@@ -1117,6 +1318,7 @@ void Coordinator::finishJob(uint64_t jobId) {
   sql::Transaction tx(store_.database());
   store_.setJobState(jobId, JobState::Done, job->finishedMs, outputError);
   tx.commit();
+  forgetEndedJob(jobId);
   if (outputError.empty())
     spdlog::info("job {} done: {}", jobId, ctx.reader().getOutput().cStr());
   else
@@ -1158,6 +1360,11 @@ void Coordinator::withdrawDamagedLender(uint64_t lender, const std::string& reas
   spdlog::error("job {}: {}; its photon pass is not reused again", lender, reason);
 }
 
+void Coordinator::forgetEndedJob(uint64_t jobId) {
+  storeTrouble_.erase(jobId);
+  std::erase_if(refusedResults_, [&](const auto& entry) { return entry.first.first == jobId; });
+}
+
 void Coordinator::failJob(uint64_t jobId, const std::string& error) {
   // The first reason stands: a job fails once.
   if (auto job = store_.job(jobId); !job || !isActive(job->state)) return;
@@ -1167,6 +1374,7 @@ void Coordinator::failJob(uint64_t jobId, const std::string& error) {
   store_.setJobState(jobId, JobState::Failed, wallMs(), error);
   tx.commit();
   spdlog::error("job {} failed: {}", jobId, error);
+  forgetEndedJob(jobId);
 }
 
 }  // namespace portico

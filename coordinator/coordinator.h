@@ -47,6 +47,9 @@ struct CoordinatorOptions {
   // workers that can open it write their deposits into themselves
   // (coordinator/deposit_regions.h); false: every deposit comes in its Result.
   bool depositRegions = true;
+  // A job whose scene store the coordinator cannot read (deleted, moved,
+  // unmounted) waits this long for it to come back, then fails saying so.
+  int64_t storeGoneTimeoutMs = 600000;
 };
 
 class Coordinator {
@@ -72,6 +75,19 @@ class Coordinator {
   void onReady(const std::string& identity);
   void onResult(const std::string& identity, wire::Result::Reader result);
   void recordResultCounters(const std::string& identity, const LeaseRecord& lease, wire::Result::Reader result);
+  // A Result that does not add up or holds impossible values (result_check.h):
+  // dropped, its lease traced again by another worker where one is ready,
+  // counted against its worker. The job fails only when the Results of two
+  // workers for the cell were refused (they agree: the cell's doing, such
+  // as a scene too bright for the film), or, with no other worker to try,
+  // maxCellFailures of one worker's.
+  void refuseResult(const std::string& identity, const LeaseRecord& lease, const std::string& reason);
+  // A cell one of whose Results from this worker was refused, while a ready
+  // worker whose Result for it was not exists: left to the others.
+  bool leftToOthers(const WorkerInfo& worker, uint64_t job, uint32_t cell) const;
+  // A worker with kRefusalsBeforeSidelined refused Results gets no lease
+  // while a ready worker with fewer exists.
+  bool sidelined(const WorkerInfo& worker) const;
   void onFailure(const std::string& identity, wire::Failure::Reader failure);
   void onFetchPhotons(const std::string& identity, wire::FetchPhotons::Reader request);
   // The job back to the start of its photon pass, one of its own (its
@@ -106,6 +122,17 @@ class Coordinator {
   // Whether the coordinator can read the job's store itself: when it
   // cannot, a failure to read it is the store's (unmounted, moved), not the cell's.
   std::optional<std::string> storeUnreadable(uint64_t job, uint32_t cell);
+  // Each heartbeat: whether each active job's store can be read; a job
+  // whose store stayed unreadable for storeGoneTimeoutMs fails.
+  void checkStores();
+  void noteStoreTrouble(uint64_t job, const std::string& reason);
+  // The job's store directory, from its loaded context or its stored spec.
+  std::optional<std::string> storeDirectoryOf(uint64_t job);
+  // What the coordinator keeps in memory about an active job, dropped as it ends.
+  void forgetEndedJob(uint64_t job);
+  // Why an active job makes no progress, as its status says it: the disk,
+  // its store, refused Results, no workers. Empty: nothing known holds it.
+  std::vector<std::string> waitingReasons(uint64_t job) const;
   // The workers tracing leases of a job that ended stop them (Cancel).
   void recallLeasesOf(uint64_t job);
   // A transaction failed for want of disk (full, failing): leasing pauses,
@@ -155,6 +182,15 @@ class Coordinator {
     int64_t notBeforeMs = 0;    // steady clock
   };
   std::map<std::pair<uint64_t, uint32_t>, Retry> retries_;   // (job, cell)
+  // Refused Results of each (job, cell) since its last accepted one: which
+  // worker sent it and why it was refused.
+  struct Refusal {
+    std::string worker;
+    std::string reason;
+  };
+  std::map<std::pair<uint64_t, uint32_t>, std::vector<Refusal>> refusedResults_;
+  std::map<std::string, int64_t> refusalsByWorker_;   // worker name -> its Results refused, all jobs
+  static constexpr int64_t kRefusalsBeforeSidelined = 3;
   // Disk trouble: no leasing before diskPausedUntilMs_ (steady clock); the
   // pause doubles with each failed round; requeueUntracedLeases is owed
   // when undoRound could not do it.
@@ -162,6 +198,15 @@ class Coordinator {
   int64_t diskBackoffMs_ = 0;
   int64_t diskFailures_ = 0;          // failed rounds since the last line logged about them
   int64_t diskLoggedMs_ = 0;
+  int64_t diskTroubleSinceMs_ = 0;    // wall clock of the first failed round since writes last succeeded
+  int64_t diskRoundsUndone_ = 0;      // since then
+  std::string diskTroubleWhat_;       // the last failure, for status
+  // Jobs whose store cannot be read: since when (wall clock) and why.
+  struct StoreTrouble {
+    int64_t sinceMs = 0;
+    std::string reason;
+  };
+  std::map<uint64_t, StoreTrouble> storeTrouble_;
   bool requeueOwed_ = false;
   LogThrottle storeLog_{std::chrono::seconds(10)};
   // The round in progress (inRound): its replies, and the leases it opened

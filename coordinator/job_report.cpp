@@ -239,7 +239,9 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
           : 0.5 * double(photonsDone) / std::max<int64_t>(1, spec.getPhotons()) +
                 0.5 * double(get(counters, "rays.camera")) / std::max<int64_t>(1, samples);
   status["progress"]["fraction"] = fraction;
-  const double elapsed = double(nowMs - job.createdMs) / 1000.0;
+  // An ended job's time is its own, not the time since it was submitted.
+  const int64_t endMs = isActive(job.state) || job.finishedMs == 0 ? nowMs : job.finishedMs;
+  const double elapsed = double(endMs - job.createdMs) / 1000.0;
   status["elapsed_s"] = elapsed;
   status["rays_per_s"] = elapsed > 0 ? double(get(counters, "rays.traced")) / elapsed : 0.0;
   if (isActive(job.state) && fraction > 0.01 && spec.getMaxPasses() == 1) status["eta_s"] = elapsed * (1.0 - fraction) / fraction;

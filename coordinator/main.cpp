@@ -42,6 +42,12 @@ int main(int argc, char** argv) {
                  "times one cell's lease may be lost with its worker (killed, out of memory, gone) before its job fails")
       ->capture_default_str()
       ->check(portico::cli::wholeNumber(1, 1000));
+  double storeGoneSeconds = double(options.storeGoneTimeoutMs) / 1000;
+  app.add_option("--store-gone-timeout", storeGoneSeconds,
+                 "seconds a job waits for its scene store to be readable again (deleted, moved, unmounted) before "
+                 "it fails saying so")
+      ->capture_default_str()
+      ->check(portico::cli::realNumber(0.001, 1e9));
   app.add_option("--keys", options.keysDirectory,
                  "CURVE keys directory (`portico keys generate`): encrypt, and admit only the keys of "
                  "{client,worker,operator}.public, each in its role; required beyond loopback. Without it, "
@@ -57,6 +63,7 @@ int main(int argc, char** argv) {
   app.add_option("--log-level", logLevel, "trace, debug, info, warn, error")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   options.depositRegions = !noDepositRegions;
+  options.storeGoneTimeoutMs = static_cast<int64_t>(storeGoneSeconds * 1000);
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
   // Every Result is unpacked into fresh segments and its batches re-packed:

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "coordinator/cell_cache_model.h"
+#include "coordinator/result_check.h"
 
 namespace portico {
 
@@ -28,6 +29,7 @@ struct WorkerInfo {
     // Each more cell and the work taken from its queue: logged with the
     // lease (LeaseLogEntry) for the cluster model; never read to schedule.
     std::vector<std::pair<uint32_t, int64_t>> moreCellWork;
+    LeaseExpectation expected;   // what its Result must add up to (result_check.h)
   };
   std::map<uint64_t, LeaseInFlight> leases;
   // A worker holds up to two leases: the next one is on its way (or already

@@ -8,6 +8,8 @@
 #include <string_view>
 #include <thread>
 
+#include "common/net/endpoint_scope.h"
+
 namespace portico {
 
 namespace {
@@ -32,6 +34,7 @@ void CoordinatorLink::connect() {
   socket_.emplace(context_, zmq::socket_type::dealer);
   socket_->set(zmq::sockopt::linger, 0);
   socket_->set(zmq::sockopt::maxmsgsize, int64_t(net::kMaxFrameBytes));
+  if (net::isIpv6Endpoint(options_.endpoint)) socket_->set(zmq::sockopt::ipv6, true);
   if (keys_) net::applyClientKeys(*socket_, *keys_);
   socket_->connect(options_.endpoint);
   welcomed_ = false;

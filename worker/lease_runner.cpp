@@ -7,6 +7,7 @@
 #include "worker/lease_load.h"
 #include "worker/lease_result.h"
 #include "worker/lease_trace.h"
+#include "worker/test_faults.h"
 
 namespace portico {
 
@@ -27,7 +28,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   const auto started = std::chrono::steady_clock::now();
   const ThreadTimes startedTimes = threadTimes();
   const LoadedLease lease = loadLease(cache, chooser, assign, std::move(photonRecords), storeDirectory);
-  const TracedLease traced = traceLoadedLease(cache, chooser, lease, assign, forwardRays, stop);
+  TracedLease traced = traceLoadedLease(cache, chooser, lease, assign, forwardRays, stop);
   LeaseFigures figures;
   figures.cache = cache.takeStatistics();
   figures.irradiancePoints = lease.irradiancePoints;
@@ -36,7 +37,9 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   figures.moreCells = int64_t(assign.getMoreCells().size());
   figures.started = started;
   figures.startedTimes = startedTimes;
+  applyTestFault(traced.out);
   auto message = encodeResult(assign, traced.out, figures);
+  applyTestFault(message->getRoot<wire::Envelope>().getResult());
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",
                 assign.getLease(), assign.getCell(), assign.getBatches().size(), traced.out.counters.photonDeposits,
                 traced.out.crossings.size(), traced.out.film.sums().size(),

@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   app.add_option("--connect", options.connect, "coordinator endpoint")->capture_default_str();
   app.add_option("--memory", memory, "the whole worker's memory: its code, and a cache for cells, accelerators, photon maps and texture tiles (e.g. 512MiB, 4GiB)")
       ->capture_default_str()
-      ->check(portico::cli::byteSize());
+      ->check(portico::cli::workerMemory());
   app.add_option("--threads", options.threads, "tracing threads")
       ->capture_default_str()
       ->check(portico::cli::wholeNumber(1, 1024));

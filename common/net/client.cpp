@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/net/curve_keys.h"
+#include "common/net/endpoint_scope.h"
 
 namespace portico::net {
 
@@ -15,6 +16,7 @@ CoordinatorClient::CoordinatorClient(const std::string& endpoint, const std::str
     : endpoint_(endpoint), timeout_(timeout), context_(1), socket_(context_, zmq::socket_type::dealer) {
   socket_.set(zmq::sockopt::linger, 200);
   socket_.set(zmq::sockopt::maxmsgsize, int64_t(kMaxFrameBytes));
+  if (isIpv6Endpoint(endpoint)) socket_.set(zmq::sockopt::ipv6, true);
   if (const std::string keys = keysForEndpoint(keysDirectory, endpoint); !keys.empty()) {
     // An operator's folder holds operator.secret alone: it may do what a client does.
     namespace fs = std::filesystem;

@@ -34,4 +34,8 @@ bool isLoopbackEndpoint(std::string_view endpoint) {
   return host == "localhost" || host == "[::1]" || isLoopbackIpv4(host);
 }
 
+bool isIpv6Endpoint(std::string_view endpoint) {
+  return endpoint.starts_with("tcp://") && endpoint.find('[') != std::string_view::npos;
+}
+
 }  // namespace portico::net

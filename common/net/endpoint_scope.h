@@ -11,4 +11,9 @@ namespace portico::net {
 // host name, another transport) may be reachable from other machines.
 bool isLoopbackEndpoint(std::string_view endpoint);
 
+// True for a tcp:// endpoint on an IPv6 address ([::1], [fe80::...]): its
+// socket needs ZMQ_IPV6 set, or libzmq takes the literal for an interface
+// name ("No such device").
+bool isIpv6Endpoint(std::string_view endpoint);
+
 }  // namespace portico::net

@@ -88,4 +88,27 @@ inline CLI::Validator byteSize() {
       "SIZE");
 }
 
+// The least --memory a worker starts with: its own footprint at start (9
+// MiB resident here), a lease's buffers (12 MiB) and room for cells (4 MiB),
+// with a margin. Below it every worker would exit at start
+// (worker_session.cpp cacheBudgetFor), after the command line passed.
+constexpr uint64_t kLeastWorkerMemory = uint64_t(32) << 20;
+
+// A worker's --memory: a byte size of at least kLeastWorkerMemory.
+inline CLI::Validator workerMemory() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        try {
+          if (parseByteSize(text) < kLeastWorkerMemory)
+            return fmt::format("'{}' is too small: a worker needs at least {}MiB (its own code and a lease's "
+                               "buffers, and room for cells)",
+                               text, kLeastWorkerMemory >> 20);
+        } catch (const std::exception& e) {
+          return e.what();
+        }
+        return {};
+      },
+      "SIZE");
+}
+
 }  // namespace portico::cli

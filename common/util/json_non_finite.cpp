@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cctype>
 #include <string_view>
 
@@ -53,6 +54,18 @@ std::optional<std::string> nonFiniteLiteral(const std::string& value) {
   const std::string_view marker(kNonFiniteMarker);
   if (value.rfind(marker, 0) != 0) return std::nullopt;
   return value.substr(marker.size());
+}
+
+std::string describeJsonError(const std::string& text, const nlohmann::json::exception& e) {
+  constexpr int kNumberOverflow = 406;   // nlohmann's out_of_range.406: "number overflow parsing '1e400'"
+  const std::string message = e.what();
+  const size_t open = message.find('\''), close = message.rfind('\'');
+  if (e.id != kNumberOverflow || open == std::string::npos || close <= open) return message;
+  const std::string number = message.substr(open + 1, close - open - 1);
+  const size_t at = text.find(number);
+  if (at == std::string::npos) return fmt::format("the number {} is beyond a double's range", number);
+  const auto line = 1 + std::count(text.begin(), text.begin() + std::ptrdiff_t(at), '\n');
+  return fmt::format("line {}: the number {} is beyond a double's range", line, number);
 }
 
 }  // namespace portico

@@ -7,8 +7,10 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <climits>
 #include <filesystem>
 #include <stdexcept>
+#include <string_view>
 
 namespace portico {
 
@@ -30,6 +32,19 @@ void checkOutputPath(const std::string& path) {
                                             extension.empty() ? std::string("has no image extension")
                                                               : fmt::format("unknown image extension {}", extension)));
   const fs::path parent = output.has_parent_path() ? output.parent_path() : fs::path(".");
+  // Beside the image go OUTPUT.json, each written as a temporary of a longer
+  // name first (".tmp-" + name, OUTPUT.json.tmp): the longest of them must fit.
+  constexpr size_t kLongestSuffix = std::string_view(".json.tmp").size();
+  const long nameMax = ::pathconf(parent.c_str(), _PC_NAME_MAX);
+  const size_t mostName = (nameMax > 0 ? size_t(nameMax) : size_t(NAME_MAX)) - kLongestSuffix;
+  if (output.filename().string().size() > mostName)
+    throw std::invalid_argument(fmt::format("output {}: its name is {} bytes; at most {} here (the file system's "
+                                            "{}, less {} for the files written beside it)",
+                                            path, output.filename().string().size(), mostName,
+                                            nameMax > 0 ? nameMax : long(NAME_MAX), kLongestSuffix));
+  if (path.size() + kLongestSuffix >= PATH_MAX)
+    throw std::invalid_argument(fmt::format("output {}...: the path is {} bytes; at most {}", path.substr(0, 60),
+                                            path.size(), PATH_MAX - 1 - kLongestSuffix));
   if (!fs::is_directory(parent, error))
     throw std::invalid_argument(fmt::format("output {}: directory {} does not exist (create it first)", path,
                                             parent.string()));

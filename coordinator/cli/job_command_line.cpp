@@ -26,7 +26,9 @@ void addRender(CLI::App& app, CommandTable& table) {
   renderCommand->add_option("--workers", o->local.workers, "local worker processes")
       ->capture_default_str()
       ->check(wholeNumber(1, 256));
-  renderCommand->add_option("--memory", o->local.memory, "cache budget per worker")->capture_default_str()->check(byteSize());
+  renderCommand->add_option("--memory", o->local.memory, "memory of each worker (its --memory)")
+      ->capture_default_str()
+      ->check(workerMemory());
   renderCommand->add_flag("--keep-logs", o->local.keepLogs, "keep the services' logs and jobs.db");
   renderCommand->add_option("--log-level", o->local.logLevel, "services' log level")->capture_default_str();
   renderCommand->add_option("--keys", o->local.keys, "CURVE keys directory for the local services (`portico keys generate`)")

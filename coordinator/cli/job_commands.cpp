@@ -391,17 +391,17 @@ int runFetchImage(const ConnectOptions& connect, uint64_t job, const std::string
 }
 
 int runShutdown(const ConnectOptions& connect) {
-  // A coordinator that stops answers nothing; one that refuses answers an
-  // Error (which request() throws): wait briefly for the latter.
-  net::CoordinatorClient client(connect.endpoint, connect.keys, std::chrono::seconds(2), net::Role::Operator);
+  // A coordinator that stops answers Shutdown; one that refuses answers an
+  // Error (which request() throws); no answer is no shutdown either.
+  net::CoordinatorClient client(connect.endpoint, connect.keys,
+                                std::chrono::milliseconds(static_cast<int64_t>(connect.timeoutSeconds * 1000)),
+                                net::Role::Operator);
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().setShutdown();
-  try {
-    client.request(message);
-  } catch (const std::exception& e) {
-    if (std::string(e.what()).find("no answer from") == std::string::npos) throw;
-  }
-  std::cout << "shutdown sent to " << connect.endpoint << "\n";
+  const auto reply = client.request(message);
+  if (reply->envelope().which() != wire::Envelope::SHUTDOWN)
+    throw std::runtime_error(fmt::format("coordinator at {} sent an unexpected reply to Shutdown", connect.endpoint));
+  std::cout << "coordinator at " << connect.endpoint << " is stopping\n";
   return 0;
 }
 

@@ -53,6 +53,7 @@ std::string summaryLine(const nlohmann::json& s) {
                                  p.value("photons_total", int64_t{0}), p.value("camera_rays_done", int64_t{0}),
                                  p.value("camera_rays_total", int64_t{0}), s.value("rays_per_s", 0.0) / 1e6);
   if (s.contains("eta_s")) line += fmt::format("  ETA {:.0f} s", s["eta_s"].get<double>());
+  if (s.contains("waiting") && !s["waiting"].empty()) line += "  waiting: " + s["waiting"][0].get<std::string>();
   return line + passesText(s);
 }
 }  // namespace
@@ -85,6 +86,8 @@ std::string describeStatus(const nlohmann::json& s) {
   } else {
     text += summaryLine(s) + "\n";
     if (s.contains("error")) text += fmt::format("error: {}\n", s.value("error", ""));
+    if (s.contains("waiting"))
+      for (const auto& reason : s["waiting"]) text += fmt::format("waiting: {}\n", reason.get<std::string>());
     const auto& photons = s["photons"];
     text += fmt::format("photons: emitted {} deposited {} absorbed {} escaped {} queued {}\n",
                         photons.value("emitted", int64_t{0}), photons.value("deposits", int64_t{0}), photons.value("absorbed", int64_t{0}),
@@ -123,6 +126,8 @@ std::string describeStatus(const nlohmann::json& s) {
       text += fmt::format("  {} {} ({} leases), holds {} cells, recent:", w.value("name", "?"),
                           w.value("idle", false) ? "idle" : "busy", w.value("leases", int64_t{0}), w.value("cells_held", int64_t{0}));
       for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", int64_t{0}));
+      if (const int64_t refused = w.value("refused_results", int64_t{0}); refused > 0)
+        text += fmt::format("; {} of its Results refused", refused);
       text += "\n";
     }
   }
@@ -154,14 +159,22 @@ void ProgressDisplay::update(const nlohmann::json& s) {
 }
 
 void ProgressDisplay::finish(const nlohmann::json& s) {
-  if (quiet_) return;
-  if (terminal_) std::fprintf(stderr, "\n");
+  if (terminal_ && !quiet_) std::fprintf(stderr, "\n");
   const std::string state = s.value("state", "?");
+  const std::string error = s.value("error", "");
+  const int64_t job = s.value("job", int64_t{0});
+  // elapsed_s of an ended job: from its submit to its end.
+  if (state == "done" && error.empty()) {
+    if (!quiet_)
+      std::cerr << fmt::format("job {} done in {:.1f} s: {}{}\n", job, s.value("elapsed_s", 0.0),
+                               s["settings"].value("output", ""), passesText(s));
+    return;
+  }
+  // What makes the command fail is said even with --quiet.
   if (state == "done")
-    std::cerr << fmt::format("job {} done in {:.1f} s: {}{}\n", s.value("job", int64_t{0}), s.value("elapsed_s", 0.0),
-                             s["settings"].value("output", ""), passesText(s));
+    std::cerr << fmt::format("job {} done in {:.1f} s, but {}\n", job, s.value("elapsed_s", 0.0), error);
   else
-    std::cerr << fmt::format("job {} {}: {}\n", s.value("job", int64_t{0}), state, s.value("error", ""));
+    std::cerr << fmt::format("job {} {}: {}\n", job, state, error);
 }
 
 }  // namespace portico::cli

@@ -140,10 +140,13 @@ std::vector<View> readViewList(const std::string& path) {
   if (!in) throw std::invalid_argument(fmt::format("{}: cannot be read", path));
   const std::string text(std::istreambuf_iterator<char>(in), {});
   nlohmann::json document;
+  const std::string marked = markNonFiniteLiterals(text);
   try {
-    document = nlohmann::json::parse(markNonFiniteLiterals(text));
+    document = nlohmann::json::parse(marked);
   } catch (const nlohmann::json::parse_error& e) {
     throw std::invalid_argument(fmt::format("{}: not JSON (byte {})", path, e.byte));
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument(fmt::format("{}: not JSON: {}", path, describeJsonError(marked, e)));
   }
   return parseViewList(document, path);
 }

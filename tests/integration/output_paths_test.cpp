@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <filesystem>
+#include <tuple>
 
 #include "tests/integration/service_harness.h"
 
@@ -22,7 +23,9 @@ TEST_F(Outputs, BadPathsAreRefusedAtSubmitNamingTheProblemAndNothingIsCreated) {
       {dir / "missing" / "y.png", "directory " + (dir / "missing").string() + " does not exist"},
       {dir / "no-extension", "has no image extension"},
       {dir / "image.bmpx", "unknown image extension .bmpx"},
-      {dir, "is a directory"}};
+      {dir, "is a directory"},
+      // Longer than a file name may be with OUTPUT.json.tmp beside it (it used to fail only at writing).
+      {dir / (std::string(300, 'a') + ".png"), "its name is 304 bytes"}};
   int index = 0;
   for (const auto& [output, expected] : cases) {
     const std::string name = "submit-" + std::to_string(index++);
@@ -44,6 +47,24 @@ TEST_F(Outputs, BadPathsAreRefusedAtSubmitNamingTheProblemAndNothingIsCreated) {
         << e.what();
   }
   EXPECT_FALSE(fs::exists(dir / "missing"));
+  try {
+    cluster.submit(store_, dir / (std::string(300, 'a') + ".exr"), 2000, 1);
+    ADD_FAILURE() << "the coordinator accepted an output name of 304 bytes";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("its name is 304 bytes"), std::string::npos) << e.what();
+  }
+  // Relative paths would be read against the coordinator's working
+  // directory: a Submit names absolute ones (the client resolves them).
+  for (const auto& [store, output, what] :
+       {std::tuple<fs::path, fs::path, std::string>{"demo", dir / "y.exr", "scene store 'demo' is a relative path"},
+        {store_, "y.exr", "output 'y.exr' is a relative path"}}) {
+    try {
+      cluster.submit(store, output, 2000, 1);
+      ADD_FAILURE() << "the coordinator accepted a relative path: " << what;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  }
   EXPECT_EQ(cluster.status(0)["jobs"].size(), 0u);
 }
 
@@ -95,6 +116,10 @@ TEST_F(Outputs, AnImageThatCouldNotBeWrittenIsKeptAndFetchedWithTheSameBits) {
   captureOutput({kBin + "portico", "wait", "--coordinator", cluster.endpoint(), std::to_string(job), "--quiet"}, dir,
                 "wait", &code);
   EXPECT_EQ(code, 1) << readFile(dir / "wait.log");   // done, but the image the user asked for is not there
+  // ... and it says why, even with --quiet, not only "done".
+  EXPECT_NE(readFile(dir / "wait.log").find("done in"), std::string::npos) << readFile(dir / "wait.log");
+  EXPECT_NE(readFile(dir / "wait.log").find("but the image could not be written"), std::string::npos)
+      << readFile(dir / "wait.log");
   captureOutput({kBin + "portico", "fetch-image", "--coordinator", cluster.endpoint(), std::to_string(job), "-o",
                  (dir / "fetched.exr").string()},
                 dir, "fetch", &code);

@@ -360,6 +360,37 @@ TEST_F(Resilience, AStoreThatVanishesForAWhileDoesNotFailTheJob) {
   expectSameAsReference(dir / "image.exr");
 }
 
+// A store deleted for good: the job's status says so from the first
+// heartbeat on, and the job fails after --store-gone-timeout with that
+// message, instead of waiting for ever with idle workers and a growing ETA.
+TEST_F(Resilience, AJobWhoseStoreIsGoneSaysWhyItWaitsAndFailsAfterTheTimeout) {
+  const fs::path dir = dir_ / "store-gone";
+  fs::create_directories(dir);
+  fs::copy(store_, dir / "store", fs::copy_options::recursive);
+  const fs::path store = fs::canonical(dir / "store");
+  ClusterOptions options;
+  options.coordinatorExtra = {"--store-gone-timeout", "4"};
+  LocalCluster cluster(dir, 0, {}, options);
+  const uint64_t job = cluster.submit(store, dir / "image.exr", kPhotons, 1);
+  fs::remove_all(store);
+  cluster.addWorker({});
+  nlohmann::json status;
+  ASSERT_TRUE(waitUntil(
+      [&] {
+        status = cluster.status(job);
+        return status.contains("waiting") && status["waiting"].dump().find("store cannot be read since") != std::string::npos;
+      },
+      std::chrono::seconds(10)))
+      << status.dump(2) << readFile(dir / "coordinator.log");
+  EXPECT_NE(status["waiting"].dump().find(store.string() + "/scene.db"), std::string::npos) << status.dump(2);
+  EXPECT_FALSE(status.contains("eta_s")) << status.dump(2);
+  status = cluster.wait(job);
+  ASSERT_EQ(status.value("state", ""), "failed") << status.dump(2);
+  const std::string error = status.value("error", "");
+  EXPECT_NE(error.find("store " + store.string() + " cannot be read since"), std::string::npos) << error;
+  EXPECT_NE(error.find("--store-gone-timeout"), std::string::npos) << error;
+}
+
 // A real full disk: jobs.db and its files on a 32 MiB tmpfs, filled while
 // a job runs. Writes fail (ENOSPC on the photon and batch files,
 // SQLITE_FULL on the WAL); the coordinator undoes each failed round,
@@ -394,6 +425,18 @@ TEST_F(Resilience, AFullDiskPausesTheJobWhichResumesByItselfWithTheSameBits) {
   std::this_thread::sleep_for(std::chrono::seconds(3));
   const auto during = cluster.status(job);
   EXPECT_EQ(during.value("state", ""), "photons") << during.dump(2);
+  // Its status says why it waits, and gives no ETA that would only grow.
+  ASSERT_TRUE(during.contains("waiting")) << during.dump(2);
+  const std::string waiting = during["waiting"].dump();
+  EXPECT_NE(waiting.find("disk full on " + dir.string()), std::string::npos) << waiting;
+  EXPECT_NE(waiting.find("rounds undone"), std::string::npos) << waiting;
+  EXPECT_FALSE(during.contains("eta_s")) << during.dump(2);
+  int code = -1;
+  const std::string text = captureOutput({kBin + "portico", "status", "--coordinator", cluster.endpoint(),
+                                          std::to_string(job)},
+                                         dir_, "full-disk-status", &code);
+  EXPECT_EQ(code, 0) << readFile(dir_ / "full-disk-status.log");
+  EXPECT_NE(text.find("waiting: disk full on "), std::string::npos) << text;
   const std::string log = readFile(dir / "coordinator.log");
   size_t lines = 0;
   for (size_t at = log.find("[error]"); at != std::string::npos; at = log.find("[error]", at + 1)) ++lines;

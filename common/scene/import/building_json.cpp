@@ -113,10 +113,11 @@ json parseFile(const std::string& path) {
   if (!in) throw std::runtime_error(fmt::format("{}: cannot be opened", path));
   std::stringstream text;
   text << in.rdbuf();
+  const std::string marked = markNonFiniteLiterals(text.str());
   try {
-    return json::parse(markNonFiniteLiterals(text.str()));
-  } catch (const json::parse_error& e) {
-    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path, e.what()));
+    return json::parse(marked);
+  } catch (const json::exception& e) {
+    throw std::runtime_error(fmt::format("{}: not valid JSON: {}", path, describeJsonError(marked, e)));
   }
 }
 

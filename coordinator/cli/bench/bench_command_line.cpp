@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "common/util/cli_bounds.h"
 #include "coordinator/cli/bench/bench_accel.h"
 #include "coordinator/cli/bench/bench_analyze.h"
 #include "coordinator/cli/bench/bench_calibrate.h"
@@ -88,7 +89,8 @@ void addPipeline(CLI::App& bench, CommandTable& table) {
       ->capture_default_str();
   benchPipelineCommand->add_option("--accel", o->accel, "portico's accelerator spec")->capture_default_str();
   benchPipelineCommand->add_option("--memory", o->memory, "cache budget per portico worker")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(workerMemory());
   benchPipelineCommand->add_option("--runs", o->runs, "runs per mode, interleaved (the median is reported)")
       ->capture_default_str()
       ->check(CLI::Range(1u, 100u));
@@ -123,7 +125,9 @@ void addPaper(CLI::App& bench, CommandTable& table) {
   benchPaperCommand->add_option("--seed", o->seed, "seed of the photon passes")->capture_default_str();
   benchPaperCommand->add_option("--scene-seed", o->sceneSeed, "furnishing seed of the buildings")
       ->capture_default_str();
-  benchPaperCommand->add_option("--memory", o->memory, "cache budget per worker")->capture_default_str();
+  benchPaperCommand->add_option("--memory", o->memory, "cache budget per worker")
+      ->capture_default_str()
+      ->check(workerMemory());
   benchPaperCommand->add_option("--timeout", o->timeoutSeconds,
                                 "seconds a run may take before it is stopped and marked failed (default: the mode's)");
   table.add(benchPaperCommand, [o] { return runBenchPaper(*o); });

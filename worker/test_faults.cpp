@@ -1,0 +1,43 @@
+#include "worker/test_faults.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+namespace portico {
+
+namespace {
+const std::string& testFault() {
+  static const std::string fault = [] {
+    const char* value = std::getenv("PORTICO_TEST_FAULT");
+    const std::string name = value ? value : "";
+    if (!name.empty()) spdlog::warn("PORTICO_TEST_FAULT={}: this worker sends bad Results on purpose", name);
+    return name;
+  }();
+  return fault;
+}
+}  // namespace
+
+void applyTestFault(KernelOutputs& out) {
+  const std::string& fault = testFault();
+  if (fault == "zero-deposits") {
+    for (auto& [cell, records] : out.deposits) std::memset(records.data(), 0, records.size() * sizeof(PhotonRecord));
+    TraceCounters& c = out.counters;
+    c.photonsEmitted = c.photonDeposits = c.photonsAbsorbed = c.photonsEscaped = c.photonCrossings = c.photonCopies = 0;
+  } else if (fault == "drop-crossings") {
+    out.crossings.clear();
+  }
+}
+
+void applyTestFault(wire::Result::Builder result) {
+  if (testFault() != "negative-film") return;
+  for (auto pixel : result.getFilm()) {
+    pixel.setR(-1 - pixel.getR());
+    pixel.setG(-1 - pixel.getG());
+    pixel.setB(-1 - pixel.getB());
+  }
+}
+
+}  // namespace portico

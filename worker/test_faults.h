@@ -1,0 +1,22 @@
+// A test hook, not a feature: PORTICO_TEST_FAULT, read by the worker alone,
+// makes it send the bad Results the coordinator must refuse
+// (coordinator/result_check.h), so that the integration tests check that
+// refusal with real worker processes instead of hand-forged messages.
+//   zero-deposits   every deposit record zeroed (their CRCs still right) and
+//                   the photon counters zero: a worker that traced nothing
+//   drop-crossings  rays handed on to other cells left out, counters honest
+//   negative-film   every film value negated
+// Unset (always, outside tests): nothing changes.
+#pragma once
+
+#include "common/transport/cell_kernel.h"
+#include "proto/wire.capnp.h"
+
+namespace portico {
+
+// Before the Result is encoded (deposits, crossings, counters).
+void applyTestFault(KernelOutputs& out);
+// After (film values).
+void applyTestFault(wire::Result::Builder result);
+
+}  // namespace portico
