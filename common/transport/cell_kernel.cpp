@@ -755,6 +755,10 @@ void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3&
   const LightChoice choice = lightSampler_->choose(point, normal, choiceNumber);
   if (choice.probability <= 0) return;
   const AreaLight& light = lights_[choice.light];
+  if (light.isPoint()) {
+    samplePointLight(ray, point, normal, brdf, light, choice.probability * float(samples), out);
+    return;
+  }
   const Vec3 target = light.pointAt(onLight.u, onLight.v);
   const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
   const Vec3 toLight = target - origin;
@@ -770,6 +774,23 @@ void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3&
   const float geometry = cosSurface * cosLight * light.area() / distance2;
   addShadowRay(ray, origin, direction, distance,
                ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), sky, out);
+}
+
+void CellKernel::samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
+                                  const AreaLight& light, float probability, KernelOutputs& out) {
+  // Illuminance from a point: E = I(direction) cos / d^2, no area to sample.
+  const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
+  const Vec3 toLight = light.corner - origin;
+  const float distance2 = dot(toLight, toLight);
+  if (!(distance2 > 0)) return;
+  const float distance = std::sqrt(distance2);
+  const Vec3 direction = toLight / distance;
+  const float cosSurface = dot(normal, direction);
+  if (cosSurface <= 0) return;
+  const Vec3 intensity = light.intensityToward(-direction);
+  if (!(maxComponent(intensity) > 0)) return;
+  addShadowRay(ray, origin, direction, distance, ray.weight * brdf * intensity * (cosSurface / (distance2 * probability)),
+               false, out);
 }
 
 void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float u,

@@ -139,6 +139,10 @@ class CellKernel {
   // light is divided by `samples`.
   void sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float choice,
                    const PatternPoint& onLight, uint32_t samples, KernelOutputs& out);
+  // The shadow ray to point luminaire `light`, chosen with `probability`
+  // (times the samples its light is divided by).
+  void samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
+                        const AreaLight& light, float probability, KernelOutputs& out);
   // (u, v): the point on the sun's disc.
   void sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float u, float v,
                  KernelOutputs& out);

@@ -15,6 +15,10 @@ std::vector<uint32_t> LightSampler::allLights(const std::vector<AreaLight>& ligh
 
 namespace {
 
+// A point luminaire's weight stops growing this near it (metres): a point
+// almost at the lamp does not take every sample.
+constexpr double kNearestPointLight = 0.01;
+
 // The cells within `hops` portals of `cell` (itself included), breadth first
 // over the store's neighbour index: a tower's 35 K portals are not looked at
 // per lease.
@@ -70,6 +74,7 @@ LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uin
       for (int k = 0; k < c.cornerCount; ++k) c.reach = std::max(c.reach, length(c.corners[k] - c.center));
     }
     c.luminousPower = luminance(light.power());
+    if (light.isPoint()) c.point = &light;
     prepared_.push_back(c);
   }
 }
@@ -81,6 +86,16 @@ LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u)
   for (size_t i = 0; i < prepared_.size(); ++i) {
     const Candidate& light = prepared_[i];
     const Vec3 toPoint = point - light.center;
+    if (light.point) {
+      // Its light reaches the side of the point's tangent plane it lies on.
+      const float d2 = dot(toPoint, toPoint);
+      if (dot(normal, toPoint) < 0 && d2 > 0) {
+        const float intensity = luminance(light.point->intensityToward(toPoint / std::sqrt(d2)));
+        total += intensity / std::max(double(d2), kNearestPointLight * kNearestPointLight);
+      }
+      cumulative[i] = total;
+      continue;
+    }
     // A point behind the light's plane sees only its dark back.
     const bool lightFacesPoint = dot(light.normal, toPoint) > 0;
     bool pointFacesLight = false;   // any part of the light above the point's tangent plane

@@ -3,7 +3,8 @@
 // walls hide nearly all of them from any point). Weights follow each
 // light's power over its squared distance (zero for lights facing away), so
 // near, bright, visible-side lights get most samples; every candidate light
-// that can contribute keeps a nonzero probability.
+// that can contribute keeps a nonzero probability. A point luminaire weighs
+// its intensity towards the point over the squared distance.
 #pragma once
 
 #include <cstdint>
@@ -21,7 +22,8 @@ struct LightChoice {
 
 class LightSampler {
  public:
-  // Samples among `candidates` (light ids).
+  // Samples among `candidates` (light ids). `lights` must outlive the
+  // sampler (its point luminaires are read from it).
   LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates);
   static std::vector<uint32_t> allLights(const std::vector<AreaLight>& lights);
   // The lights of cells within `hops` portals of `cell` (breadth first over
@@ -45,6 +47,8 @@ class LightSampler {
     int cornerCount = 4;
     float reach = 0;       // half the diagonal (parallelogram), farthest corner (triangle)
     float luminousPower = 0;
+    // A point luminaire (weighed by its intensity towards the point); null for area lights.
+    const AreaLight* point = nullptr;
   };
   std::vector<uint32_t> candidates_;
   std::vector<Candidate> prepared_;   // one per candidate, in the same order

@@ -23,10 +23,26 @@ namespace portico {
 // Photon `path` leaving `light` (whose normal() is lightNormal): from a
 // uniform point of the light, moved just off it, in a cosine-distributed
 // direction, carrying `power` (the light's power over its photon count).
+//
+// A point luminaire's photon leaves its point in a direction drawn from its
+// candela distribution (LuminousIntensity::sample, a cell by the light's two
+// numbers, a direction within it by the direction's), so every photon
+// carries the same power and their directions follow the intensity.
 inline RayState emitPhoton(const AreaLight& light, const Vec3& lightNormal, const Vec3& power, uint64_t seed,
                            uint64_t path) {
   const float u = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightU);
   const float v = randomUniform(seed, RandomStream::Photon, path, 0, dim::LightV);
+  if (light.isPoint()) {
+    const Vec3 local = light.intensity->sample(u, v, randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionU),
+                                               randomUniform(seed, RandomStream::Photon, path, 0, dim::DirectionV));
+    RayState photon;
+    photon.kind = RayKind::Photon;
+    photon.pathId = path;
+    photon.origin = light.corner;
+    photon.direction = normalize(light.fromLuminaire(local));
+    photon.weight = power;
+    return photon;
+  }
   const Vec3 point = light.pointAt(u, v);
   RayState photon;
   photon.kind = RayKind::Photon;

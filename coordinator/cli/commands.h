@@ -43,6 +43,9 @@ struct ScenePlanOptions {
   int panelSize = 800;    // pixels along the longer side of a floor's panel
 };
 int runScenePlan(const std::string& store, const ScenePlanOptions& options);
+// `portico scene ies FILE...`: each photometric file's standard, grid and
+// total lumens as portico reads it (docs/photometric-lights.md).
+int runSceneIes(const std::vector<std::string>& files);
 
 struct LocalRunOptions {
   uint32_t workers = 2;

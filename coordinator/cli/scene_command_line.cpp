@@ -1,4 +1,4 @@
-// The options and arguments of `portico scene generate|import|info|export|plan|grid`.
+// The options and arguments of `portico scene generate|import|info|export|plan|grid|ies`.
 #include <CLI/CLI.hpp>
 
 #include <memory>
@@ -142,6 +142,13 @@ void addGrid(CLI::App& scene, CommandTable& table) {
 
 }  // namespace
 
+void addIes(CLI::App& scene, CommandTable& table) {
+  auto files = std::make_shared<std::vector<std::string>>();
+  auto* ies = scene.add_subcommand("ies", "read IES LM-63 photometric files and print each one's total lumens");
+  ies->add_option("FILE", *files, "IES files (.ies)")->required();
+  table.add(ies, [files] { return runSceneIes(*files); });
+}
+
 void addSceneCommands(CLI::App& app, CommandTable& table) {
   auto* scene = app.add_subcommand("scene", "create and inspect scene stores");
   scene->require_subcommand(1);
@@ -151,6 +158,7 @@ void addSceneCommands(CLI::App& app, CommandTable& table) {
   addExport(*scene, table);
   addPlan(*scene, table);
   addGrid(*scene, table);
+  addIes(*scene, table);
 }
 
 }  // namespace portico::cli

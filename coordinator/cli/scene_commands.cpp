@@ -9,6 +9,8 @@
 #include <iostream>
 #include <optional>
 
+#include "common/photometry/ies_file.h"
+#include "common/photometry/luminous_intensity.h"
 #include "common/scene/generator/building_generator.h"
 #include "common/scene/import/building_importer.h"
 #include "common/scene/generator/demo_generator.h"
@@ -42,7 +44,36 @@ int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, 
 
 namespace {
 constexpr size_t kObjectsWorthProgress = 1000;
+
+std::string horizontalSymmetry(const CandelaGrid& grid) {
+  if (grid.horizontal.size() == 1) return "the same all around";
+  if (grid.horizontal.front() == 90.0) return "mirrored across C90-C270";
+  if (grid.horizontal.back() == 90.0) return "four mirrored quadrants";
+  if (grid.horizontal.back() == 180.0) return "mirrored across C0-C180";
+  return "no symmetry";
+}
 }  // namespace
+
+int runSceneIes(const std::vector<std::string>& files) {
+  int status = 0;
+  for (const std::string& file : files) {
+    try {
+      const IesPhotometry ies = readIesFile(file);
+      const LuminousIntensity intensity(ies.grid, file);
+      const double peak = *std::max_element(ies.grid.candela.begin(), ies.grid.candela.end());
+      std::cout << fmt::format(
+          "{}: {}, {} vertical x {} horizontal angles ({}), peak {:.1f} cd, {:.2f} lm; lamps: {}\n", file,
+          ies.standard, ies.grid.vertical.size(), ies.grid.horizontal.size(), horizontalSymmetry(ies.grid), peak,
+          intensity.lumens(),
+          ies.ratedLumens() < 0 ? std::string("absolute photometry")
+                                : fmt::format("{} x {} lm rated", ies.lampCount, ies.lumensPerLamp));
+    } catch (const std::runtime_error& e) {
+      std::cerr << "portico: " << e.what() << "\n";
+      status = 1;
+    }
+  }
+  return status;
+}
 
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,
                    const IfcOptions& ifc) {

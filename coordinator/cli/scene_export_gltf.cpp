@@ -126,7 +126,7 @@ json sceneExtras(const SceneStore& store) {
                        {"polygon", polygon}});
   }
   for (const AreaLight& light : store.lights())
-    lights.push_back({{"shape", light.isTriangle() ? "triangle" : "parallelogram"},
+    lights.push_back({{"shape", light.isPoint() ? "point" : light.isTriangle() ? "triangle" : "parallelogram"},
                       {"cell", store.cells()[light.cell].name},
                       {"corner", vec3(light.corner)},
                       {"edge1", vec3(light.edge1)},

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/job/sun_time.h"
+#include "common/photometry/lamp_colour.h"
 #include "common/scene/import/quad_light.h"
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/scene_store.h"
@@ -253,6 +254,15 @@ ExportSummary exportStoreRadiance(const std::string& directory, const std::strin
   }
   summary.materials = writeMaterials(store, out);
   writeGeometry(store, out, summary);
+  // A point luminaire has no triangles to export; say where it is, so that
+  // ies2rad can make it from the same file.
+  for (const AreaLight& light : store.lights())
+    if (light.isPoint())
+      out.print("# point luminaire {} ({}, {:.1f} lm): position {} {} {}, nadir {} {} {}, C0 {} {} {}: not exported "
+                "(ies2rad makes it from its IES file)\n",
+                light.id, light.intensity->name(), lumensOfPower(light.power()), light.corner.x, light.corner.y,
+                light.corner.z, light.edge1.x, light.edge1.y, light.edge1.z, light.edge2.x, light.edge2.y,
+                light.edge2.z);
   if (daylight.any()) {
     AtomicTextFile sky(skyPath);
     writeSky(daylight, store.directory(), sky.out());

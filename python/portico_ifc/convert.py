@@ -226,8 +226,9 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
         path = os.path.join("meshes", f"lamp-{i:04d}.obj")
         q = np.array(lamp["quad"])
         _write_obj(os.path.join(out_dir, path), [q[[0, 1, 2]], q[[0, 2, 3]]])
+        photometric = {key: lamp[key] for key in ("lumens", "colour", "colour_temperature") if key in lamp}
         objects.append({"obj": path, "name": lamp["name"], "cell": names[lamp["cell"]], "albedo": [0, 0, 0],
-                        "emission": lamp["radiance"]})
+                        **photometric})
 
     def rectangle(p):
         u, v = [a for a in range(3) if a != p.axis]

@@ -111,6 +111,8 @@ class Fixture:
     lo: np.ndarray
     hi: np.ndarray
     watts: float = None
+    lumens: float = None          # luminous flux, lm
+    kelvin: float = None          # colour temperature, K
 
 
 @dataclass
@@ -162,13 +164,28 @@ def _is_light_fixture(product):
     return False
 
 
-def _fixture_watts(product):
+def _fixture_property(product, keys, low=0.0, high=float("inf")):
+    """The first of `keys` in the fixture's property sets (its type's
+    included) that is a number in (low, high]."""
     for pset in ifcopenshell.util.element.get_psets(product).values():
-        for key in ("Wattage", "Power", "TotalWattage"):
+        for key in keys:
             value = pset.get(key)
-            if isinstance(value, (int, float)) and value > 0:
+            if isinstance(value, (int, float)) and low < value <= high:
                 return float(value)
     return None
+
+
+def _fixture_watts(product):
+    return _fixture_property(product, ("Wattage", "Power", "TotalWattage"))
+
+
+def _fixture_lumens(product):
+    return _fixture_property(product, ("LuminousFlux", "TotalLuminousFlux"))
+
+
+def _fixture_kelvin(product):
+    # The importer accepts 1667-25000 K (docs/photometric-lights.md).
+    return _fixture_property(product, ("ColourTemperature", "ColorTemperature"), 1667.0, 25000.0)
 
 
 def _opening_of(product):
@@ -374,7 +391,8 @@ def read_ifc(path, glazing=True):
             continue
         if product.id() in fixtures:
             lo, hi = mesh.bounds()
-            result.fixtures.append(Fixture(name, lo, hi, _fixture_watts(product)))
+            result.fixtures.append(Fixture(name, lo, hi, _fixture_watts(product), _fixture_lumens(product),
+                                           _fixture_kelvin(product)))
         of_triangle = _triangle_materials(geometry, materials, len(triangles))
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))

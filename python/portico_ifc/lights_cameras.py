@@ -1,12 +1,15 @@
 """Lamps and cameras for the spaces of an IFC model.
 
-Lamps: one quad per IfcLightFixture (IFC2x3: IfcFlowTerminal typed as a
-light fixture), under the fixture, with the fixture's wattage where its
-property sets give one (FIXTURE_WATTS otherwise); or, where the model has
+Lamps, given to the importer in lumens (docs/photometric-lights.md): one
+quad per IfcLightFixture (IFC2x3: IfcFlowTerminal typed as a light
+fixture), under the fixture, with the luminous flux and colour temperature
+its property sets give, else its wattage times FIXTURE_EFFICACY (lm/W),
+else FIXTURE_LUMENS, at FIXTURE_KELVIN by default; or, where the model has
 none (or with --lights panels), one ceiling panel per space, centred over
-the space's largest cell, of area PANEL_FRACTION of the space's floor area.
-Every lamp emits downwards with PANEL_RADIANCE (the generated buildings'
-ceiling panels), unless a wattage sets the radiance: L = P / (pi A).
+the space's largest cell, of area PANEL_FRACTION of the space's floor area,
+emitting PANEL_LUMENS_PER_M2 per m2 of that floor in PANEL_COLOUR (the
+generated buildings' ceiling panels' colour and, at 4 % of the floor,
+their radiance). Every lamp emits downwards.
 
 Cameras: one per space, at eye height over the centre of its largest cell,
 looking across the space towards the far corner of its box.
@@ -19,8 +22,11 @@ import numpy as np
 from .solid_queries import first_hit_along, inside_mesh
 
 PANEL_FRACTION = 0.04
-PANEL_RADIANCE = (12.0, 11.0, 9.5)
-FIXTURE_WATTS = 60.0
+PANEL_COLOUR = (12.0, 11.0, 9.5)
+PANEL_LUMENS_PER_M2 = 250.0
+FIXTURE_EFFICACY = 100.0      # lm/W of an LED luminaire
+FIXTURE_LUMENS = 3000.0
+FIXTURE_KELVIN = 4000.0
 EYE_HEIGHT = 1.6
 BELOW_CEILING = 0.05
 
@@ -68,7 +74,7 @@ def space_panels(spaces, cells):
                       for sx in (-1, 0, 1) for sz in (-1, 0, 1))
         y = min(ceiling, cell.hi[1]) - BELOW_CEILING
         lamps.append({"name": f"lamp {space.name}", "cell": c, "quad": _quad_down(cx, y, cz, half_x, half_z),
-                      "radiance": list(PANEL_RADIANCE)})
+                      "lumens": PANEL_LUMENS_PER_M2 * max(floor_area(space), 1.0), "colour": list(PANEL_COLOUR)})
     return lamps
 
 
@@ -83,11 +89,9 @@ def fixture_lamps(fixtures, cells, cell_of_point):
         cell = cells[c]
         half_x = max(0.05, min((fixture.hi[0] - fixture.lo[0]) / 2, cx - cell.lo[0], cell.hi[0] - cx) * 0.95)
         half_z = max(0.05, min((fixture.hi[2] - fixture.lo[2]) / 2, cz - cell.lo[2], cell.hi[2] - cz) * 0.95)
-        area = 4 * half_x * half_z
-        watts = fixture.watts or FIXTURE_WATTS
-        radiance = watts / (math.pi * area) / 3
+        lumens = fixture.lumens or (fixture.watts * FIXTURE_EFFICACY if fixture.watts else FIXTURE_LUMENS)
         lamps.append({"name": f"fixture {fixture.name}", "cell": c, "quad": _quad_down(cx, y, cz, half_x, half_z),
-                      "radiance": [radiance] * 3})
+                      "lumens": lumens, "colour_temperature": fixture.kelvin or FIXTURE_KELVIN})
     return lamps
 
 

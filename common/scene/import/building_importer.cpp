@@ -14,6 +14,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/photometry/lamp_colour.h"
 #include "common/scene/import/building_json.h"
 #include "common/scene/import/store_scene_reader.h"
 #include "common/scene/import/imported_scene.h"
@@ -165,6 +166,11 @@ void checkObjectsInCells(const ImportedScene& scene, const std::string& path) {
 // An entry of the building.json's "lights": its triangles (an emissive,
 // black material) and the light itself.
 void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& materials, ImportedScene& scene) {
+  if (given.shape == LightShape::Point) {   // a luminaire: no triangles, no camera sees it
+    scene.lights.push_back(ImportedLight{given.label(), cell, Parallelogram{given.corner, given.edge1, given.edge2},
+                                         given.radiance, given.shape, given.intensity});
+    return;
+  }
   ImportedObject object;
   object.label = given.label();
   object.cell = cell;
@@ -181,6 +187,36 @@ void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& mat
   scene.lights.push_back(ImportedLight{given.label(), cell, Parallelogram{given.corner, given.edge1, given.edge2},
                                        given.radiance, given.shape});
   scene.objects.push_back(std::move(object));
+}
+
+// The area of every triangle of a mesh file (m^2).
+double meshArea(const LoadedMeshFile& mesh) {
+  double area = 0;
+  for (const MeshFilePart& part : mesh.parts) {
+    const auto vertex = [&](uint32_t i) {
+      return Vec3(part.positions[3 * i], part.positions[3 * i + 1], part.positions[3 * i + 2]);
+    };
+    for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
+      const Vec3 a = vertex(part.indices[t]), b = vertex(part.indices[t + 1]), c = vertex(part.indices[t + 2]);
+      area += 0.5 * double(length(cross(b - a, c - a)));
+    }
+  }
+  return area;
+}
+
+// An object's emission: "emission" as given, or its "lumens" spread over
+// the mesh file's whole area.
+std::optional<Vec3> objectEmission(const BuildingObject& entry, const LoadedMeshFile& mesh) {
+  if (!entry.lumens) return entry.emission;
+  const double area = meshArea(mesh);
+  if (!(area > 0)) throw std::runtime_error(fmt::format("{}: \"lumens\" needs triangles of nonzero area", entry.label()));
+  return radianceOfLumens(entry.lumens->lumens, entry.lumens->colour, area);
+}
+
+const Bounds3& findCellBounds(const BuildingDescription& building, const std::string& name) {
+  for (const BuildingCell& cell : *building.cells)
+    if (cell.name == name) return cell.bounds;
+  throw std::logic_error("unknown cell " + name);   // readBuildingJson checked every name
 }
 
 // `imageDirectory`: where images embedded in mesh files are written.
@@ -217,6 +253,12 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
     }
     scene.degenerateTrianglesDropped += mesh.degenerateTriangles;
     const uint32_t cell = givenCells ? cellIds.at(entry.cell) : 0;
+    std::optional<Vec3> emission;
+    try {
+      emission = objectEmission(entry, mesh);
+    } catch (const std::runtime_error& e) {
+      fail(e.what());
+    }
     if (entry.glass) {
       ImportedObject object;
       object.label = entry.label();
@@ -227,7 +269,7 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
       scene.objects.push_back(std::move(object));
     } else if (!entry.albedo) {
       try {
-        addPartsWithFileMaterials(mesh, entry.label(), cell, entry.emission, materials, scene);
+        addPartsWithFileMaterials(mesh, entry.label(), cell, emission, materials, scene);
       } catch (const std::runtime_error& e) {
         fail(e.what());
       }
@@ -236,9 +278,9 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
       object.label = entry.label();
       object.cell = cell;
       for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
-      const Vec3 emission = entry.emission.value_or(Vec3(0.0f));
-      object.material = materials.add(entry.name, *entry.albedo, emission, scene.materials);
-      if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
+      const Vec3 radiance = emission.value_or(Vec3(0.0f));
+      object.material = materials.add(entry.name, *entry.albedo, radiance, scene.materials);
+      if (maxComponent(radiance) > 0.0f) addEmitter(object, radiance, scene);
       scene.objects.push_back(std::move(object));
     }
     if (options.onMeshRead) options.onMeshRead(scene.objects.size(), building.objects.size());
@@ -249,6 +291,13 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
 
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
   for (const BuildingCamera& camera : building.cameras) scene.bounds.extend(camera.camera.origin);
+  for (const BuildingLight& light : building.lights) {
+    if (light.shape != LightShape::Point) continue;   // area lights' triangles are objects
+    scene.bounds.extend(light.corner);
+    if (checkCells && !findCellBounds(building, light.cell).contains(light.corner))
+      fail(fmt::format("{}: position {} lies outside the aabb of its cell '{}'", light.label(), formatVec(light.corner),
+                       light.cell));
+  }
   for (const ImportedCell& cell : scene.cells)
     if (!cell.bounds.empty()) scene.bounds.extend(cell.bounds);
   if (!givenCells) scene.cells[0].bounds = padded(scene.bounds);

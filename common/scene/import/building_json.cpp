@@ -23,6 +23,9 @@
 #include <tuple>
 #include <vector>
 
+#include "common/analysis/sensor.h"
+#include "common/photometry/ies_file.h"
+#include "common/photometry/lamp_colour.h"
 #include "common/scene/store/portal_geometry.h"
 #include "common/util/json_non_finite.h"
 
@@ -180,11 +183,58 @@ Vec3 radiance(const Reader& reader, const json& value, const std::string& what) 
   return v;
 }
 
+double readLumens(const Reader& reader, const json& value, const std::string& what) {
+  reader.number(value, what + " lumens");   // refuses anything but a finite number, naming it
+  const double lumens = value.get<double>();
+  if (!(lumens > 0)) reader.fail(fmt::format("{}: lumens = {} must be above 0", what, lumens));
+  return lumens;
+}
+
+// A lamp's colour at luminance Y = 1: "colour_temperature" (kelvin) or
+// "colour" ([r, g, b]), else kDefaultColourTemperature.
+Vec3 readLampColour(const Reader& reader, const json& entry, const std::string& what) {
+  const json* temperature = reader.member(entry, "colour_temperature");
+  const json* colour = reader.member(entry, "colour");
+  if (temperature && colour) reader.fail(what + ": give \"colour_temperature\" or \"colour\", not both");
+  if (colour) {
+    const Vec3 rgb = reader.vec3(*colour, what + " colour");
+    if (std::min({rgb.x, rgb.y, rgb.z}) < 0.0f || !(maxComponent(rgb) > 0.0f))
+      reader.fail(fmt::format("{}: colour [{}, {}, {}] must not be negative or black", what, rgb.x, rgb.y, rgb.z));
+    return unitLuminanceColour(rgb);
+  }
+  double kelvin = kDefaultColourTemperature;
+  if (temperature) {
+    reader.number(*temperature, what + " colour_temperature");
+    kelvin = temperature->get<double>();
+    if (const std::string problem = colourTemperatureProblem(kelvin); !problem.empty())
+      reader.fail(fmt::format("{}: {}", what, problem));
+  }
+  return colourOfTemperature(kelvin);
+}
+
+// "lumens" and its colour, when the entry gives them: "colour_temperature"
+// (kelvin) or "colour" ([r, g, b]), else kDefaultColourTemperature.
+std::optional<LampOutput> readLampOutput(const Reader& reader, const json& entry, const std::string& what) {
+  const json* lumens = reader.member(entry, "lumens");
+  const json* temperature = reader.member(entry, "colour_temperature");
+  const json* colour = reader.member(entry, "colour");
+  if (!lumens) {
+    if (temperature || colour)
+      reader.fail(fmt::format("{}: \"{}\" needs \"lumens\" (the lamp's luminous flux)", what,
+                              temperature ? "colour_temperature" : "colour"));
+    return std::nullopt;
+  }
+  LampOutput output;
+  output.lumens = readLumens(reader, *lumens, what);
+  output.colour = readLampColour(reader, entry, what);
+  return output;
+}
+
 // An object's "glass": {"transmittance": [r, g, b], "ior": n}; not with an albedo or emission.
 BuildingObject::Glass readGlass(const Reader& reader, const json& entry, const std::string& what,
                                 const BuildingObject& object) {
-  if (object.albedo || object.emission)
-    reader.fail(what + ": \"glass\" is a material of its own; give no \"albedo\" or \"emission\" with it");
+  if (object.albedo || object.emission || object.lumens)
+    reader.fail(what + ": \"glass\" is a material of its own; give no \"albedo\", \"emission\" or \"lumens\" with it");
   if (!entry.is_object()) reader.fail(what + ": \"glass\" must be an object with \"transmittance\" (and \"ior\")");
   reader.requireKnownKeys(entry, what + " glass", {"transmittance", "ior"});
   BuildingObject::Glass glass;
@@ -224,7 +274,8 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
       object.name = reader.string(*name, what + ".name");
     if (object.name.empty()) object.name = meshPath.stem().string();
     what = object.label();
-    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission", "glass"});
+    reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission", "lumens",
+                                          "colour_temperature", "colour", "glass"});
 
     if (const json* cell = reader.member(entry, "cell")) {
       object.cell = reader.string(*cell, what + ".cell");
@@ -243,24 +294,68 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
     }
     const json* emission = reader.member(entry, "emission");
     if (emission && !emission->is_null()) object.emission = radiance(reader, *emission, what + " emission");
+    object.lumens = readLampOutput(reader, entry, what);
+    if (object.lumens && emission && !emission->is_null())
+      reader.fail(what + ": give \"emission\" (radiance) or \"lumens\", not both");
     if (const json* glass = reader.member(entry, "glass")) object.glass = readGlass(reader, *glass, what, object);
     objects.push_back(std::move(object));
   }
   return objects;
 }
 
-// One entry of "lights": {"quad": {"corner", "edge1", "edge2"}} or
-// {"triangle": [p0, p1, p2]}, with "radiance" and (given cells) "cell".
-BuildingLight readLight(const Reader& reader, const json& entry, size_t index,
-                        const std::optional<std::vector<BuildingCell>>& cells) {
-  BuildingLight light;
-  light.index = index;
-  std::string what = fmt::format("lights[{}]", index);
-  if (!entry.is_object()) reader.fail(what + " must be an object");
-  light.name = fmt::format("light-{}", index);
-  if (const json* name = reader.member(entry, "name")) light.name = reader.string(*name, what + ".name");
-  what = light.label();
-  reader.requireKnownKeys(entry, what, {"name", "cell", "quad", "triangle", "radiance"});
+// Photometric files already read, by resolved path.
+using LuminaireFiles = std::map<std::string, std::shared_ptr<const LuminousIntensity>>;
+
+// A unit vector from `value`, named `what` in messages.
+Vec3 unitVector(const Reader& reader, const json& value, const std::string& what) {
+  const Vec3 v = reader.vec3(value, what);
+  if (!(length(v) > 0.0f)) reader.fail(what + " is a zero vector; it gives a direction");
+  return normalize(v);
+}
+
+// An "ies" light: a point luminaire at "position", its nadir along "aim"
+// (default straight down) and its C0 direction along "c0" (default +x, or
+// +z when the aim is near the x axis; made perpendicular to the aim).
+void readLuminaire(const Reader& reader, const json& entry, const json& ies, const std::string& what,
+                   const fs::path& baseDirectory, LuminaireFiles& distributions, BuildingLight& light) {
+  reader.requireKnownKeys(entry, what, {"name", "cell", "ies", "position", "aim", "c0", "lumens", "colour_temperature",
+                                        "colour"});
+  const std::string file = reader.string(ies, what + ".ies");
+  if (file.empty()) reader.fail(what + ": the ies file name is empty");
+  const fs::path iesPath(file);
+  light.iesPath = (iesPath.is_absolute() ? iesPath : baseDirectory / iesPath).lexically_normal().string();
+  std::shared_ptr<const LuminousIntensity>& intensity = distributions[light.iesPath];
+  if (!intensity) {
+    try {
+      intensity = std::make_shared<const LuminousIntensity>(readIesFile(light.iesPath).grid,
+                                                            fs::path(light.iesPath).filename().string());
+    } catch (const std::runtime_error& e) {
+      reader.fail(fmt::format("{}: {}", what, e.what()));
+    }
+  }
+  if (!(intensity->lumens() > 0)) reader.fail(fmt::format("{}: {} emits no light (every candela value is 0)", what, file));
+  light.intensity = intensity;
+  light.shape = LightShape::Point;
+  light.corner = reader.vec3(reader.required(entry, "position", what), what + " position");
+  const json* aimValue = reader.member(entry, "aim");
+  const Vec3 aim = aimValue ? unitVector(reader, *aimValue, what + " aim") : Vec3(0, -1, 0);
+  Vec3 c0 = std::abs(aim.x) < 0.9f ? Vec3(1, 0, 0) : Vec3(0, 0, 1);
+  if (const json* c0Value = reader.member(entry, "c0")) c0 = unitVector(reader, *c0Value, what + " c0");
+  const Vec3 across = c0 - aim * dot(aim, c0);
+  if (!(length(across) > 1e-3f)) reader.fail(what + ": c0 is parallel to aim; it must point across it");
+  light.edge1 = aim;
+  light.edge2 = normalize(across);
+  const Vec3 colour = readLampColour(reader, entry, what);
+  // Its own candela values, or scaled to give "lumens".
+  const json* lumens = reader.member(entry, "lumens");
+  const double scale = lumens ? readLumens(reader, *lumens, what) / intensity->lumens() : 1.0;
+  light.radiance = colour * float(scale / kLuminousEfficacy);
+}
+
+// A "quad" or "triangle" light with "radiance" or "lumens".
+void readAreaLight(const Reader& reader, const json& entry, const std::string& what, BuildingLight& light) {
+  reader.requireKnownKeys(entry, what, {"name", "cell", "quad", "triangle", "radiance", "lumens", "colour_temperature",
+                                        "colour"});
   const json* quad = reader.member(entry, "quad");
   const json* triangle = reader.member(entry, "triangle");
   if ((quad != nullptr) == (triangle != nullptr))
@@ -285,8 +380,40 @@ BuildingLight readLight(const Reader& reader, const json& entry, size_t index,
   if (!(length(cross(light.edge1, light.edge2)) > 0.0f))
     reader.fail(fmt::format("{}: the {} has zero area (its edges are parallel or zero)", what,
                             quad ? "quad" : "triangle"));
-  light.radiance = radiance(reader, reader.required(entry, "radiance", what), what + " radiance");
+  const std::optional<LampOutput> lumens = readLampOutput(reader, entry, what);
+  const json* given = reader.member(entry, "radiance");
+  if (lumens && given) reader.fail(what + ": give \"radiance\" or \"lumens\", not both");
+  if (!lumens && !given) reader.fail(what + " has no \"radiance\" (W m^-2 sr^-1 per channel) or \"lumens\"");
+  if (lumens) {
+    AreaLight shape;   // its area, as the store will compute the light's power
+    shape.shape = light.shape;
+    shape.edge1 = light.edge1;
+    shape.edge2 = light.edge2;
+    light.radiance = radianceOfLumens(lumens->lumens, lumens->colour, shape.area());
+  } else {
+    light.radiance = radiance(reader, *given, what + " radiance");
+  }
   if (!(maxComponent(light.radiance) > 0.0f)) reader.fail(what + ": radiance is zero; a light must emit");
+}
+
+// One entry of "lights": {"quad": {"corner", "edge1", "edge2"}} or
+// {"triangle": [p0, p1, p2]}, with "radiance" or "lumens"; or an "ies"
+// luminaire; and (given cells) "cell".
+BuildingLight readLight(const Reader& reader, const json& entry, size_t index,
+                        const std::optional<std::vector<BuildingCell>>& cells, const fs::path& baseDirectory,
+                        LuminaireFiles& distributions) {
+  BuildingLight light;
+  light.index = index;
+  std::string what = fmt::format("lights[{}]", index);
+  if (!entry.is_object()) reader.fail(what + " must be an object");
+  light.name = fmt::format("light-{}", index);
+  if (const json* name = reader.member(entry, "name")) light.name = reader.string(*name, what + ".name");
+  what = light.label();
+  if (const json* ies = reader.member(entry, "ies")) {
+    readLuminaire(reader, entry, *ies, what, baseDirectory, distributions, light);
+  } else {
+    readAreaLight(reader, entry, what, light);
+  }
   if (const json* cell = reader.member(entry, "cell")) {
     light.cell = reader.string(*cell, what + ".cell");
     if (!findCell(cells, light.cell))
@@ -298,10 +425,13 @@ BuildingLight readLight(const Reader& reader, const json& entry, size_t index,
 }
 
 std::vector<BuildingLight> readLights(const Reader& reader, const json& list,
-                                      const std::optional<std::vector<BuildingCell>>& cells) {
+                                      const std::optional<std::vector<BuildingCell>>& cells,
+                                      const fs::path& baseDirectory) {
   if (!list.is_array()) reader.fail("\"lights\" must be an array");
   std::vector<BuildingLight> lights;
-  for (size_t i = 0; i < list.size(); ++i) lights.push_back(readLight(reader, list[i], i, cells));
+  LuminaireFiles distributions;   // each photometric file read once, however many luminaires use it
+  for (size_t i = 0; i < list.size(); ++i)
+    lights.push_back(readLight(reader, list[i], i, cells, baseDirectory, distributions));
   return lights;
 }
 
@@ -448,7 +578,8 @@ BuildingDescription readBuildingJson(const std::string& path) {
   readUnits(reader, root);
   if (const json* cells = reader.member(root, "cells")) building.cells = readCells(reader, *cells);
   building.objects = readObjects(reader, root, fs::path(path).parent_path(), building.cells);
-  if (const json* lights = reader.member(root, "lights")) building.lights = readLights(reader, *lights, building.cells);
+  if (const json* lights = reader.member(root, "lights"))
+    building.lights = readLights(reader, *lights, building.cells, fs::path(path).parent_path());
   if (const json* portals = reader.member(root, "portals"))
     building.portals = readPortals(reader, *portals, building.cells);
   building.cameras = readCameras(reader, root);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,6 +17,13 @@
 
 namespace portico {
 
+// A lamp's output in photometric terms: "lumens" with "colour_temperature"
+// (kelvin) or "colour" ([r, g, b], any scale); neither: 4000 K.
+struct LampOutput {
+  double lumens = 0;
+  Vec3 colour;               // linear Rec. 709, luminance Y = 1
+};
+
 struct BuildingObject {
   size_t index = 0;          // position in "objects"
   std::string name;          // "name", else the mesh file's stem
@@ -24,6 +32,9 @@ struct BuildingObject {
   // Absent: every part of the mesh file takes the file's own material.
   std::optional<Vec3> albedo;
   std::optional<Vec3> emission;   // absent when null or not given
+  // "lumens" instead of "emission": spread uniformly over every triangle of
+  // the mesh file (the importer turns it into a radiance by their area).
+  std::optional<LampOutput> lumens;
   // "glass": thin glass of this tint and index, instead of albedo.
   struct Glass {
     Vec3 transmittance;
@@ -43,7 +54,12 @@ struct BuildingLight {
   std::string cell;          // "cell"; empty when the file has no "cells"
   LightShape shape = LightShape::Parallelogram;
   Vec3 corner, edge1, edge2;
-  Vec3 radiance;
+  Vec3 radiance;             // given, or from "lumens" and the shape's area
+  // "ies": a point luminaire (shape Point; docs/photometric-lights.md):
+  // corner is its "position", edge1 its "aim" (the nadir), edge2 its "c0";
+  // radiance the RGB intensity per candela (W/sr per cd).
+  std::shared_ptr<const LuminousIntensity> intensity;
+  std::string iesPath;       // resolved against the json's directory
   // "lights[2] ('desk lamp')": how messages name the light.
   std::string label() const;
 };

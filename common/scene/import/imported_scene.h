@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -49,6 +50,9 @@ struct ImportedLight {
   Parallelogram shape;
   Vec3 radiance;
   LightShape kind = LightShape::Parallelogram;
+  // A point luminaire's candela distribution (shape: corner = its point,
+  // edge1 its nadir, edge2 its C0 direction; radiance per candela).
+  std::shared_ptr<const LuminousIntensity> intensity;
   // The store's record of it (id left to the writer).
   AreaLight areaLight() const {
     AreaLight light;
@@ -58,6 +62,7 @@ struct ImportedLight {
     light.edge1 = shape.edge1;
     light.edge2 = shape.edge2;
     light.radiance = radiance;
+    light.intensity = intensity;
     return light;
   }
 };

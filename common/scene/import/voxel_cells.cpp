@@ -146,6 +146,12 @@ std::vector<AreaLight> voxelLights(const ImportedLight& light, const VoxelGrid& 
   const Vec3 normal = normalize(cross(shape.edge1, shape.edge2));
   const int axis1 = alignedAxis(shape.edge1), axis2 = alignedAxis(shape.edge2);
   std::vector<AreaLight> lights;
+  if (light.kind == LightShape::Point) {   // in the voxel holding its point
+    AreaLight whole = light.areaLight();
+    whole.cell = grid.locate(whole.corner);
+    lights.push_back(whole);
+    return lights;
+  }
   if (light.kind == LightShape::Triangle || axis1 < 0 || axis2 < 0 || axis1 == axis2) {
     // A triangle, or oblique: whole, in the voxel holding its centre (nudged to the emitting side).
     AreaLight whole = light.areaLight();

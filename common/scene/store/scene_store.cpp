@@ -146,12 +146,47 @@ class CatalogueReader {
       light.edge2 = columnVec3(row, 8);
       light.radiance = columnVec3(row, 11);
       const std::string shape = row.columnText(14);
-      if (shape != "parallelogram" && shape != "triangle")
-        fail(fmt::format("light {}: unknown shape '{}' (parallelogram or triangle)", light.id, shape));
-      light.shape = shape == "triangle" ? LightShape::Triangle : LightShape::Parallelogram;
+      if (shape != "parallelogram" && shape != "triangle" && shape != "point")
+        fail(fmt::format("light {}: unknown shape '{}' (parallelogram, triangle or point)", light.id, shape));
+      light.shape = shape == "triangle" ? LightShape::Triangle
+                    : shape == "point"  ? LightShape::Point
+                                        : LightShape::Parallelogram;
       lights.push_back(light);
     }
+    if (version >= 8) readPointLights(lights);
+    for (const AreaLight& light : lights)
+      if (light.isPoint() && !light.intensity) fail(fmt::format("light {}: a point light without a distribution", light.id));
     return lights;
+  }
+
+  static std::vector<double> columnDoubles(const sql::Statement& row, int column) {
+    const std::span<const uint8_t> blob = row.columnBlob(column);
+    std::vector<double> values(blob.size() / sizeof(double));
+    if (!values.empty()) std::memcpy(values.data(), blob.data(), values.size() * sizeof(double));
+    return values;
+  }
+
+  // Each point luminaire's candela distribution (version 8 on).
+  void readPointLights(std::vector<AreaLight>& lights) {
+    std::vector<std::shared_ptr<const LuminousIntensity>> distributions;
+    sql::Statement& row =
+        db_.prepare("SELECT id, name, vertical, horizontal, candela FROM light_distributions ORDER BY id");
+    while (row.step()) {
+      requireDenseId("light_distributions", row.columnInt(0), distributions.size());
+      CandelaGrid grid{columnDoubles(row, 2), columnDoubles(row, 3), columnDoubles(row, 4)};
+      if (const std::string problem = grid.problem(); !problem.empty())
+        fail(fmt::format("light distribution {} ('{}'): {}", row.columnInt(0), row.columnText(1), problem));
+      distributions.push_back(std::make_shared<const LuminousIntensity>(std::move(grid), row.columnText(1)));
+    }
+    sql::Statement& link = db_.prepare("SELECT light, distribution FROM point_lights ORDER BY light");
+    while (link.step()) {
+      const int64_t light = link.columnInt(0), distribution = link.columnInt(1);
+      if (light < 0 || size_t(light) >= lights.size() || !lights[size_t(light)].isPoint())
+        fail(fmt::format("point_lights: light {} is not a point light", light));
+      if (distribution < 0 || size_t(distribution) >= distributions.size())
+        fail(fmt::format("light {}: unknown light distribution {}", light, distribution));
+      lights[size_t(light)].intensity = distributions[size_t(distribution)];
+    }
   }
 
   // Version 4 on: table cameras, the default first. Before: table camera,

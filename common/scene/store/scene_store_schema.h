@@ -25,7 +25,11 @@ namespace portico::scene_schema {
 //   7: table site (where the building stands: latitude, longitude, north
 //      azimuth; no row when unknown). Versions 1 to 6 are still read,
 //      without a site.
-constexpr int kVersion = 7;
+//   8: shape 'point' (a point luminaire) in lights; tables
+//      light_distributions (a photometric file's candela grid) and
+//      point_lights (which distribution each point luminaire has).
+//      Versions 1 to 7 are still read, without point luminaires.
+constexpr int kVersion = 8;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -35,7 +39,9 @@ constexpr std::string_view kTextureDirectory = "textures";
 // Portal polygons are a BLOB of little-endian float32, xyz per vertex, in
 // order around the polygon: exact (no decimal round trip) and compact. All
 // other coordinates are REAL columns, which hold a float exactly. Camera 0
-// is the store's default camera.
+// is the store's default camera. A light distribution's angles (degrees)
+// and candela values (horizontal-major, CandelaGrid) are BLOBs of
+// little-endian float64.
 constexpr std::string_view kCreateTables = R"sql(
 CREATE TABLE meta(
   key   TEXT PRIMARY KEY,
@@ -74,7 +80,16 @@ CREATE TABLE lights(
   edge1_x REAL NOT NULL, edge1_y REAL NOT NULL, edge1_z REAL NOT NULL,
   edge2_x REAL NOT NULL, edge2_y REAL NOT NULL, edge2_z REAL NOT NULL,
   radiance_r REAL NOT NULL, radiance_g REAL NOT NULL, radiance_b REAL NOT NULL,
-  shape TEXT NOT NULL DEFAULT 'parallelogram' CHECK (shape IN ('parallelogram', 'triangle')));
+  shape TEXT NOT NULL DEFAULT 'parallelogram' CHECK (shape IN ('parallelogram', 'triangle', 'point')));
+CREATE TABLE light_distributions(
+  id INTEGER PRIMARY KEY,
+  name TEXT NOT NULL,
+  vertical BLOB NOT NULL,
+  horizontal BLOB NOT NULL,
+  candela BLOB NOT NULL);
+CREATE TABLE point_lights(
+  light INTEGER PRIMARY KEY REFERENCES lights(id),
+  distribution INTEGER NOT NULL REFERENCES light_distributions(id));
 CREATE TABLE cameras(
   id INTEGER PRIMARY KEY,
   name TEXT NOT NULL UNIQUE,

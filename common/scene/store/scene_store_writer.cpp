@@ -187,7 +187,16 @@ uint32_t SceneStoreWriter::addLight(const AreaLight& light) {
   const std::string what = fmt::format("light {} (cell {})", stored.id, stored.cell);
   if (!isFinite(light.corner) || !isFinite(light.edge1) || !isFinite(light.edge2))
     impl_->fail(fmt::format("{}: corner or edges are not finite", what));
-  if (!(light.area() > 0.0f)) impl_->fail(fmt::format("{}: has zero area (edges are parallel or zero)", what));
+  if (light.isPoint()) {
+    if (!light.intensity || !(light.intensity->lumens() > 0))
+      impl_->fail(fmt::format("{}: a point luminaire needs a candela distribution that emits", what));
+    if (std::abs(length(light.edge1) - 1.0f) > 1e-4f || std::abs(length(light.edge2) - 1.0f) > 1e-4f ||
+        std::abs(dot(light.edge1, light.edge2)) > 1e-4f)
+      impl_->fail(fmt::format("{}: its nadir {} and C0 direction {} must be perpendicular unit vectors", what,
+                              formatVec(light.edge1), formatVec(light.edge2)));
+  } else if (!(light.area() > 0.0f)) {
+    impl_->fail(fmt::format("{}: has zero area (edges are parallel or zero)", what));
+  }
   if (!isFinite(light.radiance) || std::min({light.radiance.x, light.radiance.y, light.radiance.z}) < 0.0f)
     impl_->fail(fmt::format("{}: radiance {} must be finite and non-negative", what, formatVec(light.radiance)));
   impl_->lights.push_back(stored);
@@ -404,8 +413,25 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
       insert.bind(9 + c, double{light.edge2[c]});
       insert.bind(12 + c, double{light.radiance[c]});
     }
-    insert.bind(15, std::string(light.isTriangle() ? "triangle" : "parallelogram"));
+    insert.bind(15, std::string(light.isPoint() ? "point" : light.isTriangle() ? "triangle" : "parallelogram"));
     insert.run();
+  }
+  // Point luminaires: each distinct candela distribution once.
+  std::map<const LuminousIntensity*, int64_t> distributions;
+  for (const AreaLight& light : lights) {
+    if (!light.isPoint()) continue;
+    auto [it, fresh] = distributions.emplace(light.intensity.get(), int64_t(distributions.size()));
+    if (fresh) {
+      const CandelaGrid& grid = light.intensity->grid();
+      db.prepare("INSERT INTO light_distributions VALUES (?, ?, ?, ?, ?)")
+          .bind(1, it->second)
+          .bind(2, light.intensity->name())
+          .bindBlob(3, grid.vertical.data(), grid.vertical.size() * sizeof(double))
+          .bindBlob(4, grid.horizontal.data(), grid.horizontal.size() * sizeof(double))
+          .bindBlob(5, grid.candela.data(), grid.candela.size() * sizeof(double))
+          .run();
+    }
+    db.prepare("INSERT INTO point_lights VALUES (?, ?)").bind(1, int64_t{light.id}).bind(2, it->second).run();
   }
   int64_t cameraId = 0;
   const auto insertCamera = [&](const Camera& c) {

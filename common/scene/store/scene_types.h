@@ -2,10 +2,12 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/math.h"
+#include "common/photometry/luminous_intensity.h"
 
 namespace portico {
 
@@ -32,38 +34,64 @@ struct Material {
   bool glass() const { return maxComponent(transmittance) > 0.0f; }
 };
 
-enum class LightShape : uint8_t { Parallelogram, Triangle };
+enum class LightShape : uint8_t { Parallelogram, Triangle, Point };
 
 // An area light: a parallelogram corner + s*edge1 + t*edge2, s,t in [0,1],
 // or the triangle (corner, corner + edge1, corner + edge2), s + t <= 1.
 // It emits on the side of cross(edge1, edge2). Its triangles are also part
 // of its cell's geometry (with an emissive material), so rays can hit it.
+//
+// Or a point luminaire (LightShape::Point, docs/photometric-lights.md): the
+// candela distribution `intensity` of a photometric file, from the point
+// `corner`; `edge1` is its nadir (unit: vertical angle 0), `edge2` its C0
+// direction (unit, perpendicular to edge1), and `radiance` the RGB
+// intensity per candela (W sr^-1 per channel per cd). It has no triangles:
+// no camera ray meets it.
 struct AreaLight {
   uint32_t id = 0;
   uint32_t cell = 0;
   LightShape shape = LightShape::Parallelogram;
   Vec3 corner, edge1, edge2;
   Vec3 radiance;
+  std::shared_ptr<const LuminousIntensity> intensity;   // a point luminaire's; null for area lights
   bool isTriangle() const { return shape == LightShape::Triangle; }
-  Vec3 normal() const { return normalize(cross(edge1, edge2)); }
-  float area() const { return isTriangle() ? 0.5f * length(cross(edge1, edge2)) : length(cross(edge1, edge2)); }
-  Vec3 power() const { return radiance * (kPi * area()); }   // Phi = pi A L per channel
+  bool isPoint() const { return shape == LightShape::Point; }
+  // The emitting side; a point luminaire's nadir.
+  Vec3 normal() const { return isPoint() ? edge1 : normalize(cross(edge1, edge2)); }
+  float area() const {
+    if (isPoint()) return 0.0f;
+    return isTriangle() ? 0.5f * length(cross(edge1, edge2)) : length(cross(edge1, edge2));
+  }
+  // Phi = pi A L per channel; a point luminaire's: its lumens x intensity per candela.
+  Vec3 power() const { return isPoint() ? radiance * float(intensity->lumens()) : radiance * (kPi * area()); }
   Vec3 center() const {
+    if (isPoint()) return corner;
     return isTriangle() ? corner + (edge1 + edge2) * (1.0f / 3.0f) : corner + (edge1 + edge2) * 0.5f;
   }
+  // A point luminaire's frame: x its C0 direction, y C90 (counter-clockwise
+  // from C0 seen from above, against the nadir), z its nadir.
+  Vec3 luminaireC90() const { return cross(edge2, edge1); }
+  Vec3 toLuminaire(const Vec3& direction) const {
+    return Vec3(dot(direction, edge2), dot(direction, luminaireC90()), dot(direction, edge1));
+  }
+  Vec3 fromLuminaire(const Vec3& local) const { return edge2 * local.x + luminaireC90() * local.y + edge1 * local.z; }
+  // A point luminaire's RGB intensity (W/sr) towards unit `direction`.
+  Vec3 intensityToward(const Vec3& direction) const { return radiance * intensity->candela(toLuminaire(direction)); }
   // A uniformly distributed point for (u, v) uniform in [0,1)^2. A triangle
   // folds the square's far half onto itself (u + v > 1 -> 1 - u, 1 - v), so
   // both shapes use the same two random numbers.
   Vec3 pointAt(float u, float v) const {
+    if (isPoint()) return corner;
     if (isTriangle() && u + v > 1.0f) {
       u = 1.0f - u;
       v = 1.0f - v;
     }
     return corner + edge1 * u + edge2 * v;
   }
-  // Its 3 or 4 corners; returns how many were written.
+  // Its 3 or 4 corners (a point luminaire: 1); returns how many were written.
   int corners(Vec3 (&out)[4]) const {
     out[0] = corner;
+    if (isPoint()) return 1;
     out[1] = corner + edge1;
     out[2] = corner + edge2;
     out[3] = corner + edge1 + edge2;

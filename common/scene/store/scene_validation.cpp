@@ -131,7 +131,8 @@ class Validator {
         problem("{}: {}", what, missingCell(light.cell));
         continue;
       }
-      if (!isFinite(light.corner) || !isFinite(light.edge1) || !isFinite(light.edge2) || !(light.area() > 0.0f)) {
+      if (!isFinite(light.corner) || !isFinite(light.edge1) || !isFinite(light.edge2) ||
+          !(light.isPoint() || light.area() > 0.0f)) {
         problem("{}: corner or edges are not finite, or its area is zero", what);
         continue;
       }

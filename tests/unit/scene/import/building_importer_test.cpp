@@ -15,6 +15,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "common/photometry/lamp_colour.h"
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/import/mesh_loader.h"
 #include "common/scene/import/quad_light.h"
@@ -1066,6 +1067,109 @@ TEST(BuildingImportGlass, GlassWithAnAlbedoOrAboveOneIsRefusedNamingTheObject) {
   EXPECT_NE(error.find("('pane'): \"glass\" is a material of its own"), std::string::npos) << error;
   error = errorFor(R"({"obj": "t.obj", "name": "pane", "glass": {"transmittance": [1.5, 0.9, 0.9]}})");
   EXPECT_NE(error.find("glass transmittance [1.5, 0.9, 0.9] must lie within [0, 1]"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace portico
+
+namespace portico {
+namespace {
+
+// An IES file of 1000 cd all around: 4 pi 1000 lm.
+const char* const kIsotropicIes =
+    "IESNA:LM-63-2002\n[TEST] isotropic\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 90 180\n0\n1000 1000 1000\n";
+
+TEST(BuildingImportPhotometric, AnObjectsLumensSpreadOverItsArea) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  importBuilding({building.json({{"\"emission\": [10, 10, 10]", "\"lumens\": 1000, \"colour_temperature\": 3000"}})},
+                 temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.lights().size(), 1u);
+  // lamp.obj is a 1 m^2 square: L = Phi / (pi A).
+  EXPECT_EQ(store.lights()[0].radiance, radianceOfLumens(1000, colourOfTemperature(3000), 1.0));
+  EXPECT_NEAR(lumensOfPower(store.lights()[0].power()), 1000.0, 1e-3);
+  EXPECT_GT(store.lights()[0].radiance.x, store.lights()[0].radiance.z);   // warm
+}
+
+TEST(BuildingImportPhotometric, AnIesLuminaireIsAPointLightKeptWithItsDistribution) {
+  TempDirectory temp;
+  writeText(temp.path() / "lamp.ies", kIsotropicIes);
+  BrokenBuilding building(temp);
+  const std::string lights =
+      R"("lights": [{"name": "bulb", "cell": "room", "ies": "lamp.ies", "position": [1, 1.5, 1], "lumens": 800,
+                     "colour": [1, 1, 1]},
+                    {"name": "bulb 2", "cell": "hall", "ies": "lamp.ies", "position": [3, 1.5, 1],
+                     "aim": [1, 0, 0]}],
+  "camera")";
+  importBuilding({building.json({{"\"camera\"", lights}})}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  ASSERT_EQ(store.lights().size(), 3u);
+  const AreaLight& bulb = store.lights()[1];
+  ASSERT_TRUE(bulb.isPoint());
+  ASSERT_TRUE(bulb.intensity);
+  EXPECT_EQ(bulb.cell, 0u);
+  EXPECT_EQ(bulb.corner, Vec3(1, 1.5f, 1));
+  EXPECT_EQ(bulb.edge1, Vec3(0, -1, 0));
+  EXPECT_EQ(bulb.edge2, Vec3(1, 0, 0));
+  EXPECT_NEAR(bulb.intensity->lumens(), 4 * M_PI * 1000, 1e-6 * 4 * M_PI * 1000);
+  // Scaled to the 800 lm asked for.
+  EXPECT_NEAR(lumensOfPower(bulb.power()), 800, 1e-3);
+  // Both luminaires share one distribution in the store.
+  EXPECT_EQ(store.lights()[2].intensity.get(), bulb.intensity.get());
+  // Aimed along +x: C0 defaults to +z.
+  EXPECT_EQ(store.lights()[2].edge2, Vec3(0, 0, 1));
+  EXPECT_NEAR(lumensOfPower(store.lights()[2].power()), 4 * M_PI * 1000, 1e-2);
+  // A re-cut into voxels keeps each luminaire, in the voxel holding its point.
+  ImportOptions grid;
+  grid.gridResolution = 2;
+  importBuilding({temp / "store"}, temp / "voxels", grid);
+  const SceneStore voxels = SceneStore::open(temp / "voxels");
+  int points = 0;
+  for (const AreaLight& light : voxels.lights())
+    if (light.isPoint()) {
+      ++points;
+      EXPECT_TRUE(voxels.cells()[light.cell].bounds.contains(light.corner));
+      EXPECT_NEAR(light.intensity->lumens(), 4 * M_PI * 1000, 1e-2);
+    }
+  EXPECT_EQ(points, 2);
+}
+
+TEST(BuildingImportPhotometric, BadPhotometricInputGivesOneLineErrors) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  const auto withLight = [&](const std::string& light) {
+    return building.importError({{"\"camera\"", "\"lights\": [" + light + "], \"camera\""}});
+  };
+  writeText(temp.path() / "lamp.ies", kIsotropicIes);
+  std::string truncated = kIsotropicIes;
+  writeText(temp.path() / "short.ies", truncated.substr(0, truncated.size() - 6));
+  const std::string path = (temp.path() / "building.json").string();
+  EXPECT_EQ(withLight(R"({"name": "b", "cell": "room", "ies": "short.ies", "position": [1, 1, 1]})"),
+            path + ": lights[0] ('b'): " + (temp.path() / "short.ies").string() +
+                ": line 8: the file ends before candela value 3 of 3 (horizontal angle 0, vertical angle 180) "
+                "(truncated?)");
+  EXPECT_EQ(withLight(R"({"name": "b", "cell": "room", "ies": "none.ies", "position": [1, 1, 1]})"),
+            path + ": lights[0] ('b'): " + (temp.path() / "none.ies").string() + ": cannot be read");
+  EXPECT_EQ(withLight(R"({"name": "b", "cell": "room", "ies": "lamp.ies", "position": [1, 3, 1]})"),
+            path + ": lights[0] ('b'): position (1, 3, 1) lies outside the aabb of its cell 'room'");
+  EXPECT_EQ(withLight(R"({"name": "b", "cell": "room", "ies": "lamp.ies", "position": [1, 1, 1], "c0": [0, 2, 0]})"),
+            path + ": lights[0] ('b'): c0 is parallel to aim; it must point across it");
+  EXPECT_EQ(withLight(R"({"name": "b", "cell": "room", "ies": "lamp.ies", "position": [1, 1, 1], "aim": [0, 0, 0]})"),
+            path + ": lights[0] ('b') aim is a zero vector; it gives a direction");
+  const std::string quad = R"("quad": {"corner": [0.5, 1.9, 0.5], "edge1": [1, 0, 0], "edge2": [0, 0, 1]})";
+  EXPECT_EQ(withLight(R"({"name": "p", "cell": "room", "radiance": [1, 1, 1], "lumens": 10, )" + quad + "}"),
+            path + ": lights[0] ('p'): give \"radiance\" or \"lumens\", not both");
+  EXPECT_EQ(withLight(R"({"name": "p", "cell": "room", "radiance": [1, 1, 1], "colour_temperature": 3000, )" + quad + "}"),
+            path + ": lights[0] ('p'): \"colour_temperature\" needs \"lumens\" (the lamp's luminous flux)");
+  EXPECT_EQ(withLight(R"({"name": "p", "cell": "room", "lumens": 10, "colour_temperature": 1000, )" + quad + "}"),
+            path + ": lights[0] ('p'): colour temperature 1000 K lies outside 1667-25000 K");
+  EXPECT_EQ(withLight(R"({"name": "p", "cell": "room", "lumens": -5, )" + quad + "}"),
+            path + ": lights[0] ('p'): lumens = -5 must be above 0");
+  EXPECT_EQ(withLight(R"({"name": "p", "cell": "room", "lumens": 10, "colour": [0, 0, 0], )" + quad + "}"),
+            path + ": lights[0] ('p'): colour [0, 0, 0] must not be negative or black");
+  EXPECT_EQ(building.importError({{"\"emission\": [10, 10, 10]", "\"emission\": [10, 10, 10], \"lumens\": 5"}}),
+            path + ": objects[1] ('lamp'): give \"emission\" (radiance) or \"lumens\", not both");
 }
 
 }  // namespace

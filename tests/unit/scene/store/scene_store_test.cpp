@@ -185,7 +185,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "7");
+  EXPECT_EQ(store.meta().at("format_version"), "8");
   EXPECT_FALSE(store.materials()[0].glass());
   EXPECT_FALSE(store.site());
 
@@ -624,7 +624,9 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 7);
+    EXPECT_EQ(db.userVersion(), 8);
+    db.exec("DROP TABLE point_lights");
+    db.exec("DROP TABLE light_distributions");
     db.exec("DROP TABLE site");
     db.exec("DROP TABLE material_textures");
     keepOnlyTheDefaultCameraAsVersionThreeDid(db);
