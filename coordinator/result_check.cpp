@@ -22,7 +22,7 @@ namespace {
 // The counters the checks read; any other is only required to be >= 0.
 struct ResultCounters {
   int64_t emitted = 0, absorbed = 0, escaped = 0, deposits = 0, copies = 0;
-  int64_t camera = 0, invalid = 0, filmOutOfRange = 0;
+  int64_t camera = 0, rayCrossings = 0, invalid = 0, filmOutOfRange = 0;
 };
 
 ResultCounters readCounters(wire::Result::Reader result) {
@@ -37,6 +37,7 @@ ResultCounters readCounters(wire::Result::Reader result) {
     else if (name == "photons.deposits") c.deposits = value;
     else if (name == "photons.portal_copies") c.copies = value;
     else if (name == "rays.camera") c.camera = value;
+    else if (name == "rays.crossings") c.rayCrossings = value;
     else if (name == "rays.invalid") c.invalid = value;
     else if (name == kFilmOutOfRangeCounter) c.filmOutOfRange = value;
   }
@@ -87,6 +88,10 @@ void checkResultCounts(const LeaseExpectation* expected, int phase, wire::Result
   }
   if (result.getDeposits().size() != 0)
     throw BadResultError(fmt::format("a render lease's Result holds deposits for {} cells", result.getDeposits().size()));
+  // Every ray handed on crossed a portal, counted as it did (those traced
+  // on in cells the worker holds are counted but not handed on).
+  if (const int64_t handedOn = raysHandedOn(result); handedOn > c.rayCrossings)
+    throw BadResultError(fmt::format("it hands on {} rays for {} portal crossings", handedOn, c.rayCrossings));
   if (!expected) return;
   if (c.camera != expected->cameraSamples)
     throw BadResultError(

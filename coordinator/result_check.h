@@ -16,8 +16,8 @@
 //   once: absorbed + escaped + rays handed on (its crossings) + rays.invalid;
 //   no more deposit records than photons.deposits + photons.portal_copies;
 //   no film.
-// - render lease: rays.camera equals its camera batches' pixels x spp;
-//   rays.invalid at most the rays it received; no deposits; every film value
+// - render lease: rays.camera = its camera batches' pixels x spp; rays handed
+//   on <= rays.crossings; rays.invalid <= rays received; no deposits; film value
 //   in [0, the film's range] on a pixel of the image; film.out_of_range 0.
 // - every counter is >= 0.
 #pragma once
