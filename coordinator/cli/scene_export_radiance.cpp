@@ -245,7 +245,7 @@ ExportSummary exportStoreRadiance(const std::string& directory, const std::strin
     out.print(
         "# No daylight: `portico scene export STORE -o FILE.rad --sky overcast` (or uniform:R,G,B, --sun) writes\n"
         "# the sky as FILE.sky.rad (the CIE overcast sky is gensky -c -B 55.866 turned to +Y up).\n");
-  out.print("# Illuminance at sensors: rtrace -h -I -ab 8 -ad 4096 -aa 0 -lw 1e-5 scene.oct < sensors.pts\n");
+  out.print("# Illuminance at sensors: rtrace -h -I -ab 8 -lr -16 -ad 4096 -aa 0 -lw 1e-5 scene.oct < sensors.pts\n");
   writeViews(store, out);
   for (const Portal& p : store.portals()) {
     out.print("# portal {} {}", store.cells()[p.cellA].name, store.cells()[p.cellB].name);
