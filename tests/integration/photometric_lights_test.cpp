@@ -1,0 +1,167 @@
+// Lamps in photometric terms, rendered by `portico render`:
+//  * an IES luminaire over a large diffuse floor: every pixel's radiance is
+//    rho E / pi with E = I(gamma, C) cos(theta) / d^2 (inverse-square and
+//    cosine law, the candela function the file samples, asymmetric in C so a
+//    wrong orientation shows), within 1 %; the same with a deliberate 5 %
+//    error in the expected light fails;
+//  * a lamp given as 1000 lm renders the same bits as the lamp given by the
+//    radiance those lumens make.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+
+#include "common/image/image_reader.h"
+#include "common/photometry/lamp_colour.h"
+#include "common/scene/store/scene_store.h"
+#include "tests/integration/service_harness.h"
+
+namespace portico {
+namespace {
+
+using namespace harness;
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr float kHeight = 2.0f;       // the luminaire over the floor
+constexpr float kCameraHeight = 1.9f;
+constexpr float kAlbedo = 0.5f;
+
+// The candela function the test file samples: a downlight brighter towards C0 (+x).
+double candela(double gamma, double c) {
+  if (gamma > 90) return 0;
+  return (500 + 1000 * std::cos(gamma * kDeg)) * (1 + 0.3 * std::sin(gamma * kDeg) * std::cos(c * kDeg));
+}
+
+void writeIes(const fs::path& path) {
+  std::ofstream out(path);
+  out << "IESNA:LM-63-2002\n[TEST] portico photometric_lights_test\n[LUMINAIRE] analytic downlight\nTILT=NONE\n";
+  const int verticals = 37, horizontals = 73;   // every 2.5 degrees to 90, every 5 to 360
+  out << "1 -1 1 " << verticals << ' ' << horizontals << " 1 2 0 0 0\n1 1 10\n";
+  for (int v = 0; v < verticals; ++v) out << 2.5 * v << ' ';
+  out << '\n';
+  for (int h = 0; h < horizontals; ++h) out << 5.0 * h << ' ';
+  out << '\n';
+  char value[32];
+  for (int h = 0; h < horizontals; ++h) {
+    for (int v = 0; v < verticals; ++v) {
+      std::snprintf(value, sizeof value, "%.6f ", candela(2.5 * v, 5.0 * h));
+      out << value;
+    }
+    out << '\n';
+  }
+}
+
+void writeFloor(const fs::path& path, float half) {
+  std::ofstream out(path);
+  out << "v " << -half << " 0 " << -half << "\nv " << -half << " 0 " << half << "\nv " << half << " 0 " << half
+      << "\nv " << half << " 0 " << -half << "\nf 1 2 3\nf 1 3 4\n";
+}
+
+// Straight down at the floor: +x to the image's right, +z down the image (up is -z).
+nlohmann::json camera(int size) {
+  return {{"origin", {0, kCameraHeight, 0}}, {"target", {0, 0, 0}}, {"up", {0, 0, -1}}, {"fov_y_deg", 90},
+          {"width", size},                   {"height", size}};
+}
+
+class PhotometricLights : public ::testing::Test {
+ protected:
+  void SetUp() override { dir_ = makeTempDirectory("photometric-lights"); }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path import(const std::string& name, const nlohmann::json& building) {
+    std::ofstream(dir_ / (name + ".json")) << building.dump(1);
+    const fs::path store = dir_ / (name + "-store");
+    EXPECT_EQ(runCommand({kBin + "portico", "scene", "import", (dir_ / (name + ".json")).string(), store.string()},
+                         dir_ / (name + "-import.log")),
+              0)
+        << readFile(dir_ / (name + "-import.log"));
+    return store;
+  }
+  LinearImage render(const fs::path& store, const std::string& name, const std::vector<std::string>& extra = {}) {
+    const fs::path image = dir_ / (name + ".exr");
+    std::vector<std::string> argv{kBin + "portico", "render", store.string(), "-o", image.string(), "--workers", "1",
+                                  "--photons", "20000"};
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    EXPECT_EQ(runCommand(argv, dir_ / (name + ".log")), 0) << readFile(dir_ / (name + ".log"));
+    return readImage(image.string());
+  }
+  fs::path dir_;
+};
+
+TEST_F(PhotometricLights, AnIesLuminaireLightsAPlaneByTheInverseSquareAndCosineLaws) {
+  writeIes(dir_ / "downlight.ies");
+  writeFloor(dir_ / "floor.obj", 50);
+  constexpr int kSize = 48;
+  const nlohmann::json building = {
+      {"name", "ies-plane"},
+      {"objects", {{{"obj", "floor.obj"}, {"albedo", {kAlbedo, kAlbedo, kAlbedo}}}}},
+      // Aimed down, C0 along +x; "colour" white: 1/179 W/sr per cd in each channel.
+      {"lights",
+       {{{"name", "downlight"}, {"ies", "downlight.ies"}, {"position", {0, kHeight, 0}}, {"aim", {0, -1, 0}},
+         {"c0", {1, 0, 0}}, {"colour", {1, 1, 1}}}}},
+      {"camera", camera(kSize)}};
+  const fs::path store = import("ies-plane", building);
+  // 64 samples a pixel: its mean is then its centre's value (E varies by some 4 % across a pixel).
+  const LinearImage image = render(store, "ies-plane", {"--spp", "64"});
+  ASSERT_EQ(image.width, uint32_t(kSize));
+  // The floor point at a pixel's centre: 90 degrees from 1.9 m up spans +-1.9 m.
+  double worst = 0, worstWrong = 1e9;
+  int checked = 0;
+  for (int row = 2; row < kSize; row += 5)
+    for (int column = 1; column < kSize; column += 5) {
+      const double x = kCameraHeight * (2.0 * (column + 0.5) / kSize - 1.0);
+      const double z = kCameraHeight * (2.0 * (row + 0.5) / kSize - 1.0);
+      const double d2 = x * x + z * z + kHeight * kHeight, d = std::sqrt(d2);
+      const double cosTheta = kHeight / d;                          // at the floor, and gamma's cosine at the lamp
+      const double gamma = std::acos(cosTheta) / kDeg;
+      // C90 = cross(C0, nadir) = cross(+x, -y) = -z.
+      const double cAngle = std::atan2(-z, x) / kDeg;
+      const double illuminance = candela(gamma, cAngle) / 179.0 * cosTheta / d2;   // W/m^2 per channel
+      const double expected = kAlbedo * illuminance / M_PI;
+      const size_t i = 3 * (size_t(row) * kSize + column);
+      for (int channel = 0; channel < 3; ++channel) {
+        const double error = std::abs(image.rgb[i + channel] / expected - 1);
+        worst = std::max(worst, error);
+        worstWrong = std::min(worstWrong, std::abs(image.rgb[i + channel] / (1.05 * expected) - 1));
+      }
+      ++checked;
+    }
+  std::printf("  %d floor points: worst error %.3f %% against E = I cos / d^2 (against 5 %% more light: best %.3f %%)\n",
+              checked, 100 * worst, 100 * worstWrong);
+  EXPECT_LT(worst, 0.01);
+  // The check would see a 5 % error in the light at every point.
+  EXPECT_GT(worstWrong, 0.01);
+}
+
+// A lamp given by its flux renders exactly as the lamp given by the
+// radiance that flux makes: the same bits.
+TEST_F(PhotometricLights, LumensRenderTheSameBitsAsTheRadianceTheyMake) {
+  writeFloor(dir_ / "floor.obj", 3);
+  const nlohmann::json quad = {{"corner", {-0.3, 1.5, -0.3}}, {"edge1", {0.6, 0, 0}}, {"edge2", {0, 0, 0.6}}};
+  nlohmann::json building = {{"objects", {{{"obj", "floor.obj"}, {"albedo", {0.6, 0.5, 0.4}}}}},
+                             {"lights", {{{"name", "panel"}, {"quad", quad}, {"lumens", 1000}, {"colour_temperature", 3000}}}},
+                             {"camera", camera(32)}};
+  const fs::path byLumens = import("lumens", building);
+  const SceneStore lumensStore = SceneStore::open(byLumens.string());
+  ASSERT_EQ(lumensStore.lights().size(), 1u);
+  const Vec3 radiance = lumensStore.lights()[0].radiance;
+  // 1000 lm out: 179 lm/W x Y(pi A L).
+  EXPECT_NEAR(lumensOfPower(lumensStore.lights()[0].power()), 1000.0, 1e-3);
+  EXPECT_EQ(radiance, radianceOfLumens(1000, colourOfTemperature(3000), 0.36f));
+  char text[128];
+  std::snprintf(text, sizeof text, "[%.9g, %.9g, %.9g]", radiance.x, radiance.y, radiance.z);
+  building["lights"][0].erase("lumens");
+  building["lights"][0].erase("colour_temperature");
+  building["lights"][0]["radiance"] = nlohmann::json::parse(text);
+  const fs::path byRadiance = import("radiance", building);
+  EXPECT_EQ(SceneStore::open(byRadiance.string()).lights()[0].radiance, radiance);
+  const LinearImage a = render(byLumens, "lumens", {"--spp", "4"}), b = render(byRadiance, "radiance", {"--spp", "4"});
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  EXPECT_TRUE(a.rgb == b.rgb) << "the two lamps render different images";
+  double sum = 0;
+  for (float v : a.rgb) sum += v;
+  EXPECT_GT(sum, 0);
+}
+
+}  // namespace
+}  // namespace portico
