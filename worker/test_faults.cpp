@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <vector>
 
 namespace portico {
 
@@ -28,6 +29,14 @@ void applyTestFault(KernelOutputs& out) {
     c.photonsEmitted = c.photonDeposits = c.photonsAbsorbed = c.photonsEscaped = c.photonCrossings = c.photonCopies = 0;
   } else if (fault == "drop-crossings") {
     out.crossings.clear();
+  } else if (fault == "duplicate-crossings") {
+    // Render leases only: they trace camera, shadow or gather rays.
+    const TraceCounters& c = out.counters;
+    if (c.cameraRays + c.emissionRays + c.shadowRays + c.gatherRays == 0) return;
+    for (auto& [cell, rays] : out.crossings) {
+      const std::vector<RayState> copy = rays;
+      rays.insert(rays.end(), copy.begin(), copy.end());
+    }
   }
 }
 

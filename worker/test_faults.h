@@ -6,6 +6,7 @@
 //                   the photon counters zero: a worker that traced nothing
 //   drop-crossings  rays handed on to other cells left out, counters honest
 //   negative-film   every film value negated
+//   duplicate-crossings  a render lease's rays handed on sent twice
 // Unset (always, outside tests): nothing changes.
 #pragma once
 

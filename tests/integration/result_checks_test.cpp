@@ -42,11 +42,12 @@ class ResultChecks : public DemoStoreSuite<ResultChecks> {
   }
   // A faulty worker (w0) alone until one of its Results is refused, then an
   // honest one (w1): the job must end done, with the reference's bits.
-  static void expectOutvoted(const std::string& fault, const std::string& refusal) {
+  static void expectOutvoted(const std::string& fault, const std::string& refusal,
+                             const std::vector<std::string>& faultyWorkerExtra = {}) {
     const fs::path dir = dir_ / fault;
     LocalCluster cluster(dir, 0, {}, patientCoordinator());
     const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-    cluster.addWorker({}, withFault(fault));
+    cluster.addWorker(faultyWorkerExtra, withFault(fault));
     ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find(refusal) != std::string::npos; },
                           std::chrono::seconds(60)))
         << readFile(dir / "coordinator.log");
@@ -105,6 +106,12 @@ TEST_F(ResultChecks, AResultThatEmittedFewerPhotonsThanItsLeaseIsRefused) {
 // not add up.
 TEST_F(ResultChecks, AResultWhosePhotonsDoNotAddUpIsRefused) {
   expectOutvoted("drop-crossings", "its photons do not add up");
+}
+
+// A render lease's rays handed on twice: more than the portal crossings it
+// counted (the worker hands every crossing back: --forward-rays 0).
+TEST_F(ResultChecks, ARenderResultHandingOnMoreRaysThanItCountedCrossingsIsRefused) {
+  expectOutvoted("duplicate-crossings", "portal crossings", {"--forward-rays", "0"});
 }
 
 TEST_F(ResultChecks, TwoWorkersWhoseResultsDoNotAddUpFailTheJobNamingBoth) {
