@@ -21,6 +21,7 @@
 #include "common/util/atomic_file.h"
 #include "common/util/output_path.h"
 #include "common/util/process_memory.h"
+#include "coordinator/analysis_sensors.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
@@ -1080,7 +1081,7 @@ void Coordinator::onFetchImage(const std::string& identity, wire::FetchImage::Re
       throw std::runtime_error(fmt::format("job {} is {}, not done: it has no image", job->id, toString(job->state)));
     auto spec = context(job->id).reader();
     reply.setOutput(spec.getOutput());
-    const std::string image = encodeJobImage(store_, *job, spec);
+    const std::string image = encodeJobImage(store_, *job, spec, *context(job->id).scene);
     reply.setImage(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(image.data()), image.size()));
     reply.setStatistics(jobStatistics(store_, *job, spec).dump(2) + "\n");
   } catch (const std::exception& e) {
@@ -1108,10 +1109,20 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     const auto store = std::filesystem::canonical(settings.store, unresolved);
     if (unresolved) throw std::runtime_error(fmt::format("scene store {}: {}", settings.store, unresolved.message()));
     settings.store = store.string();
-    checkOutputPath(settings.output);
+    checkOutputPath(settings.output, settings.analysis ? OutputKind::AnalysisCsv : OutputKind::Image);
     auto scene = std::make_unique<SceneStore>(SceneStore::open(settings.store));
     settings = resolveJobSettings(std::move(settings), *scene);
     validateJobSettings(settings, *scene);
+    // An analysis's sensors, checked and located in their cells.
+    std::vector<Sensor> sensors;
+    if (settings.analysis) {
+      if (submit.getSensors().size() != settings.analysis->sensors)
+        throw std::invalid_argument(fmt::format("the analysis names {} sensors, the submit carries {}",
+                                                settings.analysis->sensors, submit.getSensors().size()));
+      sensors = sensorsOfSubmit(submit.getSensors(), *scene);
+    } else if (submit.getSensors().size() > 0) {
+      throw std::invalid_argument("sensors in a submit that is no analysis");
+    }
     auto spec = std::make_unique<capnp::MallocMessageBuilder>();
     toWire(settings, spec->initRoot<wire::JobSpec>());
     auto builder = spec->getRoot<wire::JobSpec>();
@@ -1129,6 +1140,13 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
       job = store_.createJob(packed, wallMs());
       store_.addCounter(job, kCoordinatorCpuAtSubmitCounter, cpuAtSubmit);
       store_.setPhotonPass(job, photonKey, lender.value_or(0));
+      if (settings.analysis) {
+        store_.setJobSensors(job, encodeSensors(sensors));
+        const auto outside = std::count_if(sensors.begin(), sensors.end(), [](const Sensor& s) { return s.cell < 0; });
+        if (outside > 0)
+          spdlog::warn("job {}: {} of its {} sensors lie outside every cell: not measured, their rows left empty",
+                       job, outside, sensors.size());
+      }
       if (!lender) queuePhotonEmission(store_, job, builder.asReader(), *scene, &stopping_);
       tx.commit();
     }
@@ -1293,7 +1311,7 @@ bool Coordinator::startNextRenderPass(const JobRecord& job, JobContext& ctx, int
   // The average of the passes so far, for whoever watches the file; the
   // job goes on whether or not it can be written.
   try {
-    writeJobOutputs(store_, job, ctx.reader());
+    writeJobOutputs(store_, job, ctx.reader(), *ctx.scene);
   } catch (const std::exception& e) {
     spdlog::warn("job {}: the image after render pass {} could not be written: {}", job.id, end.pass, e.what());
   }
@@ -1310,7 +1328,7 @@ void Coordinator::finishJob(uint64_t jobId) {
   // `portico fetch-image` writes it where its client can.
   std::string outputError;
   try {
-    writeJobOutputs(store_, *job, ctx.reader());
+    writeJobOutputs(store_, *job, ctx.reader(), *ctx.scene);
   } catch (const std::exception& e) {
     outputError = fmt::format("the image could not be written ({}); `portico fetch-image {} -o FILE` writes it",
                               e.what(), jobId);

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "common/accel/accelerator.h"
+#include "common/analysis/sensor_film.h"
 #include "common/job/sun_time.h"
 #include "common/net/message.h"
 #include "common/net/job_spec_wire.h"
@@ -18,6 +19,7 @@
 #include "common/scene/store/floor_levels.h"
 #include "common/scene/store/portal_geometry.h"
 #include "common/transport/sampling.h"
+#include "coordinator/analysis_sensors.h"
 #include "coordinator/job_limits.h"
 
 namespace portico {
@@ -54,6 +56,29 @@ void validateRenderPasses(const JobSettings& settings) {
   if (settings.maxPasses < 1 || settings.maxPasses > limits::kMaxPasses)
     throw std::invalid_argument(
         fmt::format("max passes {} must be between 1 and {}", settings.maxPasses, limits::kMaxPasses));
+}
+
+// An analysis job's own rules: its sensors are its film's rows; it renders
+// no image, in one pass.
+void validateAnalysis(const JobSettings& settings) {
+  const AnalysisSettings& analysis = *settings.analysis;
+  if (analysis.sensors == 0 || analysis.sensors > kMaxSensors)
+    throw std::invalid_argument(fmt::format("an analysis of {} sensors: it needs 1 to {}", analysis.sensors, kMaxSensors));
+  if (settings.width != kSensorFilmColumns || settings.height != analysis.sensors)
+    throw std::invalid_argument(fmt::format("an analysis's film is {}x{}, not {}x{}", kSensorFilmColumns,
+                                            analysis.sensors, settings.width, settings.height));
+  if (uint64_t(analysis.sensors) * settings.spp > limits::kMaxCameraSamples)
+    throw std::invalid_argument(fmt::format("{} sensors at {} samples each is too many: at most {}", analysis.sensors,
+                                            settings.spp, limits::kMaxCameraSamples));
+  if (settings.progressive() || settings.maxPasses != 1)
+    throw std::invalid_argument("an analysis runs in one pass: no --target-error, --time-limit or --max-passes");
+  if (settings.aov != JobSettings::Aov::Radiance) throw std::invalid_argument("an analysis has no --aov");
+  if (analysis.daylightFactor) {
+    if (settings.daylight.sun || !SkyModel(settings.daylight).horizontalSkyLux())
+      throw std::invalid_argument(
+          "--daylight-factor needs a sky whose outdoor illuminance is known in closed form (the CIE overcast or a "
+          "uniform sky) and no sun");
+  }
 }
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -139,7 +164,11 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
     settings.cameraName.clear();
     sizeFrom = &named;
   }
-  if (settings.width == 0 || settings.height == 0) {
+  if (settings.analysis) {
+    // Its film: a row per sensor (common/analysis/sensor_film.h).
+    settings.width = kSensorFilmColumns;
+    settings.height = settings.analysis->sensors;
+  } else if (settings.width == 0 || settings.height == 0) {
     settings.width = sizeFrom->width;
     settings.height = sizeFrom->height;
   }
@@ -171,15 +200,18 @@ void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
                                             scene.directory()));
   if (scene.lights().empty() && !settings.daylight.any())
     throw std::invalid_argument(fmt::format("scene {} has no lights (and the job no --sun or --sky)", scene.directory()));
-  requireAtMost("image width", settings.width, limits::kMaxImageSide);
-  requireAtMost("image height", settings.height, limits::kMaxImageSide);
+  if (settings.analysis) validateAnalysis(settings);
+  else {
+    requireAtMost("image width", settings.width, limits::kMaxImageSide);
+    requireAtMost("image height", settings.height, limits::kMaxImageSide);
+  }
   const uint64_t pixels = uint64_t(settings.width) * settings.height;
   if (pixels > limits::kMaxImagePixels)
     throw std::invalid_argument(fmt::format("image {}x{} is too large: at most {} pixels", settings.width,
                                             settings.height, limits::kMaxImagePixels));
   if (settings.spp == 0 || settings.spp > limits::kMaxSpp)
     throw std::invalid_argument(fmt::format("spp {} must be between 1 and {}", settings.spp, limits::kMaxSpp));
-  if (pixels * settings.spp > limits::kMaxCameraSamples)
+  if (!settings.analysis && pixels * settings.spp > limits::kMaxCameraSamples)
     throw std::invalid_argument(fmt::format("{}x{} pixels at {} spp is too many camera samples: at most {}",
                                             settings.width, settings.height, settings.spp,
                                             limits::kMaxCameraSamples));
@@ -255,6 +287,11 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
 }
 
 void queueCameraRays(JobStore& store, uint64_t job, wire::JobSpec::Reader spec, const SceneStore& scene) {
+  // An analysis job's "pixels" are its sensors, queued by the cells they lie in.
+  if (spec.hasAnalysis()) {
+    queueSensors(store, job, spec, decodeSensors(store.jobSensors(job), scene));
+    return;
+  }
   const uint32_t pixels = spec.getWidth() * spec.getHeight();
   // A resolved spec always has its camera; one stored without it renders the store's.
   const uint32_t cameraCell = spec.hasCamera() ? spec.getCamera().getCell() : scene.camera().cell;

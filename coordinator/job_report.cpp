@@ -14,6 +14,8 @@
 #include "common/image/image_writer.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
+#include "coordinator/analysis_results.h"
+#include "coordinator/analysis_sensors.h"
 #include "coordinator/render_passes.h"
 
 namespace portico {
@@ -213,6 +215,12 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
   addAcceleratorChoices(counters, stats);
   stats["render_passes"] = renderPassStatistics(store, job, spec);
+  if (spec.hasAnalysis())
+    stats["analysis"] = {{"sensors", spec.getAnalysis().getSensors()},
+                         {"outside_cells", sensorsOutsideCells(store.jobSensors(job.id))},
+                         {"measured", get(counters, "sensors.measured")},
+                         {"samples_per_sensor", spec.getSpp()},
+                         {"daylight_factor", spec.getAnalysis().getDaylightFactor()}};
   return stats;
 }
 
@@ -227,7 +235,11 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   const auto& passes = status["render_passes"];
   const uint32_t passesCounted = std::max<uint32_t>(
       {1u, passes["current"].is_number() ? passes["current"].get<uint32_t>() : 0u, passes["done"].get<uint32_t>()});
-  const int64_t samples = int64_t(spec.getWidth()) * spec.getHeight() * spec.getSpp() * passesCounted;
+  // An analysis job's camera samples are those of its sensors inside cells.
+  const int64_t samples =
+      (spec.hasAnalysis() ? status["analysis"]["sensors"].get<int64_t>() - status["analysis"]["outside_cells"].get<int64_t>()
+                          : int64_t(spec.getWidth()) * spec.getHeight()) *
+      spec.getSpp() * passesCounted;
   status["progress"] = {{"photons_done", photonsDone},
                         {"photons_total", spec.getPhotons()},
                         {"camera_rays_done", get(counters, "rays.camera")},
@@ -292,17 +304,21 @@ LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Read
 
 }  // namespace
 
-void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene) {
   // The directory was checked at submit; it is never created here, on
   // behalf of whoever submitted.
   const std::string output = spec.getOutput().cStr();
-  writeImage(output, filmImage(store, job, spec), spec.getExposure());
+  if (spec.hasAnalysis())
+    writeAnalysisOutputs(analysisResults(store, job, spec, scene), output);
+  else
+    writeImage(output, filmImage(store, job, spec), spec.getExposure());
   const std::string statsPath = output + ".json";
   writeFileAtomically(statsPath, jobStatistics(store, job, spec).dump(2) + "\n");
 }
 
-std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene) {
   namespace fs = std::filesystem;
+  if (spec.hasAnalysis()) return analysisCsv(analysisResults(store, job, spec, scene));
   // OpenImageIO writes files: one in a private directory, read back and removed.
   std::string pattern = (fs::temp_directory_path() / "portico-image-XXXXXX").string();
   if (!::mkdtemp(pattern.data()))

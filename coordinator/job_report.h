@@ -32,11 +32,12 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);
 
-// Resolves the film into radiance and writes spec.output and spec.output +
+// Resolves the film into radiance (an analysis job's: into its sensors'
+// readings, analysis_results.h) and writes spec.output and spec.output +
 // ".json". Creates no directory.
-void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
-// The image of the job's film encoded as spec.output's extension says
-// (for `portico fetch-image`: the client writes it).
-std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
+void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene);
+// The image of the job's film encoded as spec.output's extension says (an
+// analysis job's CSV), for `portico fetch-image`: the client writes it.
+std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene);
 
 }  // namespace portico

@@ -326,6 +326,14 @@ constexpr const char* kSchemaVersion10 = "ALTER TABLE lease_log ADD COLUMN more_
 // Version 11: the end of the last deposit region set aside in each job's
 // photon file (coordinator/deposit_regions.h).
 constexpr const char* kSchemaVersion11 = "ALTER TABLE jobs ADD COLUMN photon_region_end INTEGER NOT NULL DEFAULT 0";
+// Version 12: lighting analysis, each analysis job's sensors (fixed-size
+// records, coordinator/analysis_sensors.h).
+constexpr const char* kSchemaVersion12 = R"sql(
+      CREATE TABLE job_sensors (
+        job INTEGER PRIMARY KEY REFERENCES jobs(id),
+        records BLOB NOT NULL
+      );
+    )sql";
 
 // LeaseLogEntry::moreCellWork as its column holds it, and back.
 std::string moreCellWorkText(const std::vector<std::pair<uint32_t, int64_t>>& cells) {
@@ -372,6 +380,7 @@ void JobStore::migrate() {
   step(9, [&] { db_.exec(kSchemaVersion9); });
   step(10, [&] { db_.exec(kSchemaVersion10); });
   step(11, [&] { db_.exec(kSchemaVersion11); });
+  step(12, [&] { db_.exec(kSchemaVersion12); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -983,6 +992,24 @@ void JobStore::addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb
     write.bind(1, int64_t(job)).bind(2, int64_t(index)).bindBlob(3, chunk.data(), chunk.size() * sizeof(FixedRgb));
     write.run();
   }
+}
+
+void JobStore::setJobSensors(uint64_t job, std::string_view records) {
+  auto& s = db_.prepare("INSERT OR REPLACE INTO job_sensors(job, records) VALUES (?, ?)");
+  s.bind(1, int64_t(job)).bindBlob(2, records.data(), records.size());
+  s.run();
+}
+
+std::string JobStore::jobSensors(uint64_t job) {
+  auto& s = db_.prepare("SELECT records FROM job_sensors WHERE job = ?");
+  s.bind(1, int64_t(job));
+  std::string records;
+  if (s.step()) {
+    const auto blob = s.columnBlob(0);
+    records.assign(reinterpret_cast<const char*>(blob.data()), blob.size());
+  }
+  s.reset();
+  return records;
 }
 
 std::vector<FixedRgb> JobStore::film(uint64_t job, uint64_t pixelCount) {

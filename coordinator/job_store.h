@@ -28,7 +28,7 @@ inline bool isActive(JobState s) { return s == JobState::Photons || s == JobStat
 // The batch phase a job in `state` is working on (0 photons, 1 render).
 inline int phaseOf(JobState s) { return s == JobState::Render ? 1 : 0; }
 
-enum class BatchKind { Rays = 0, Emit = 1, Camera = 2 };
+enum class BatchKind { Rays = 0, Emit = 1, Camera = 2, Sensors = 3 };
 
 struct JobRecord {
   uint64_t id = 0;
@@ -97,7 +97,7 @@ struct LeaseLogEntry {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 11;
+  static constexpr int kSchemaVersion = 12;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -211,6 +211,12 @@ class JobStore {
   // transaction (what it reads must be committed), e.g. after each commit;
   // it costs nothing when no file became a candidate.
   void reclaimBatchFiles();
+
+  // An analysis job's sensors (coordinator/analysis_sensors.h), stored
+  // whole at submit: the sensor batches of its render phase and its CSV are
+  // made from them.
+  void setJobSensors(uint64_t job, std::string_view records);
+  std::string jobSensors(uint64_t job);
 
   static constexpr uint32_t kFilmChunkPixels = 4096;
   // Throws FilmRangeError (film.h) when a pixel's sum would leave the film's range.

@@ -15,6 +15,8 @@ void LeaseExpectation::add(wire::RayBatch::Reader batch, uint32_t spp) {
     case wire::RayBatch::EMIT: photonsToEmit += batch.getEmit().getCount(); break;
     case wire::RayBatch::CAMERA: cameraSamples += int64_t(batch.getCamera().getPixelCount()) * spp; break;
     case wire::RayBatch::RAYS: raysIn += int64_t(batch.getRays().size()); break;
+    // An analysis's sensors: each of their samples counts as a camera ray.
+    case wire::RayBatch::SENSORS: cameraSamples += int64_t(batch.getSensors().size()) * spp; break;
   }
 }
 

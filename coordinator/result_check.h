@@ -16,7 +16,8 @@
 //   once: absorbed + escaped + rays handed on (its crossings) + rays.invalid;
 //   no more deposit records than photons.deposits + photons.portal_copies;
 //   no film.
-// - render lease: rays.camera = its camera batches' pixels x spp; rays handed
+// - render lease: rays.camera = its camera batches' pixels x spp (sensor
+//   batches' sensors x spp); rays handed
 //   on <= rays.crossings; rays.invalid <= rays received; no deposits; film value
 //   in [0, the film's range] on a pixel of the image; film.out_of_range 0.
 // - every counter is >= 0.
@@ -41,7 +42,7 @@ struct LeaseExpectation {
   int phase = 0;                // 0: photons, 1: render
   int64_t photonsToEmit = 0;    // EmitRange counts
   int64_t raysIn = 0;           // rays of its ray batches
-  int64_t cameraSamples = 0;    // CameraRange pixels x spp
+  int64_t cameraSamples = 0;    // CameraRange pixels (and sensors) x spp
   void add(wire::RayBatch::Reader batch, uint32_t spp);
 };
 

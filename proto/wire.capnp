@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 14;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves)
+const protocolVersion :UInt32 = 15;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors)
 
 enum Phase {
   photons @0;
@@ -78,11 +78,27 @@ struct CameraRange {
   pixelCount @1 :UInt32;
 }
 
+# A lighting-analysis sensor (common/analysis/sensor.h): a point and the
+# unit normal of its measuring plane. `index` is its place in the job's
+# sensor list (the sensor file's order), which is its row of the film;
+# `line` its 1-based line in the sensor file (0: placed by a grid).
+struct SensorPoint {
+  index @0 :UInt32;
+  line @1 :UInt32;
+  x @2 :Float32;
+  y @3 :Float32;
+  z @4 :Float32;
+  dx @5 :Float32;
+  dy @6 :Float32;
+  dz @7 :Float32;
+}
+
 struct RayBatch {
   union {
     rays @0 :List(Ray);
     emit @1 :EmitRange;
     camera @2 :CameraRange;
+    sensors @3 :List(SensorPoint);   # an analysis job's sensors in the lease's cell, measured there
   }
 }
 
@@ -123,6 +139,16 @@ struct JobSpec {
   maxPasses @22 :UInt32;   # 0 (in a Submit): 1 without a target or time limit, else kProgressiveMaxPasses
   cameraName @23 :Text;    # in a Submit: the store camera of this name ("": none); "" once resolved
   daylight @24 :Daylight;  # absent: no daylight
+  analysis @25 :Analysis;  # present: a lighting analysis (illuminance at sensors), not an image
+}
+
+# A lighting analysis (docs/lighting-analysis.md): the job measures the
+# illuminance at its sensors (sent in the Submit, kept by the coordinator)
+# and writes a CSV to `output`. Its film is `height` = sensors rows of
+# `width` = 2 x kSensorGroups columns (common/analysis/sensor_film.h).
+struct Analysis {
+  sensors @0 :UInt32;       # how many the Submit carries
+  daylightFactor @1 :Bool;  # report DF = 100 E / E_out of the CIE overcast sky
 }
 
 # Sun and sky outside the building (common/job/job_settings.h DaylightSettings).
@@ -313,6 +339,8 @@ struct Submit {
   # A photon pass of its own, even when an earlier job's finished pass on
   # the same store with the same photon settings could be reused.
   freshPhotons @1 :Bool;
+  # An analysis job's sensors (spec.analysis), in the sensor file's order.
+  sensors @2 :List(SensorPoint);
 }
 
 struct SubmitReply {

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -34,6 +35,22 @@ void traceBatches(const SceneStore& scene, CellKernel& kernel, const JobSettings
       case wire::RayBatch::RAYS:
         for (auto ray : batch.getRays()) kernel.trace(fromWire(ray), out);
         break;
+      case wire::RayBatch::SENSORS: {
+        if (!parameters.analysis) throw std::runtime_error("a sensor batch in a job that is no analysis");
+        std::vector<SensorTask> sensors;
+        sensors.reserve(batch.getSensors().size());
+        for (auto s : batch.getSensors()) {
+          if (s.getIndex() >= parameters.analysis->sensors)
+            throw std::runtime_error(fmt::format("sensor batch names sensor {} of {}", s.getIndex(),
+                                                 parameters.analysis->sensors));
+          SensorTask task{s.getIndex(), Vec3(s.getX(), s.getY(), s.getZ()), Vec3(s.getDx(), s.getDy(), s.getDz())};
+          if (!isFinite(task.position) || !(std::abs(length(task.direction) - 1.0f) < 1e-3f))
+            throw std::runtime_error(fmt::format("sensor {} is not a point and a unit direction", s.getIndex()));
+          sensors.push_back(task);
+        }
+        kernel.measureSensors(sensors, out);
+        break;
+      }
     }
   }
   kernel.finishGathers(out);

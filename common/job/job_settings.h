@@ -64,6 +64,22 @@ struct DaylightSettings {
   bool operator==(const DaylightSettings&) const = default;
 };
 
+// A lighting analysis (docs/lighting-analysis.md): the job measures the
+// illuminance at sensors instead of rendering an image. Its sensors travel
+// beside the settings (wire::Submit.sensors), kept by the coordinator.
+struct AnalysisSettings {
+  uint32_t sensors = 0;              // how many
+  bool daylightFactor = false;       // under the CIE overcast sky: DF = 100 E / E_out per sensor
+  bool operator==(const AnalysisSettings&) const = default;
+};
+
+// An analysis job's sampling by default (`portico analyze`): a sensor is
+// one point, so it can take far more rays than a pixel. 64 samples of 4
+// shadow rays and 16 gather rays: 256 shadow and 1 024 gather rays a sensor.
+constexpr uint32_t kAnalysisSpp = 64;
+constexpr uint32_t kAnalysisGather = 16;
+constexpr uint32_t kAnalysisLightSamples = 4;
+
 struct JobSettings {
   std::string store;                 // scene store directory (absolute once submitted)
   std::string output;                // image path (.png or .exr)
@@ -120,6 +136,8 @@ struct JobSettings {
   // workers see only the resolved camera.
   std::string cameraName;
   DaylightSettings daylight;
+  // Set: a lighting analysis, whose output is a CSV of its sensors' readings.
+  std::optional<AnalysisSettings> analysis;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;

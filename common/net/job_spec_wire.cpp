@@ -36,6 +36,11 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
   if (settings.targetError) spec.getTargetError().setValue(*settings.targetError);
   if (settings.timeLimitSeconds) spec.getTimeLimit().setSeconds(*settings.timeLimitSeconds);
   spec.setMaxPasses(settings.maxPasses);
+  if (settings.analysis) {
+    auto analysis = spec.initAnalysis();
+    analysis.setSensors(settings.analysis->sensors);
+    analysis.setDaylightFactor(settings.analysis->daylightFactor);
+  }
   if (const DaylightSettings& d = settings.daylight; d.any()) {
     auto daylight = spec.initDaylight();
     daylight.setSky(static_cast<wire::SkyKind>(d.sky));
@@ -88,6 +93,8 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   if (spec.getTargetError().isValue()) settings.targetError = spec.getTargetError().getValue();
   if (spec.getTimeLimit().isSeconds()) settings.timeLimitSeconds = spec.getTimeLimit().getSeconds();
   settings.maxPasses = spec.getMaxPasses();
+  if (spec.hasAnalysis())
+    settings.analysis = AnalysisSettings{spec.getAnalysis().getSensors(), spec.getAnalysis().getDaylightFactor()};
   if (spec.hasDaylight()) {
     const auto daylight = spec.getDaylight();
     DaylightSettings& d = settings.daylight;

@@ -50,6 +50,13 @@ struct KernelOutputs {
   TraceCounters counters;
 };
 
+// An analysis job's sensor as a lease measures it (wire::SensorPoint):
+// its row of the film, its point and the unit normal of its plane.
+struct SensorTask {
+  uint32_t index = 0;
+  Vec3 position, direction;
+};
+
 class CellKernel {
  public:
   // indirect: the cell's photon map in the render phase (null in the photon
@@ -64,6 +71,10 @@ class CellKernel {
   // Whether `light` (as emitPhotons numbers them) emits in this cell.
   bool emitsHere(uint32_t light) const;
   void generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, KernelOutputs& out);
+  // An analysis job's sensors, each lit as a camera hit on a white
+  // Lambertian surface at its point facing its direction, whose light is
+  // its irradiance (sensor_measure.cpp; film layout: sensor_film.h).
+  void measureSensors(const std::vector<SensorTask>& sensors, KernelOutputs& out);
   // Runs a ray, and the shadow rays it spawns here, to its end in this cell or a crossing.
   void trace(const RayState& ray, KernelOutputs& out);
   // Final-gather hits that read the irradiance cache wait in the kernel

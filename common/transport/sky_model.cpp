@@ -133,6 +133,15 @@ Vec3 SkyModel::irradianceFacing(const Vec3& n) const {
   return sum * (kPi / float(kSteps * kSteps));
 }
 
+std::optional<double> SkyModel::horizontalSkyLux() const {
+  const auto lux = [](const Vec3& rgb) {
+    return double(kWhiteEfficacy) * (0.2126 * rgb.x + 0.7152 * rgb.y + 0.0722 * rgb.z);
+  };
+  if (kind_ == DaylightSettings::Sky::Uniform) return lux(uniform_) * kPi;
+  if (kind_ == DaylightSettings::Sky::Overcast) return lux(Vec3(overcastZenith_)) * 7.0 * kPi / 9.0;
+  return std::nullopt;
+}
+
 std::string daylightProblem(const DaylightSettings& s) {
   using Sky = DaylightSettings::Sky;
   if (s.sunTime) {

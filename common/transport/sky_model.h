@@ -24,6 +24,7 @@
 #pragma once
 
 #include <array>
+#include <optional>
 #include <string>
 
 #include "common/job/job_settings.h"
@@ -49,6 +50,11 @@ class SkyModel {
   // hemisphere about n), by a fixed stratified quadrature: the same bits
   // wherever it is computed.
   Vec3 irradianceFacing(const Vec3& n) const;
+  // The sky's illuminance (lux) on an unobstructed horizontal plane, in
+  // closed form: pi L for the uniform sky (its upper hemisphere), 7 pi Lz / 9
+  // for the CIE overcast sky (10 000 lx); nullopt for Preetham's sky and
+  // for none.
+  std::optional<double> horizontalSkyLux() const;
 
  private:
   Vec3 preetham(const Vec3& towardsSky) const;

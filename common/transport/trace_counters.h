@@ -37,7 +37,8 @@ struct TraceCounters {
   int64_t photonsEscaped = 0;     // left a cell where no portal was
   int64_t photonCrossings = 0;
   int64_t photonCopies = 0;       // deposits copied to a neighbour near a portal
-  int64_t cameraRays = 0;         // shaded camera samples
+  int64_t cameraRays = 0;         // shaded camera samples (an analysis job's: sensor samples)
+  int64_t sensorsMeasured = 0;    // an analysis job's sensors, each with all its samples
   int64_t emissionRays = 0;       // camera rays that add only emitted light (cell_kernel.h)
   int64_t shadowRays = 0;
   int64_t gatherRays = 0;
@@ -57,6 +58,7 @@ struct TraceCounters {
             {"photons.absorbed", photonsAbsorbed}, {"photons.escaped", photonsEscaped},
             {"photons.crossings", photonCrossings}, {"photons.portal_copies", photonCopies},
             {"rays.camera", cameraRays},           {"rays.emission", emissionRays},
+            {"sensors.measured", sensorsMeasured},
             {"rays.gather", gatherRays},           {"rays.gather_short", shortGathers},
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},

@@ -19,7 +19,7 @@ namespace {
 constexpr std::array<std::string_view, 7> kImageExtensions{".png", ".exr", ".hdr", ".tif", ".tiff", ".jpg", ".jpeg"};
 }  // namespace
 
-void checkOutputPath(const std::string& path) {
+void checkOutputPath(const std::string& path, OutputKind kind) {
   namespace fs = std::filesystem;
   const fs::path output(path);
   std::string extension = output.extension().string();
@@ -27,7 +27,10 @@ void checkOutputPath(const std::string& path) {
   std::error_code error;
   if (fs::is_directory(output, error))
     throw std::invalid_argument(fmt::format("output {}: is a directory (give a file name ending in .png or .exr)", path));
-  if (std::find(kImageExtensions.begin(), kImageExtensions.end(), extension) == kImageExtensions.end())
+  if (kind == OutputKind::AnalysisCsv) {
+    if (extension != ".csv")
+      throw std::invalid_argument(fmt::format("output {}: an analysis writes CSV: give a file name ending in .csv", path));
+  } else if (std::find(kImageExtensions.begin(), kImageExtensions.end(), extension) == kImageExtensions.end())
     throw std::invalid_argument(fmt::format("output {}: {} (use .png, .exr, .hdr, .tif or .jpg)", path,
                                             extension.empty() ? std::string("has no image extension")
                                                               : fmt::format("unknown image extension {}", extension)));

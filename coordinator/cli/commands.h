@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include <capnp/message.h>
+
+#include "common/analysis/sensor.h"
 #include "common/job/job_settings.h"
 #include "common/scene/import/building_importer.h"
 #include "coordinator/cli/ifc_conversion.h"
@@ -19,6 +22,14 @@ void addRenderOptions(CLI::App& command, JobSettings& options);
 // Their daylight: --sun, --sun-time (and its place), --sky, --sun-irradiance,
 // --turbidity (docs/daylight.md); also `scene export FILE.rad`'s sky.
 void addDaylightOptions(CLI::App& command, DaylightSettings& daylight);
+// Of those, the light and how it is computed (daylight, photons, samples,
+// gather rays, seed, ...), which `analyze` takes too; `samplesHelp` says
+// what --spp counts.
+void addLightingOptions(CLI::App& command, JobSettings& options, const std::string& samplesHelp);
+// The Submit message of a job (and its sensors, for an analysis); checks
+// what the client can check before anything starts.
+void fillSubmit(const JobSettings& settings, capnp::MallocMessageBuilder& message,
+                const std::vector<Sensor>* sensors = nullptr);
 
 int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
@@ -54,7 +65,24 @@ struct LocalRunOptions {
   std::string logLevel = "info";
   std::string keys;   // CURVE keys for the local services ("" for none)
 };
-int runRender(const JobSettings& render, const LocalRunOptions& local);
+// sensors: an analysis job's (render.analysis), in their file's order.
+int runRender(const JobSettings& render, const LocalRunOptions& local, const std::vector<Sensor>* sensors = nullptr);
+// `analyze`: sensors from a .pts file (or a grid), measured by a job as a
+// render is (analyze_command.cpp; docs/lighting-analysis.md).
+struct AnalysisOptions {
+  std::string sensorsFile;   // --sensors FILE.pts
+  std::string grid;          // --grid auto
+  bool daylightFactor = false;
+};
+// The analysis's sensors, and `settings` made an analysis of them (its
+// daylight the CIE overcast sky with --daylight-factor). Throws
+// std::invalid_argument in one line naming the file and line, or the option.
+std::vector<Sensor> prepareAnalysis(JobSettings& settings, const AnalysisOptions& analysis);
+// Warns on stderr of the sensors outside every cell of the store (when the
+// client can read it), naming their lines: they are not measured.
+void warnOfSensorsOutsideCells(const std::string& store, const std::vector<Sensor>& sensors,
+                               const std::string& sensorsFile);
+int runAnalyze(JobSettings settings, const AnalysisOptions& analysis, const LocalRunOptions& local);
 // `render --views FILE.json -o DIR/`: several views after one photon pass (views_command.cpp).
 struct ViewsOptions {
   std::string file;            // the views file (view_list.h)
@@ -70,7 +98,7 @@ struct ConnectOptions {
 };
 void addConnectOptions(CLI::App& command, ConnectOptions& options);
 
-int runSubmit(const ConnectOptions& connect, const JobSettings& render);
+int runSubmit(const ConnectOptions& connect, const JobSettings& render, const std::vector<Sensor>* sensors = nullptr);
 int runStatus(const ConnectOptions& connect, uint64_t job, bool json);
 int runWait(const ConnectOptions& connect, uint64_t job, bool quiet);
 int runCancel(const ConnectOptions& connect, uint64_t job);

@@ -1,4 +1,4 @@
-// The options and arguments of `portico render` and of the commands that
+// The options and arguments of `portico render`, `portico analyze` and of the commands that
 // talk to a running coordinator: submit, status, wait, cancel, fetch-image,
 // shutdown.
 #include <CLI/CLI.hpp>
@@ -14,6 +14,59 @@ namespace portico::cli {
 
 namespace {
 
+// The services `render` and `analyze` start on this machine.
+void addLocalRunOptions(CLI::App& command, LocalRunOptions& local) {
+  command.add_option("--workers", local.workers, "local worker processes")
+      ->capture_default_str()
+      ->check(wholeNumber(1, 256));
+  command.add_option("--memory", local.memory, "memory of each worker (its --memory)")
+      ->capture_default_str()
+      ->check(workerMemory());
+  command.add_flag("--keep-logs", local.keepLogs, "keep the services' logs and jobs.db");
+  command.add_option("--log-level", local.logLevel, "services' log level")->capture_default_str();
+  command.add_option("--keys", local.keys, "CURVE keys directory for the local services (`portico keys generate`)")
+      ->check(CLI::ExistingDirectory);
+}
+
+// An analysis's sampling defaults (a sensor takes more rays than a pixel),
+// set before its options are bound so that --help shows them.
+void useAnalysisDefaults(JobSettings& settings) {
+  settings.spp = kAnalysisSpp;
+  settings.gather = kAnalysisGather;
+  settings.lightSamples = kAnalysisLightSamples;
+}
+
+// Where an analysis's sensors come from, and what it reports.
+void addAnalysisOptions(CLI::App& command, AnalysisOptions& analysis) {
+  command.add_option("--sensors", analysis.sensorsFile,
+                     "the sensors: a Radiance .pts file, one `x y z dx dy dz` a line (a point in metres and the "
+                     "direction its measuring plane faces)")
+      ->check(CLI::ExistingFile);
+  command.add_option("--grid", analysis.grid, "auto: work-plane grids over every room instead of --sensors")
+      ->check(CLI::IsMember({"auto"}));
+  command.add_flag("--daylight-factor", analysis.daylightFactor,
+                   "under the CIE overcast sky, report each sensor's daylight factor DF = 100 E / E_out (%), E_out "
+                   "the sky's unobstructed horizontal illuminance");
+}
+
+void addAnalyze(CLI::App& app, CommandTable& table) {
+  struct Options {
+    JobSettings settings;
+    AnalysisOptions analysis;
+    LocalRunOptions local;
+  };
+  auto o = std::make_shared<Options>();
+  useAnalysisDefaults(o->settings);
+  auto* analyze = app.add_subcommand(
+      "analyze", "lighting analysis: illuminance (lux) at sensors, as a job on local workers; writes a CSV");
+  analyze->add_option("STORE", o->settings.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
+  analyze->add_option("-o,--output", o->settings.output, "the results: a .csv, one row per sensor")->required();
+  addAnalysisOptions(*analyze, o->analysis);
+  addLightingOptions(*analyze, o->settings, "samples per sensor");
+  addLocalRunOptions(*analyze, o->local);
+  table.add(analyze, [o] { return runAnalyze(o->settings, o->analysis, o->local); });
+}
+
 void addRender(CLI::App& app, CommandTable& table) {
   struct Options {
     JobSettings render;
@@ -23,16 +76,7 @@ void addRender(CLI::App& app, CommandTable& table) {
   auto o = std::make_shared<Options>();
   auto* renderCommand = app.add_subcommand("render", "render locally: starts a coordinator and workers");
   addRenderOptions(*renderCommand, o->render);
-  renderCommand->add_option("--workers", o->local.workers, "local worker processes")
-      ->capture_default_str()
-      ->check(wholeNumber(1, 256));
-  renderCommand->add_option("--memory", o->local.memory, "memory of each worker (its --memory)")
-      ->capture_default_str()
-      ->check(workerMemory());
-  renderCommand->add_flag("--keep-logs", o->local.keepLogs, "keep the services' logs and jobs.db");
-  renderCommand->add_option("--log-level", o->local.logLevel, "services' log level")->capture_default_str();
-  renderCommand->add_option("--keys", o->local.keys, "CURVE keys directory for the local services (`portico keys generate`)")
-      ->check(CLI::ExistingDirectory);
+  addLocalRunOptions(*renderCommand, o->local);
   auto* views = renderCommand->add_option(
       "--views", o->views.file,
       "a JSON file of views (name, and camera (a store camera) or look_from, look_at, optional up, fov; optional "
@@ -57,12 +101,35 @@ void addSubmit(CLI::App& app, CommandTable& table) {
   struct Options {
     ConnectOptions connect;
     JobSettings render;
+    bool analyze = false;
+    AnalysisOptions analysis;
   };
   auto o = std::make_shared<Options>();
   auto* submit = app.add_subcommand("submit", "submit a job to a running coordinator; prints its id");
   addConnectOptions(*submit, o->connect);
   addRenderOptions(*submit, o->render);
-  table.add(submit, [o] { return runSubmit(o->connect, o->render); });
+  submit->add_flag("--analyze", o->analyze,
+                   "a lighting analysis (as `portico analyze`): -o names its .csv; needs --sensors or --grid");
+  addAnalysisOptions(*submit, o->analysis);
+  table.add(submit, [o, submit] {
+    if (!o->analyze) {
+      if (!o->analysis.sensorsFile.empty() || !o->analysis.grid.empty() || o->analysis.daylightFactor)
+        throw std::invalid_argument("--sensors, --grid and --daylight-factor need --analyze");
+      return runSubmit(o->connect, o->render);
+    }
+    // The analysis's sampling defaults where the command line gives none.
+    const JobSettings defaults = [] {
+      JobSettings d;
+      useAnalysisDefaults(d);
+      return d;
+    }();
+    if (submit->get_option("--spp")->count() == 0) o->render.spp = defaults.spp;
+    if (submit->get_option("--gather")->count() == 0) o->render.gather = defaults.gather;
+    if (submit->get_option("--light-samples")->count() == 0) o->render.lightSamples = defaults.lightSamples;
+    const std::vector<Sensor> sensors = prepareAnalysis(o->render, o->analysis);
+    warnOfSensorsOutsideCells(o->render.store, sensors, o->analysis.sensorsFile);
+    return runSubmit(o->connect, o->render, &sensors);
+  });
 }
 
 void addStatus(CLI::App& app, CommandTable& table) {
@@ -122,6 +189,7 @@ void addShutdown(CLI::App& app, CommandTable& table) {
 
 void addJobCommands(CLI::App& app, CommandTable& table) {
   addRender(app, table);
+  addAnalyze(app, table);
   addSubmit(app, table);
   addStatus(app, table);
   addWait(app, table);

@@ -202,53 +202,13 @@ void addDaylightOptions(CLI::App& command, DaylightSettings& d) {
 
 void addRenderOptions(CLI::App& command, JobSettings& o) {
   addCameraOptions(command, o);
-  addDaylightOptions(command, o.daylight);
   command.add_option("STORE", o.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   command.add_option("-o,--output", o.output, "image to write: .png (tone-mapped) or .exr (linear)")->required();
-  command.add_option("--accel", o.accel,
-                     "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
-                     "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
-  command.add_option("--render-accel", o.renderAccel,
-                     "accelerator of the render phase (default: bvh with the default --accel grid, else the "
-                     "--accel)");
-  // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
-  // wrong value is refused here, in one line, before anything starts.
-  command.add_option("--photons", o.photons,
-                     "photons emitted in all (default: 5000 per light of the building, at least 400000, at most "
-                     "20000000; docs/large-buildings.md)")
-      ->check(wholeNumber(1, limits::kMaxPhotons));
-  command.add_option("--spp", o.spp, "samples per pixel")->capture_default_str()->check(wholeNumber(1, limits::kMaxSpp));
-  command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
-      ->capture_default_str()
-      ->check(wholeNumber(0, limits::kMaxGather));
-  command.add_option("--seed", o.seed, "random seed")->capture_default_str()->check(wholeNumber(0, UINT64_MAX));
+  addLightingOptions(command, o, "samples per pixel");
   command.add_option("--width", o.width, "image width (default: the camera's)")
       ->check(wholeNumber(1, limits::kMaxImageSide));
   command.add_option("--height", o.height, "image height (default: the camera's)")
       ->check(wholeNumber(1, limits::kMaxImageSide));
-  command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")
-      ->capture_default_str()
-      ->check(wholeNumber(0, limits::kMaxLightSamples));
-  command.add_option("--light-hops", o.lightHops,
-                     "sample the lights of cells within this many portals of a shading point (-1: every light; "
-                     "default: 2 with room cells, every light with --grid voxel cells)")
-      ->check(wholeNumber(-1, limits::kMaxLightHops));
-  command.add_option("--photon-k", o.photonK, "photons per density estimate")
-      ->capture_default_str()
-      ->check(wholeNumber(1, limits::kMaxPhotonK));
-  command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")
-      ->capture_default_str()
-      ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
-  command
-      .add_option_function<std::string>(
-          "--irradiance",
-          [&o](const std::string& name) {
-            o.irradiance = name == "knn" ? JobSettings::Irradiance::Knn : JobSettings::Irradiance::Precomputed;
-          },
-          "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at about one "
-          "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
-      ->check(CLI::IsMember({"precomputed", "knn"}))
-      ->default_str(toString(o.irradiance));
   // Render passes (coordinator/render_passes.h): without a target or a
   // time limit, one pass, as ever.
   command
@@ -283,6 +243,50 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
           "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
       ->check(CLI::IsMember({"radiance", "cells", "portals"}))
       ->default_str(toString(o.aov));
+}
+
+void addLightingOptions(CLI::App& command, JobSettings& o, const std::string& samplesHelp) {
+  addDaylightOptions(command, o.daylight);
+  command.add_option("--accel", o.accel,
+                     "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
+                     "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
+  command.add_option("--render-accel", o.renderAccel,
+                     "accelerator of the render phase (default: bvh with the default --accel grid, else the "
+                     "--accel)");
+  // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
+  // wrong value is refused here, in one line, before anything starts.
+  command.add_option("--photons", o.photons,
+                     "photons emitted in all (default: 5000 per light of the building, at least 400000, at most "
+                     "20000000; docs/large-buildings.md)")
+      ->check(wholeNumber(1, limits::kMaxPhotons));
+  command.add_option("--spp", o.spp, samplesHelp)->capture_default_str()->check(wholeNumber(1, limits::kMaxSpp));
+  command.add_option("--gather", o.gather, "final-gather rays per hit (0: photon-map estimate at the hit)")
+      ->capture_default_str()
+      ->check(wholeNumber(0, limits::kMaxGather));
+  command.add_option("--seed", o.seed, "random seed")->capture_default_str()->check(wholeNumber(0, UINT64_MAX));
+  command.add_option("--light-samples", o.lightSamples, "shadow rays per camera hit")
+      ->capture_default_str()
+      ->check(wholeNumber(0, limits::kMaxLightSamples));
+  command.add_option("--light-hops", o.lightHops,
+                     "sample the lights of cells within this many portals of a shading point (-1: every light; "
+                     "default: 2 with room cells, every light with --grid voxel cells)")
+      ->check(wholeNumber(-1, limits::kMaxLightHops));
+  command.add_option("--photon-k", o.photonK, "photons per density estimate")
+      ->capture_default_str()
+      ->check(wholeNumber(1, limits::kMaxPhotonK));
+  command.add_option("--photon-radius", o.photonRadius, "largest density-estimate radius (m)")
+      ->capture_default_str()
+      ->check(realNumber(1e-6, limits::kMaxPhotonRadius));
+  command
+      .add_option_function<std::string>(
+          "--irradiance",
+          [&o](const std::string& name) {
+            o.irradiance = name == "knn" ? JobSettings::Irradiance::Knn : JobSettings::Irradiance::Precomputed;
+          },
+          "what a final-gather hit reads: precomputed (the nearest irradiance precomputed at about one "
+          "photon in 8 of its cell) or knn (the k-nearest-photon estimate at every hit)")
+      ->check(CLI::IsMember({"precomputed", "knn"}))
+      ->default_str(toString(o.irradiance));
   command.add_flag("--fresh-photons", o.freshPhotons,
                    "run a photon pass of its own, even where an earlier job's finished one on the same store with "
                    "the same photon settings could be reused");
@@ -316,23 +320,34 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 }
 }  // namespace
 
-void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message) {
+void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message, const std::vector<Sensor>* sensors) {
   if (const std::string problem = cameraChoiceProblem(o); !problem.empty()) throw std::invalid_argument(problem);
   if (const std::string problem = daylightProblem(o.daylight); !problem.empty()) throw std::invalid_argument(problem);
   JobSettings settings = o;
   settings.store = std::filesystem::absolute(o.store).lexically_normal().string();
   // As the user who asks: the coordinator checks it again as itself.
-  checkOutputPath(o.output);
+  checkOutputPath(o.output, o.analysis ? OutputKind::AnalysisCsv : OutputKind::Image);
   settings.output = std::filesystem::absolute(o.output).lexically_normal().string();
   // Automatic values stay automatic: the coordinator resolves them (resolveJobSettings).
   auto submit = message.initRoot<wire::Envelope>().initSubmit();
   toWire(settings, submit.initSpec());
   submit.setFreshPhotons(settings.freshPhotons);
+  if (sensors) {
+    auto points = submit.initSensors(unsigned(sensors->size()));
+    for (size_t i = 0; i < sensors->size(); ++i) {
+      const Sensor& s = (*sensors)[i];
+      auto point = points[unsigned(i)];
+      point.setIndex(uint32_t(i));
+      point.setLine(s.sourceLine);
+      point.setX(s.position.x), point.setY(s.position.y), point.setZ(s.position.z);
+      point.setDx(s.direction.x), point.setDy(s.direction.y), point.setDz(s.direction.z);
+    }
+  }
 }
 
-int runSubmit(const ConnectOptions& connect, const JobSettings& render) {
+int runSubmit(const ConnectOptions& connect, const JobSettings& render, const std::vector<Sensor>* sensors) {
   capnp::MallocMessageBuilder message;
-  fillSubmit(render, message);
+  fillSubmit(render, message, sensors);
   net::CoordinatorClient client = connectTo(connect);
   std::cout << client.submit(message) << "\n";
   return 0;
@@ -382,7 +397,7 @@ int runFetchImage(const ConnectOptions& connect, uint64_t job, const std::string
   if (extension(path) != extension(image.getOutput().cStr()))
     throw std::invalid_argument(fmt::format("{}: job {}'s image is a {} file (its output was {})", path, job,
                                             extension(image.getOutput().cStr()), image.getOutput().cStr()));
-  checkOutputPath(path);
+  checkOutputPath(path, extension(path) == ".csv" ? OutputKind::AnalysisCsv : OutputKind::Image);
   writeWhole(path, image.getImage().begin(), image.getImage().size());
   const std::string statistics = image.getStatistics();
   writeWhole(path + ".json", statistics.data(), statistics.size());

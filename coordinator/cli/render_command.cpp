@@ -17,8 +17,6 @@
 
 namespace portico::cli {
 
-void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message);
-
 namespace {
 // The sun the coordinator computed for --sun-time, as --sun would give it:
 // one line on stderr once the status shows it; false until then.
@@ -33,10 +31,10 @@ bool showResolvedSun(const nlohmann::json& status) {
 }
 }  // namespace
 
-int runRender(const JobSettings& render, const LocalRunOptions& local) {
+int runRender(const JobSettings& render, const LocalRunOptions& local, const std::vector<Sensor>* sensors) {
   if (local.workers == 0) throw std::invalid_argument("--workers must be at least 1");
   capnp::MallocMessageBuilder submit;
-  fillSubmit(render, submit);   // validates options before anything starts
+  fillSubmit(render, submit, sensors);   // validates options before anything starts
   LocalServices services(local);
   catchInterrupts();
   net::CoordinatorClient client(services.endpoint(), services.keys());

@@ -23,8 +23,6 @@
 
 namespace portico::cli {
 
-void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message);
-
 namespace {
 // Every view's submit message, checked before anything starts.
 std::vector<std::unique_ptr<capnp::MallocMessageBuilder>> viewSubmits(const JobSettings& base,

@@ -292,6 +292,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
     store.database().exec("DROP TABLE lease_log");   // schema 8
     dropVersionSixColumns(store);
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
+    store.database().exec("DROP TABLE job_sensors");   // schema 12
     store.database().setUserVersion(1);
   }
   JobStore migrated(path_.string());
@@ -448,6 +449,7 @@ TEST_F(JobStoreTest, ALeaseLogOfSchemaEightReadsWithItsCpuUnrecorded) {
         "INSERT INTO lease_log(job, lease, phase, cell, more_cells, work, worker, sent_ms, result_ms, lease_us, "
         "load_us, cells_loaded, triangles_loaded) VALUES (1, 4, 0, 2, 0, 800, 'w0', 5, 9, 4000, 0, 0, 0)");
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
+    store.database().exec("DROP TABLE job_sensors");   // schema 12
     store.database().setUserVersion(8);
   }
   JobStore migrated(path_.string());
@@ -801,6 +803,7 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
     store.database().exec("DROP TABLE lease_log");   // schema 8
     dropVersionSixColumns(store);
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
+    store.database().exec("DROP TABLE job_sensors");   // schema 12
     store.database().setUserVersion(3);
   }
   overwriteByte(path_.string() + "-photons/job-1.bin", secondOffset + 7);   // the second batch
