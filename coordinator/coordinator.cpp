@@ -16,6 +16,7 @@
 
 #include "common/net/endpoint_scope.h"
 #include "common/net/job_spec_wire.h"
+#include "common/scene/store/store_file_names.h"
 #include "common/transport/photon_record.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
@@ -1111,6 +1112,7 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     settings.store = store.string();
     checkOutputPath(settings.output, settings.analysis ? OutputKind::AnalysisCsv : OutputKind::Image);
     auto scene = std::make_unique<SceneStore>(SceneStore::open(settings.store));
+    requireRegularStoreFiles(*scene);
     settings = resolveJobSettings(std::move(settings), *scene);
     validateJobSettings(settings, *scene);
     // An analysis's sensors, checked and located in their cells.

@@ -1,9 +1,10 @@
 // Serves a scene store's files to workers that cannot see its file system
 // (worker --cache-dir): scene.db, cells/<id>.cell and textures/<id>.tif of the stores of the
 // jobs the asking worker holds leases of, nothing else, in chunks that fit
-// a message. Each path is opened one component at a time from the store's
-// directory, following no symbolic link, and only a regular file is served:
-// a store cannot hand out a file outside itself.
+// a message. Each path is opened one component at a time from "/",
+// following no symbolic link (above the store as well as in it), and only a
+// regular file is served: a store cannot hand out a file outside itself,
+// nor can a folder above it swapped for a link after submit.
 #pragma once
 
 #include <cstdint>
@@ -12,14 +13,12 @@
 
 #include <capnp/message.h>
 
+#include "common/scene/store/store_file_names.h"
 #include "proto/wire.capnp.h"
 
 namespace portico {
 
 constexpr uint64_t kFileChunkBytes = uint64_t(4) << 20;
-
-// Whether `path` is a file a store serves: "scene.db" or "cells/<digits>.cell".
-bool isServableStorePath(const std::string& path);
 
 // Fills `chunk` for the request; a request outside `stores` (the resolved
 // store directories the asker may read) or for another path, a symbolic

@@ -48,11 +48,25 @@ RouterSecurity::RouterSecurity(zmq::context_t& context, zmq::socket_t& router, c
     router.set(zmq::sockopt::zap_domain, "portico");
     spdlog::info("no --keys on ipc://: only uid {} and root may connect", ::geteuid());
   }
-  connections_ = std::make_unique<net::ConnectionLog>(context, router, "coordinator");
+  // A connection that has not finished its handshake by then is closed: an
+  // idle one costs nothing to open and holds a descriptor.
+  router.set(zmq::sockopt::handshake_ivl, ConnectionGuard::kHandshakeMs);
+  net::ConnectionLog::Listener listener;
+  if (listen.rfind("tcp://", 0) == 0) {
+    guard_ = std::make_unique<ConnectionGuard>(ConnectionGuard::raiseDescriptorLimit());
+    listener.accepted = [this](int fd) { guard_->accepted(fd); };
+    listener.closed = [this](int fd) { guard_->closed(fd); };
+  }
+  connections_ = std::make_unique<net::ConnectionLog>(context, router, "coordinator", std::move(listener));
 }
 
 std::optional<net::Role> RouterSecurity::roleOf(zmq::message_t& frame) const {
   if (inproc_) return net::Role::Operator;
+  if (guard_) {
+    // The connection's descriptor (ZMQ_SRCFD: deprecated, still what libzmq 4.3 offers).
+    const int fd = zmq_msg_get(frame.handle(), ZMQ_SRCFD);
+    if (fd >= 0) guard_->proven(fd);
+  }
   const char* userId = zmq_msg_gets(frame.handle(), "User-Id");
   if (!userId) return std::nullopt;
   return net::roleNamed(userId);

@@ -1,7 +1,8 @@
 // What stands between the coordinator's ROUTER socket and its peers: who
 // may connect, in which role (common/net/role.h), a frame size limit sized
 // to legitimate messages, and a log of the connections libzmq dropped on
-// its own. Three ways in:
+// its own, and limits on connections that have not authenticated
+// (coordinator/connection_guard.h). Three ways in:
 //   --keys DIR     CURVE; a ZAP handler admits the keys of DIR's
 //                  {client,worker,operator}.public, each in its role;
 //   ipc:// alone   a ZAP handler admits the coordinator's own user and root
@@ -21,6 +22,7 @@
 #include "common/net/connection_log.h"
 #include "common/net/role.h"
 #include "common/net/zap_authenticator.h"
+#include "coordinator/connection_guard.h"
 
 namespace portico {
 
@@ -39,13 +41,15 @@ class RouterSecurity {
   RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& listen,
                  const std::string& keysDirectory, uint64_t maxFrameBytes);
   // The role of the peer that sent `frame`, from what the ZAP handler
-  // admitted it as; none when it was admitted without one.
+  // admitted it as; none when it was admitted without one. Its connection
+  // has passed the handshake (ConnectionGuard).
   std::optional<net::Role> roleOf(zmq::message_t& frame) const;
   // Call from the serving loop: logs connections libzmq closed or refused.
   void logConnectionEvents() { connections_->drain(); }
 
  private:
   std::unique_ptr<net::ZapAuthenticator> zap_;
+  std::unique_ptr<ConnectionGuard> guard_;   // tcp:// only (ipc:// admits only local users)
   std::unique_ptr<net::ConnectionLog> connections_;
   bool inproc_ = false;   // the same process: every peer is an operator
 };

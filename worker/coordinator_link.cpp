@@ -3,12 +3,17 @@
 #include <fmt/format.h>
 #include <spdlog/spdlog.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
+#include <filesystem>
 #include <string_view>
 #include <thread>
 
 #include "common/net/endpoint_scope.h"
+#include "common/net/ipc_peer.h"
 
 namespace portico {
 
@@ -23,13 +28,63 @@ constexpr int kMostBackoffMs = 30000;
 }  // namespace
 
 CoordinatorLink::CoordinatorLink(LinkOptions options, std::optional<net::ClientKeys> keys)
-    : options_(std::move(options)), keys_(std::move(keys)), backoffMs_(kFirstBackoffMs) {}
+    : options_(std::move(options)),
+      keys_(std::move(keys)),
+      checkPeerUid_(!keys_ && options_.endpoint.rfind("ipc://", 0) == 0),
+      backoffMs_(kFirstBackoffMs) {}
 
-void CoordinatorLink::connect() {
+// Without keys on ipc://, the coordinator is whoever listens on the socket's
+// path: any local user may bind it in a folder they can write (before the
+// coordinator starts, or while it restarts). Trusted only when the socket
+// belongs to this user or root, in a folder no one else may change.
+std::optional<std::string> CoordinatorLink::untrustedSocket() const {
+  const std::string path = options_.endpoint.substr(std::string_view("ipc://").size());
+  const uid_t us = ::geteuid();
+  struct stat info {};
+  const std::string folder = std::filesystem::path(path).parent_path().string();
+  if (!folder.empty() && ::stat(folder.c_str(), &info) == 0) {
+    if (info.st_uid != us && info.st_uid != 0)
+      return fmt::format("its folder {} belongs to uid {}, who may put any socket there", folder, info.st_uid);
+    if ((info.st_mode & S_IWOTH) && !(info.st_mode & S_ISVTX))
+      return fmt::format("its folder {} is writable by every user (mode {:o}, not sticky): anyone may replace the "
+                         "socket",
+                         folder, info.st_mode & 07777);
+  }
+  if (::lstat(path.c_str(), &info) != 0) return std::nullopt;   // not there yet: libzmq retries; messages are checked
+  if (!S_ISSOCK(info.st_mode)) return fmt::format("{} is not a socket", path);
+  if (info.st_uid != us && info.st_uid != 0)
+    return fmt::format("the socket {} belongs to uid {}, not to uid {} (this user) or root: another user may have "
+                       "taken its path",
+                       path, info.st_uid, us);
+  return std::nullopt;
+}
+
+// The same for each message: libzmq reconnects by itself after the
+// coordinator restarts, to whoever listens on the path by then, and
+// SO_PEERCRED names that process's user.
+std::optional<std::string> CoordinatorLink::untrustedSender(zmq::message_t& frame) const {
+  const char* address = zmq_msg_gets(frame.handle(), "Peer-Address");
+  const std::optional<uid_t> uid = address ? net::ipcPeerUid(address) : std::nullopt;
+  if (!uid) return std::string("its credentials are unknown");
+  if (*uid != ::geteuid() && *uid != 0)
+    return fmt::format("it is served by uid {}, not by uid {} (this user) or root: another user may have taken the "
+                       "socket's path",
+                       *uid, ::geteuid());
+  return std::nullopt;
+}
+
+bool CoordinatorLink::connect() {
   if (backoffDue_) {
     std::this_thread::sleep_for(std::chrono::milliseconds(backoffMs_));
     backoffMs_ = std::min(backoffMs_ * 2, kMostBackoffMs);
     backoffDue_ = false;
+  }
+  if (checkPeerUid_) {
+    if (const auto why = untrustedSocket()) {
+      spdlog::error("not connecting to {}: {}; retrying in {} ms", options_.endpoint, *why, backoffMs_);
+      backoffDue_ = true;
+      return false;
+    }
   }
   socket_.emplace(context_, zmq::socket_type::dealer);
   socket_->set(zmq::sockopt::linger, 0);
@@ -47,10 +102,11 @@ void CoordinatorLink::connect() {
   hello.setMemoryBytes(options_.memoryBytes);
   send(message);
   lastHeardMs_ = steadyMs();
+  return true;
 }
 
 LinkEvent CoordinatorLink::receive(int wakeFd, std::chrono::milliseconds wait) {
-  if (!socket_) connect();
+  if (!socket_ && !connect()) return LinkEvent{};
   if (steadyMs() - lastSentMs_ >= options_.heartbeatMs) {
     capnp::MallocMessageBuilder message;
     message.initRoot<wire::Envelope>().setHeartbeat();
@@ -68,6 +124,16 @@ LinkEvent CoordinatorLink::receive(int wakeFd, std::chrono::milliseconds wait) {
       if (e.num() != EINTR) throw;   // a signal: the worker's loop decides
     }
     if (items[0].revents & ZMQ_POLLIN) received = bool(socket_->recv(frame, zmq::recv_flags::dontwait));
+  }
+  if (received && checkPeerUid_) {
+    if (const auto why = untrustedSender(frame)) {
+      spdlog::error("refused the coordinator at {}: {}; reconnecting in {} ms", options_.endpoint, *why, backoffMs_);
+      socket_.reset();
+      backoffDue_ = true;
+      welcomed_ = false;
+      event.kind = LinkEvent::Kind::Lost;
+      return event;
+    }
   }
   if (received) {
     lastHeardMs_ = steadyMs();

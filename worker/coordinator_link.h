@@ -2,7 +2,11 @@
 // the worker asks for the next message and sends replies; the link says
 // Hello, answers Welcome with Ready, sends heartbeats, swallows the
 // coordinator's, notices its silence and reconnects with exponential
-// back-off. Any message sent or received counts as a heartbeat.
+// back-off. Any message sent or received counts as a heartbeat. Without
+// CURVE keys (ipc:// only: tcp:// always pins the coordinator's key), the
+// coordinator must be a process of this user or root: the socket's owner
+// is checked before connecting and the sender's SO_PEERCRED on every
+// message, so another local user who binds the socket's path is refused.
 #pragma once
 
 #include <capnp/message.h>
@@ -56,7 +60,11 @@ class CoordinatorLink {
   void sendGoodbye();
 
  private:
-  void connect();
+  // False when it would not connect (an ipc:// socket it may not trust).
+  bool connect();
+  // Why the coordinator on ipc:// (no keys) is not trusted; none when it is.
+  std::optional<std::string> untrustedSocket() const;
+  std::optional<std::string> untrustedSender(zmq::message_t& frame) const;
   // The link's own messages (Welcome, Heartbeat, the coordinator's Errors);
   // false for those the worker handles.
   bool handleOwn(const net::Decoded& decoded, LinkEvent& event);
@@ -65,6 +73,8 @@ class CoordinatorLink {
 
   LinkOptions options_;
   std::optional<net::ClientKeys> keys_;
+  // ipc:// without keys: the coordinator must be this user or root (no CURVE key to check it by).
+  bool checkPeerUid_ = false;
   zmq::context_t context_{1};
   std::optional<zmq::socket_t> socket_;   // none: lost, to be connected again
   int backoffMs_ = 250;

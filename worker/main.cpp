@@ -59,6 +59,11 @@ int main(int argc, char** argv) {
                  "back (at least the lease's own work; 0: hand every crossing back)")
       ->capture_default_str()
       ->check(portico::cli::wholeNumber(0, INT64_MAX));
+  app.add_option("--lease-limit-s", options.leaseLimitSeconds,
+                 "a lease still tracing after this many seconds is failed and the worker exits: its thread is stuck "
+                 "(a read that never returns, on a hung file system)")
+      ->capture_default_str()
+      ->check(portico::cli::wholeNumber(1, 86400 * 7));
   app.add_option("--log-level", logLevel)->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(logLevel));

@@ -1,11 +1,20 @@
 #include "worker/store_mirror.h"
 
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <filesystem>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 #include <system_error>
+
+#include "common/scene/store/store_file_names.h"
+#include "common/util/file_at.h"
+#include "common/util/no_follow.h"
 
 namespace portico {
 
@@ -60,33 +69,64 @@ std::optional<std::string> StoreMirror::missing(const std::string& store, uint32
 }
 
 uint64_t StoreMirror::receivedBytes(const std::string& store, const std::string& path) const {
-  std::error_code error;
+  struct stat info {};
   const fs::path part = fs::path(localDirectory(store)) / (path + ".part");
-  const auto size = fs::file_size(part, error);
-  return error ? 0 : size;
+  // Not followed: a link planted there is refused when written, not measured.
+  return ::lstat(part.c_str(), &info) == 0 && S_ISREG(info.st_mode) ? uint64_t(info.st_size) : 0;
 }
+
+namespace {
+// The folder a store file goes into under the store's cache folder (created,
+// never a symbolic link) and its name there. `path` is a store file name
+// (isServableStorePath): one folder at most.
+FileDescriptor openParentFolder(int storeFolder, const std::string& path, std::string& name, std::string& error) {
+  const size_t slash = path.find('/');
+  if (slash == std::string::npos) {
+    name = path;
+    return FileDescriptor(::dup(storeFolder));
+  }
+  name = path.substr(slash + 1);
+  return openSubdirectoryNoFollow(storeFolder, path.substr(0, slash), true, error);
+}
+}  // namespace
 
 bool StoreMirror::accept(wire::FileChunk::Reader chunk) {
   const std::string store = chunk.getStore(), path = chunk.getPath();
   if (chunk.getError().size())
     throw std::runtime_error(fmt::format("coordinator cannot serve {} of {}: {}", path, store, chunk.getError().cStr()));
-  if (path != "scene.db" && path.rfind("cells/", 0) != 0 && path.rfind("textures/", 0) != 0)
-    throw std::runtime_error(fmt::format("coordinator sent an unexpected file {}", path));
+  // Whatever answers on the endpoint names the file: only a store's own
+  // file names are written, and only under the cache directory.
+  if (!isServableStorePath(path))
+    throw std::runtime_error(fmt::format("coordinator sent '{}', not a scene store file name (scene.db, "
+                                         "cells/<id>.cell, textures/<id>.tif): not written",
+                                         path));
   const fs::path local = localDirectory(store);
-  const fs::path part = local / (path + ".part"), final = local / path;
-  fs::create_directories(part.parent_path());
   if (chunk.getOffset() != receivedBytes(store, path))
     throw std::runtime_error(fmt::format("{} of {}: chunk at byte {} but {} bytes received", path, store,
                                          chunk.getOffset(), receivedBytes(store, path)));
+  std::string error, name;
+  FileDescriptor root(::open(root_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC));
+  FileDescriptor storeFolder;
+  if (root.valid()) storeFolder = openSubdirectoryNoFollow(root.get(), local.filename().string(), true, error);
+  FileDescriptor folder;
+  if (storeFolder.valid()) folder = openParentFolder(storeFolder.get(), path, name, error);
+  if (!folder.valid())
+    throw std::runtime_error(fmt::format("cache directory {}: {}", root_, error.empty() ? std::strerror(errno) : error));
+  const std::string partName = name + ".part";
   {
-    std::ofstream out(part, std::ios::binary | std::ios::app);
+    FileDescriptor out(::openat(folder.get(), partName.c_str(), O_WRONLY | O_CREAT | O_NOFOLLOW | O_CLOEXEC,
+                                0644));
     auto data = chunk.getData();
-    out.write(reinterpret_cast<const char*>(data.begin()), std::streamsize(data.size()));
-    if (!out) throw std::runtime_error(fmt::format("{}: cannot write", part.string()));
+    int writeError = 0;
+    if (!out.valid() || writeAt(out.get(), data.begin(), data.size(), int64_t(chunk.getOffset()), writeError) !=
+                            data.size())
+      throw std::runtime_error(fmt::format("{}: cannot write: {}", (local / (path + ".part")).string(),
+                                           std::strerror(out.valid() ? writeError : errno)));
     bytesFetched_ += data.size();
   }
   if (receivedBytes(store, path) < chunk.getTotalBytes()) return false;
   StoreState& s = state(store);
+  const fs::path part = local / (path + ".part"), final = local / path;
   if (path == "scene.db") {
     // A different catalogue means a regenerated store: its old cells go.
     if (!sameContents(part, final)) {
@@ -96,7 +136,8 @@ bool StoreMirror::accept(wire::FileChunk::Reader chunk) {
     s.catalogue.reset();
     s.catalogueFresh = true;
   }
-  fs::rename(part, final);
+  if (::renameat(folder.get(), partName.c_str(), folder.get(), name.c_str()) != 0)
+    throw std::runtime_error(fmt::format("{}: cannot rename into place: {}", final.string(), std::strerror(errno)));
   return true;
 }
 

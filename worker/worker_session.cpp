@@ -28,6 +28,13 @@
 
 namespace portico {
 
+namespace {
+int64_t steadyMilliseconds() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
 // --memory bounds the whole worker: the cache gets what is left after the
 // process's own footprint (code, libraries, Embree and TBB) and room for a
 // lease's messages and kernel buffers.
@@ -110,6 +117,7 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
       std::lock_guard lock(chain_.mutex);
       chain_.runningJob = assign->envelope().getAssign().getJob();
       chain_.runningLease = assign->envelope().getAssign().getLease();
+      chain_.runningSinceMs = steadyMilliseconds();
       stopLease_ = chain_.abandon || stopping_ || chain_.cancelledJobs.count(chain_.runningJob) != 0;
     }
     // Fault injection: the cell crashes the worker (reported, then fatal).
@@ -152,12 +160,13 @@ int WorkerSession::run() {
     uint64_t count;
     (void)!::read(leaseFinishedFd_, &count, sizeof count);   // finished leases: collected below
     reportCrashIfAny();
+    failStalledLease();
     sendFinishedLeases();
     prepareQueuedLeases();
   }
   abandonLeases();
   link_->sendGoodbye();
-  return 0;
+  return stalled_ ? 1 : 0;
 }
 
 void WorkerSession::handle(std::unique_ptr<net::Decoded> decoded) {
@@ -195,6 +204,11 @@ void WorkerSession::onAssign(std::unique_ptr<net::Decoded> decoded) {
 
 void WorkerSession::onFileChunk(wire::FileChunk::Reader chunk) {
   if (!preparing_ || !preparing_->waitingForFile || !mirror_) return;
+  if (chunk.getStore() != preparing_->requestedStore || chunk.getPath() != preparing_->requestedFile) {
+    spdlog::warn("dropped a chunk of {} of {}: asked for {}", chunk.getPath().cStr(), chunk.getStore().cStr(),
+                 preparing_->requestedFile);
+    return;
+  }
   preparing_->waitingForFile = false;
   try {
     mirror_->accept(chunk);
@@ -275,6 +289,8 @@ void WorkerSession::advanceLease() {
       fetch.setOffset(mirror_->receivedBytes(store, *file));
       link_->send(message);
       preparing_->waitingForFile = true;
+      preparing_->requestedStore = store;
+      preparing_->requestedFile = *file;
       return;
     }
   }
@@ -294,6 +310,7 @@ void WorkerSession::startTracing(std::optional<std::string> photonRecords) {
   {
     std::lock_guard lock(chain_.mutex);
     chain_.running = true;
+    chain_.runningSinceMs = steadyMilliseconds();   // and again by the chain, for each lease it takes
   }
   if (tracing_.valid()) tracing_.wait();   // the previous chain's thread, done but for its return
   tracing_ = std::async(std::launch::async,
@@ -374,6 +391,46 @@ void WorkerSession::reportCrashIfAny() {
   crash_report::dieOf(signal);
 }
 
+// A lease that outlives --lease-limit-s is stuck, most likely in a read
+// that does not return (a FIFO, a hung network file system): said to the
+// coordinator, which counts it against the cell and leases the work again,
+// and the worker leaves (its supervisor starts it anew).
+void WorkerSession::failStalledLease() {
+  uint64_t lease;
+  int64_t since;
+  {
+    std::lock_guard lock(chain_.mutex);
+    if (!chain_.running) return;
+    lease = chain_.runningLease;
+    since = chain_.runningSinceMs;
+  }
+  const int64_t ranMs = steadyMilliseconds() - since;
+  if (ranMs < int64_t(options_.leaseLimitSeconds) * 1000) return;
+  const std::string why = fmt::format("still tracing after {} s (--lease-limit-s): stuck, most likely in a read that "
+                                      "does not return (a hung file system?)",
+                                      ranMs / 1000);
+  spdlog::error("lease {}: {}; the worker leaves", lease, why);
+  sendFailure(lease, why);
+  stalled_ = true;
+  stop();   // Goodbye: the coordinator takes its other leases back
+}
+
+void WorkerSession::joinTracingThread(const char* why) {
+  if (!tracing_.valid()) return;
+  constexpr auto kMostStopWait = std::chrono::seconds(10);
+  if (tracing_.wait_for(kMostStopWait) == std::future_status::ready) return;
+  uint64_t lease;
+  {
+    std::lock_guard lock(chain_.mutex);
+    lease = chain_.runningLease;
+  }
+  spdlog::error("{}: lease {} did not stop within {} s (stuck in a read that does not return?); exiting without it",
+                why, lease, kMostStopWait.count());
+  link_->sendGoodbye();
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));   // libzmq's I/O thread sends it
+  std::_Exit(1);
+}
+
 void WorkerSession::abandonLeases() {
   {
     std::lock_guard lock(chain_.mutex);
@@ -381,7 +438,7 @@ void WorkerSession::abandonLeases() {
     chain_.abandon = true;
     stopLease_ = true;
   }
-  if (tracing_.valid()) tracing_.wait();
+  joinTracingThread(stopping_ ? "leaving" : "abandoning its leases");
   preparing_.reset();
   std::lock_guard lock(chain_.mutex);
   std::string ignored;

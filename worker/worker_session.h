@@ -49,6 +49,10 @@ struct WorkerOptions {
   // Most rays a lease traces in neighbour cells this worker already holds
   // (at least as many as the lease's own work); 0: every crossing goes back.
   int64_t forwardRays = 20000;
+  // A lease still tracing after this long is failed and the worker leaves:
+  // its thread is stuck (a read that never returns, on a hung file system),
+  // and heartbeats alone would keep its work held for good.
+  int leaseLimitSeconds = 600;
 };
 
 // A traced lease: its Result, or why it failed.
@@ -83,6 +87,7 @@ class WorkerSession {
     std::unique_ptr<net::Decoded> assign;
     bool waitingForPhotons = false;
     bool waitingForFile = false;
+    std::string requestedStore, requestedFile;   // the FetchFile sent: a chunk must answer it
   };
 
   // The main thread: the coordinator's messages.
@@ -99,6 +104,10 @@ class WorkerSession {
   void sendFinishedLeases();
   void sendFailure(uint64_t lease, const std::string& why, std::optional<uint32_t> failedCell = std::nullopt);
   void reportCrashIfAny();
+  void failStalledLease();
+  // Waits for the tracing thread, asked to stop, for a bounded time; a
+  // thread stuck in a system call makes the worker exit instead of hanging.
+  void joinTracingThread(const char* why);
   // Stops the chain, waits for it, and forgets every lease (the coordinator
   // requeues them): the link was lost, or the worker is leaving.
   void abandonLeases();
@@ -132,6 +141,7 @@ class WorkerSession {
     bool abandon = false;                               // reconnecting or leaving: take no more
     uint64_t runningJob = 0;                            // the job of the lease being traced
     uint64_t runningLease = 0;                          // and the lease
+    int64_t runningSinceMs = 0;                         // steady clock: when it started
     std::set<uint64_t> cancelledJobs;                   // told by the coordinator (Cancel)
   } chain_;
   std::atomic<bool> stopping_{false};
@@ -139,6 +149,7 @@ class WorkerSession {
   // cancelled, or the worker is leaving or reconnecting.
   std::atomic<bool> stopLease_{false};
   int leasesStarted_ = 0;   // by the tracing thread (--crash-in-lease)
+  bool stalled_ = false;    // a lease outlived --lease-limit-s: leaving with status 1
 };
 
 }  // namespace portico

@@ -27,10 +27,12 @@ std::string hostOf(const std::string& address) {
 }
 }  // namespace
 
-ConnectionLog::ConnectionLog(zmq::context_t& context, zmq::socket_t& watched, const std::string& name)
-    : events_(context, zmq::socket_type::pair) {
+ConnectionLog::ConnectionLog(zmq::context_t& context, zmq::socket_t& watched, const std::string& name,
+                             Listener listener)
+    : events_(context, zmq::socket_type::pair), listener_(std::move(listener)) {
   const std::string endpoint = "inproc://portico-monitor-" + name;
-  const int events = ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL | ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL;
+  const int events = ZMQ_EVENT_ACCEPTED | ZMQ_EVENT_DISCONNECTED | ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL |
+                     ZMQ_EVENT_HANDSHAKE_FAILED_NO_DETAIL;
   if (zmq_socket_monitor(watched.handle(), endpoint.c_str(), events) != 0)
     throw std::runtime_error(fmt::format("cannot monitor the socket: {}", zmq_strerror(zmq_errno())));
   events_.set(zmq::sockopt::linger, 0);
@@ -47,6 +49,12 @@ void ConnectionLog::drain() {
     uint32_t value;
     std::memcpy(&event, header.data(), sizeof event);
     std::memcpy(&value, static_cast<const char*>(header.data()) + 2, sizeof value);
+    // Accepted and disconnected events carry the connection's descriptor.
+    if (event == ZMQ_EVENT_ACCEPTED) {
+      if (listener_.accepted) listener_.accepted(int(value));
+      continue;
+    }
+    if (event == ZMQ_EVENT_DISCONNECTED && listener_.closed) listener_.closed(int(value));
     const std::string peer(static_cast<const char*>(address.data()), address.size());
     const std::string host = hostOf(peer);
     // One line a minute per host and kind of event (a DISCONNECTED event's value is only its fd).

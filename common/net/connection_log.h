@@ -5,6 +5,7 @@
 // application never sees those frames, so this is the only trace of them.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <zmq.hpp>
 
@@ -14,13 +15,18 @@ namespace portico::net {
 
 class ConnectionLog {
  public:
+  // Told of each connection accepted and closed, with its descriptor.
+  struct Listener {
+    std::function<void(int fd)> accepted, closed;
+  };
   // Attach before binding `watched`. `name` makes the inproc endpoint unique.
-  ConnectionLog(zmq::context_t& context, zmq::socket_t& watched, const std::string& name);
+  ConnectionLog(zmq::context_t& context, zmq::socket_t& watched, const std::string& name, Listener listener = {});
   // Logs every event waiting; never blocks. Call from the socket's own loop.
   void drain();
 
  private:
   zmq::socket_t events_;
+  Listener listener_;
   // A peer retrying a failing handshake would write a line per attempt.
   LogThrottle throttle_;
 };

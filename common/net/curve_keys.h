@@ -47,6 +47,10 @@ std::vector<std::string> generateKeys(const std::string& directory);
 // Read and check the files (Z85, 40 characters, secret and public halves
 // matching). Throw std::runtime_error naming the file and the problem.
 // A missing ROLE.public admits no key in that role (a warning is logged).
+// As ssh does, keys another user could have put there are refused: the
+// directory and its files must be owned by this user or root and writable
+// by no one else, and the folders above it writable by others only when
+// sticky.
 ServerKeys loadServerKeys(const std::string& directory);
 // The coordinator's public key and `role`'s pair (ROLE.secret).
 ClientKeys loadClientKeys(const std::string& directory, Role role);
@@ -61,7 +65,9 @@ std::string ensureDefaultKeys();
 // The keys a worker or client uses towards `endpoint`: `given`, else the
 // per-user directory when the endpoint is tcp:// and that directory holds a
 // coordinator.public (a coordinator started without --keys on tcp:// uses
-// it), else "" (no CURVE: ipc:// and inproc://).
+// it), else "" (no CURVE: ipc:// and inproc://). On tcp:// with neither it
+// throws: a coordinator on tcp:// always has a CURVE key, so a peer that
+// does not know it could only be talking to an impostor.
 std::string keysForEndpoint(const std::string& given, const std::string& endpoint);
 
 // Socket options: a CURVE server (call before bind, with a ZAP handler

@@ -5,7 +5,8 @@
 
 #include <zmq_addon.hpp>
 
-#include <charconv>
+#include "common/net/ipc_peer.h"
+
 
 namespace portico::net {
 
@@ -96,25 +97,15 @@ std::optional<Role> ZapAuthenticator::admitCurve(const std::string& key, std::st
 }
 
 std::optional<Role> ZapAuthenticator::admitByUid(const std::string& address, std::string& why) const {
-  // An ipc peer's address ends in ":uid:gid:pid" (libzmq, SO_PEERCRED).
-  const size_t pidColon = address.rfind(':');
-  const size_t gidColon = pidColon == std::string::npos || pidColon == 0 ? std::string::npos : address.rfind(':', pidColon - 1);
-  const size_t uidColon = gidColon == std::string::npos || gidColon == 0 ? std::string::npos : address.rfind(':', gidColon - 1);
-  if (uidColon == std::string::npos) {
+  const std::optional<uid_t> uid = ipcPeerUid(address);
+  if (!uid) {
     why = "its credentials are unknown (not an ipc:// peer)";
     return std::nullopt;
   }
-  uid_t uid = 0;
-  const char* first = address.data() + uidColon + 1;
-  const auto [end, error] = std::from_chars(first, address.data() + gidColon, uid);
-  if (error != std::errc() || end != address.data() + gidColon) {
-    why = "its credentials are unreadable";
-    return std::nullopt;
-  }
-  if (uid == *owner_ || uid == 0) return Role::Operator;
+  if (*uid == *owner_ || *uid == 0) return Role::Operator;
   why = fmt::format("uid {} is not this coordinator's user (uid {}): without --keys it serves only its own user "
                     "and root",
-                    uid, *owner_);
+                    *uid, *owner_);
   return std::nullopt;
 }
 

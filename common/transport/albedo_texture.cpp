@@ -1,5 +1,7 @@
 #include "common/transport/albedo_texture.h"
 
+#include <sys/stat.h>
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -97,6 +99,9 @@ const AlbedoTextures::Texture& AlbedoTextures::texture(const std::string& storeD
   Texture texture;
   texture.path = path;
   char error[512] = "";
+  // Not a FIFO or a device: the image library's open would block on one for good.
+  if (struct stat info {}; ::stat(path.c_str(), &info) == 0 && !S_ISREG(info.st_mode))
+    throw std::runtime_error(fmt::format("texture {} of material '{}': not a regular file", path, material.name));
   texture.handle = entries().open(system_, path.c_str(), &texture.info, error, sizeof error);
   if (!texture.handle || texture.info.width <= 0 || texture.info.height <= 0)
     throw std::runtime_error(fmt::format("texture {} of material '{}': {}", path, material.name, error));

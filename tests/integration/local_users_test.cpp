@@ -116,6 +116,61 @@ class LocalUsers : public ::testing::Test {
     });
   }
 
+  // Plays a coordinator as uid nobody for `seconds`, bound to `endpoint`
+  // (its real address written to `boundFile`): it welcomes any worker,
+  // leases it a cell, and answers its first file request with a chunk named
+  // to leave the worker's cache for `escape`.
+  static void impostorAsNobody(const std::string& endpoint, const fs::path& boundFile, const std::string& escape,
+                               int seconds) {
+    forkAsNobody([&] {
+      zmq::context_t context(1);
+      zmq::socket_t router(context, zmq::socket_type::router);
+      router.set(zmq::sockopt::linger, 0);
+      router.bind(endpoint);
+      std::ofstream(boundFile) << router.get(zmq::sockopt::last_endpoint);
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(seconds);
+      while (std::chrono::steady_clock::now() < deadline) {
+        zmq::pollitem_t items[] = {{router.handle(), 0, ZMQ_POLLIN, 0}};
+        zmq::poll(items, 1, std::chrono::milliseconds(100));
+        if (!(items[0].revents & ZMQ_POLLIN)) continue;
+        zmq::message_t identity, frame;
+        if (!router.recv(identity) || !identity.more() || !router.recv(frame)) continue;
+        const net::Decoded decoded(std::move(frame));
+        const auto reply = [&](capnp::MallocMessageBuilder& message) {
+          zmq::message_t to;
+          to.copy(identity);
+          router.send(to, zmq::send_flags::sndmore);
+          router.send(net::encode(message), zmq::send_flags::none);
+        };
+        if (decoded.envelope().isHello()) {
+          capnp::MallocMessageBuilder welcome;
+          auto w = welcome.initRoot<wire::Envelope>().initWelcome();
+          w.setVersion(wire::PROTOCOL_VERSION);
+          w.setHeartbeatMs(250);
+          w.setMaxFrameBytes(1 << 20);
+          reply(welcome);
+          capnp::MallocMessageBuilder assign;
+          auto a = assign.initRoot<wire::Envelope>().initAssign();
+          a.setLease(1);
+          a.setJob(1);
+          a.setCell(0);
+          a.initSpec().setStore("/srv/store");
+          reply(assign);
+        } else if (decoded.envelope().isFetchFile()) {
+          capnp::MallocMessageBuilder chunk;
+          auto c = chunk.initRoot<wire::Envelope>().initFileChunk();
+          c.setStore(decoded.envelope().getFetchFile().getStore());
+          c.setPath(escape);
+          const std::string planted = "written by uid nobody's impostor";
+          c.setTotalBytes(planted.size());
+          c.setData(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(planted.data()), planted.size()));
+          reply(chunk);
+        }
+      }
+      return 0;
+    });
+  }
+
   bool anyFileHolds(const fs::path& root, const std::string& text) const {
     if (!fs::exists(root)) return false;
     for (const auto& entry : fs::recursive_directory_iterator(root))
@@ -182,10 +237,10 @@ TEST_F(LocalUsers, AnotherUserCanNeitherSubmitNorReadNorWriteNorShutDownATcpCoor
 }
 
 TEST_F(LocalUsers, AnIpcCoordinatorWithoutKeysAdmitsOnlyItsOwnUser) {
-  // A socket in a directory anyone may enter: the peer's uid is what keeps nobody out.
+  // A socket in a directory anyone may write (sticky, as /tmp): the peer's uid is what keeps nobody out.
   const fs::path open = dir_ / "open";
   fs::create_directories(open);
-  fs::permissions(open, fs::perms::all);
+  fs::permissions(open, fs::perms::all | fs::perms::sticky_bit);
   giveHomeToNobody();
   ClusterOptions options;
   options.listen = "ipc://" + (open / "coordinator.sock").string();
@@ -223,6 +278,129 @@ TEST_F(LocalUsers, AnOutputDirectoryTheSubmittingUserMayNotWriteIsRefusedBeforeA
   EXPECT_NE(log.find("output " + dir_.string() + "/y.png: directory " + dir_.string() + " is not writable by uid 65534"),
             std::string::npos)
       << log;
+}
+
+}  // namespace
+}  // namespace portico
+
+namespace portico {
+namespace {
+
+// A worker run by root with a disk cache, and a coordinator played by uid
+// nobody: on ipc:// it binds the socket's path in a folder anyone may write
+// (as /tmp) after the worker started; on tcp:// it listens without CURVE
+// for a worker that has no coordinator key. The worker must never take a
+// lease from it, let alone write the file its chunk names outside the cache.
+TEST_F(LocalUsers, AWorkerTakesNoOrdersFromAnImpostorOfAnotherUser) {
+  const fs::path open = dir_ / "open";
+  fs::create_directories(open);
+  fs::permissions(open, fs::perms::all | fs::perms::sticky_bit);
+  const fs::path planted = dir_ / "root-only" / "planted";
+  giveHomeToNobody();
+  for (const std::string transport : {"ipc", "tcp"}) {
+    SCOPED_TRACE(transport);
+    const fs::path bound = open / (transport + ".endpoint");
+    const std::string listen = transport == "ipc" ? "ipc://" + (open / "coordinator.sock").string() : "tcp://127.0.0.1:*";
+    // Leaves the cache (cache/<store>/cells/) for root's folder.
+    const std::string escape = "cells/../../../root-only/planted";
+    // ipc: the worker first, while no socket exists; the impostor binds a second later.
+    std::unique_ptr<ChildProcess> worker;
+    const auto startWorker = [&](const std::string& endpoint) {
+      worker = std::make_unique<ChildProcess>(
+          std::vector<std::string>{kBin + "portico-worker", "--connect", endpoint, "--name", "victim", "--cache-dir",
+                                   (dir_ / ("cache-" + transport)).string(), "--memory", "256MiB", "--heartbeat-ms",
+                                   "250", "--liveness-ms", "1500"},
+          (dir_ / ("victim-" + transport + ".log")).string());
+    };
+    if (transport == "ipc") startWorker(listen);
+    std::this_thread::sleep_for(std::chrono::seconds(1));
+    std::thread impostor([&] { impostorAsNobody(listen, bound, escape, 6); });
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(bound) && !readFile(bound).empty(); }, std::chrono::seconds(5)));
+    if (transport == "tcp") startWorker(readFile(bound));
+    impostor.join();
+    worker->stop();
+    const std::string log = readFile(dir_ / ("victim-" + transport + ".log"));
+    EXPECT_FALSE(fs::exists(planted)) << "a worker of root wrote where uid nobody's impostor told it\n" << log;
+    EXPECT_EQ(log.find("lease 1"), std::string::npos) << log;
+    if (transport == "ipc")
+      EXPECT_NE(log.find("refused the coordinator at " + listen + ": it is served by uid 65534"), std::string::npos)
+          << log;
+    else
+      EXPECT_NE(log.find("no coordinator key to check it by"), std::string::npos) << log;
+    fs::remove(planted);
+  }
+}
+
+}  // namespace
+}  // namespace portico
+
+namespace portico {
+namespace {
+
+// uid nobody writes a key folder where root's programs look for their
+// per-user keys (PORTICO_KEYS): root's coordinator must not take them, or
+// nobody would hold its operator key and shut it down.
+TEST_F(LocalUsers, KeysInAFolderAnotherUserMadeAreRefused) {
+  giveHomeToNobody();
+  const fs::path planted = home_ / "keys-for-root";
+  ASSERT_EQ(runCommand(asNobody({program("portico"), "keys", "generate", planted.string()}), dir_ / "keys.log"), 0)
+      << readFile(dir_ / "keys.log");
+  ::setenv("PORTICO_KEYS", planted.c_str(), 1);
+  const fs::path endpointFile = dir_ / "endpoint", log = dir_ / "coordinator.log";
+  ChildProcess coordinator({kBin + "portico-coordinator", "--listen", "tcp://127.0.0.1:*", "--db",
+                            (dir_ / "jobs.db").string(), "--endpoint-file", endpointFile.string()},
+                           log.string());
+  waitUntil([&] { return !readFile(endpointFile).empty() || !coordinator.running(); }, std::chrono::seconds(10));
+  if (coordinator.running()) {
+    // It started with nobody's keys: nobody, holding the operator's, stops it.
+    int code = -1;
+    std::string endpoint = readFile(endpointFile);
+    endpoint.erase(endpoint.find_last_not_of("\n") + 1);
+    captureOutput(asNobody({"PORTICO_KEYS=" + planted.string(), program("portico"), "shutdown", "--coordinator",
+                            endpoint, "--timeout", "3"}),
+                  dir_, "shutdown", &code);
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    EXPECT_NE(readFile(log).find("shutdown requested"), std::string::npos) << readFile(log);
+    ADD_FAILURE() << "root's coordinator started with keys uid nobody wrote";
+  }
+  EXPECT_EQ(coordinator.exitCode(), 1);
+  EXPECT_NE(readFile(log).find("key directory " + planted.string() + ": owned by uid 65534, not by uid 0"),
+            std::string::npos)
+      << readFile(log);
+  // Root's worker and client refuse them too.
+  int code = -1;
+  captureOutput({kBin + "portico", "status", "--coordinator", "tcp://127.0.0.1:9", "--keys", planted.string()}, dir_,
+                "status", &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(readFile(dir_ / "status.log").find("owned by uid 65534"), std::string::npos) << readFile(dir_ / "status.log");
+}
+
+// Root submits a store in a folder of uid nobody's; nobody then swaps that
+// folder for a link to a root-only folder holding another store. The
+// coordinator resolved the store's path at submit, and must not follow the
+// link when it serves files to a --cache-dir worker.
+TEST_F(LocalUsers, AFolderAboveAStoreSwappedForALinkAfterSubmitIsNotFollowed) {
+  ASSERT_EQ(generateDemoStore(dir_ / "root-only" / "store", 5), "");
+  fs::create_directories(home_ / "project");
+  fs::copy(home_ / "store", home_ / "project" / "store", fs::copy_options::recursive);
+  giveHomeToNobody();
+  LocalCluster cluster(dir_ / "cluster", 0);
+  const uint64_t job = cluster.submit(home_ / "project" / "store", dir_ / "swapped.png", 2000, 1);
+  ASSERT_EQ(forkAsNobody([&] {
+              return ::rename((home_ / "project").c_str(), (home_ / "project.old").c_str()) == 0 &&
+                             ::symlink((dir_ / "root-only").c_str(), (home_ / "project").c_str()) == 0
+                         ? 0
+                         : 1;
+            }),
+            0);
+  cluster.addWorker({"--cache-dir", (dir_ / "cache").string()});
+  const auto status = cluster.wait(job);
+  const std::string rootsCatalogue = readFile(dir_ / "root-only" / "store" / "scene.db");
+  for (const auto& entry : fs::recursive_directory_iterator(dir_ / "cache"))
+    EXPECT_FALSE(entry.is_regular_file() && readFile(entry.path()) == rootsCatalogue)
+        << entry.path() << ": the coordinator served a root-only store through a link uid nobody made";
+  EXPECT_EQ(status.value("state", ""), "failed") << status.dump(2);
+  EXPECT_NE(status.value("error", "").find("a symbolic link"), std::string::npos) << status.dump(2);
 }
 
 }  // namespace

@@ -143,6 +143,7 @@ inline void useLocalKeys(zmq::socket_t& socket, const std::string& endpoint, net
 struct ClusterOptions {
   std::string listen = "tcp://127.0.0.1:*";
   std::vector<std::string> coordinatorExtra;   // e.g. {"--keys", DIR}
+  std::vector<std::string> coordinatorPrefix;  // a command that runs it, e.g. {"prlimit", "--nofile=256:256", "--"}
   std::string clientKeys;                      // the tests' own client: CURVE keys directory
 };
 
@@ -184,6 +185,7 @@ class LocalCluster {
                                   "--endpoint-file", (dir_ / "endpoint").string(), "--liveness-ms", "2000",
                                   "--heartbeat-ms", "250"};
     argv.insert(argv.end(), options_.coordinatorExtra.begin(), options_.coordinatorExtra.end());
+    argv.insert(argv.begin(), options_.coordinatorPrefix.begin(), options_.coordinatorPrefix.end());
     coordinator_ = std::make_unique<ChildProcess>(argv, (dir_ / "coordinator.log").string());
     endpoint_.clear();
     for (int i = 0; i < 400 && endpoint_.empty(); ++i) {

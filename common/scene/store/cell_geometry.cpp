@@ -92,13 +92,20 @@ std::unique_ptr<CellGeometry> CellGeometry::load(const std::string& path, uint32
   const auto failure = [&](const std::string& problem) {
     return std::runtime_error(fmt::format("cell file {}: {}", path, problem));
   };
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  // O_NONBLOCK: a FIFO (or a device) put in a cell's place would block
+  // open() for good, holding the worker's lease while its heartbeats go on;
+  // it is refused below instead. A regular file ignores the flag.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) throw failure(fmt::format("cannot open: {}", std::strerror(errno)));
   struct stat info {};
   if (::fstat(fd, &info) != 0) {
     const int error = errno;
     ::close(fd);
     throw failure(fmt::format("cannot stat: {}", std::strerror(error)));
+  }
+  if (!S_ISREG(info.st_mode)) {
+    ::close(fd);
+    throw failure(S_ISFIFO(info.st_mode) ? "not a regular file (a FIFO)" : "not a regular file");
   }
   const auto bytes = static_cast<size_t>(info.st_size);
   if (bytes == 0 || bytes % sizeof(capnp::word) != 0) {

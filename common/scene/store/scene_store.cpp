@@ -66,6 +66,11 @@ class CatalogueReader {
       cell.triangleCount = static_cast<uint64_t>(row.columnInt(8));
       cell.byteCount = static_cast<uint64_t>(row.columnInt(9));
       cell.file = row.columnText(10);
+      // Its own file of the store's cells/ folder, as written: a worker
+      // opens it, and one fetching stores writes it under that name.
+      if (cell.file != fmt::format("{}/{}.cell", scene_schema::kCellDirectory, cell.id))
+        fail(fmt::format("cell {}'s file '{}' is not {}/{}.cell", cell.id, cell.file, scene_schema::kCellDirectory,
+                         cell.id));
       cells.push_back(std::move(cell));
     }
     return cells;

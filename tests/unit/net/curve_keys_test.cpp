@@ -82,7 +82,9 @@ TEST_F(CurveKeys, AKeyListedInTwoRolesIsRefused) {
 TEST_F(CurveKeys, DefaultKeysAreGeneratedOnceAndFoundOnlyForTcp) {
   const fs::path home = dir_ / "home";
   ::setenv("PORTICO_KEYS", (home / "keys").c_str(), 1);
-  EXPECT_EQ(net::keysForEndpoint("", "tcp://127.0.0.1:5555"), "");   // none yet
+  // None yet: a peer on tcp:// with no coordinator key could only reach an impostor.
+  EXPECT_NE(errorOf([] { net::keysForEndpoint("", "tcp://127.0.0.1:5555"); }).find("no coordinator key to check it by"),
+            std::string::npos);
   const std::string made = net::ensureDefaultKeys();
   EXPECT_EQ(made, (home / "keys").string());
   const std::string secret = net::loadClientKeys(made, net::Role::Worker).client.secretKey;
@@ -92,6 +94,36 @@ TEST_F(CurveKeys, DefaultKeysAreGeneratedOnceAndFoundOnlyForTcp) {
   EXPECT_EQ(net::keysForEndpoint("", "ipc:///run/portico.sock"), "");
   EXPECT_EQ(net::keysForEndpoint("/etc/keys", "tcp://127.0.0.1:5555"), "/etc/keys");
   ::unsetenv("PORTICO_KEYS");
+}
+
+// As ssh: keys that another user could have written or swapped are refused.
+TEST_F(CurveKeys, KeysOtherUsersCouldHavePutThereAreRefused) {
+  net::generateKeys(dir_.string());
+  fs::permissions(dir_ / "worker.secret", fs::perms::others_write, fs::perm_options::add);
+  EXPECT_NE(errorOf([&] { net::loadClientKeys(dir_.string(), net::Role::Worker); })
+                .find("key file " + (dir_ / "worker.secret").string() + ": writable by other users"),
+            std::string::npos);
+  fs::permissions(dir_ / "worker.secret", fs::perms::others_write, fs::perm_options::remove);
+  fs::permissions(dir_, fs::perms::group_write, fs::perm_options::add);
+  EXPECT_NE(errorOf([&] { net::loadServerKeys(dir_.string()); })
+                .find("key directory " + dir_.string() + ": writable by other users"),
+            std::string::npos);
+  fs::permissions(dir_, fs::perms::group_write, fs::perm_options::remove);
+  EXPECT_EQ(errorOf([&] { net::loadServerKeys(dir_.string()); }), "");
+  // A folder above that anyone may write (not sticky): the keys could be swapped.
+  const fs::path open = dir_ / "open";
+  net::generateKeys((open / "keys").string());
+  fs::permissions(open, fs::perms::all);
+  EXPECT_NE(errorOf([&] { net::loadClientKeys((open / "keys").string(), net::Role::Client); })
+                .find("folder above the key directory " + open.string() + ": writable by other users"),
+            std::string::npos);
+  fs::permissions(open, fs::perms::sticky_bit, fs::perm_options::add);   // as /tmp: no one moves another's entry
+  EXPECT_EQ(errorOf([&] { net::loadClientKeys((open / "keys").string(), net::Role::Client); }), "");
+  if (::geteuid() != 0) return;   // only root can give a file away
+  ASSERT_EQ(::chown((dir_ / "client.public").c_str(), 65534, 65534), 0);
+  EXPECT_NE(errorOf([&] { net::loadServerKeys(dir_.string()); })
+                .find("key file " + (dir_ / "client.public").string() + ": owned by uid 65534, not by uid 0"),
+            std::string::npos);
 }
 
 TEST_F(CurveKeys, SeveralAuthorizedClientKeysAndCommentsAreRead) {
