@@ -26,6 +26,14 @@ def radiance_or_skip(source_dir=SOURCE_DIR):
     return radiance
 
 
+def analyze_or_skip(portico):
+    """Ends the test as skipped (exit 77) when this portico has no `analyze` command."""
+    commands = subprocess.run([portico, "--help"], capture_output=True, text=True).stdout.splitlines()
+    if not any(line.split()[:1] == ["analyze"] for line in commands):
+        print("SKIPPED: this portico has no `analyze` command")
+        sys.exit(77)
+
+
 class Checks:
     """A test's checks: each printed ok or FAILED; finish() exits 1 if any failed."""
 

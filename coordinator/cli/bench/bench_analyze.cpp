@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -34,14 +34,20 @@ std::string textOf(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-// "a;b;c" -> its non-blank parts; "x y" -> its words.
+// "a;b;c" -> its non-blank parts; with ' ', the words (split at any white
+// space: render_args.txt ends in a newline).
 std::vector<std::string> partsOf(const std::string& text, char separator) {
   std::vector<std::string> parts;
+  if (separator == ' ') {
+    std::istringstream words(text);
+    for (std::string word; words >> word;) parts.push_back(word);
+    return parts;
+  }
   size_t start = 0;
   while (start <= text.size()) {
     const size_t end = std::min(text.find(separator, start), text.size());
     const std::string part = text.substr(start, end - start);
-    if (part.find_first_not_of(' ') != std::string::npos) parts.push_back(part);
+    if (part.find_first_not_of(" \n") != std::string::npos) parts.push_back(part);
     start = end + 1;
   }
   return parts;
@@ -54,6 +60,20 @@ double timedChild(const std::vector<std::string>& argv, const fs::path& log, con
   return std::chrono::duration<double>(Clock::now() - started).count();
 }
 
+// One CSV line's cells, empty ones kept, quoted ones (RFC 4180) unquoted.
+std::vector<std::string> csvCells(const std::string& line) {
+  std::vector<std::string> cells(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == '"' && quoted && i + 1 < line.size() && line[i + 1] == '"') cells.back() += line[++i];
+    else if (c == '"') quoted = !quoted;
+    else if (c == ',' && !quoted) cells.emplace_back();
+    else if (c != '\r') cells.back() += c;
+  }
+  return cells;
+}
+
 // The column `name` of a CSV whose first line not starting with '#' is its header.
 std::vector<double> csvColumn(const fs::path& path, const std::string& name) {
   std::ifstream in(path);
@@ -61,7 +81,7 @@ std::vector<double> csvColumn(const fs::path& path, const std::string& name) {
   int column = -1;
   for (std::string line; std::getline(in, line);) {
     if (line.empty() || line[0] == '#') continue;
-    const std::vector<std::string> cells = partsOf(line, ',');
+    const std::vector<std::string> cells = csvCells(line);
     if (column < 0) {
       const auto found = std::find(cells.begin(), cells.end(), name);
       if (found == cells.end()) throw std::runtime_error(fmt::format("{}: no column {}", path.string(), name));
@@ -131,11 +151,11 @@ void writeComparisonCsv(const std::string& path, const std::vector<Rung>& rungs)
 }
 
 void plotComparison(const std::string& path, const std::string& scene, const std::vector<Rung>& rungs) {
-  PlotPanel panel{fmt::format("{}: sensor error against time", scene), "seconds (whole run, start-up included)",
-                  "relative RMS error over sensors (own converged reference)", true, true, {}};
+  PlotPanel panel{fmt::format("{}: sensor error against time", scene), "seconds (start-up included)",
+                  "relative RMS error over sensors", true, true, {}};
   PlotSeries radiance, portico;
-  radiance.label = "Radiance rtrace -I", radiance.color = {214, 39, 40};
-  portico.label = "portico analyze", portico.color = {31, 119, 180};
+  radiance.label = "Radiance", radiance.color = {214, 39, 40};
+  portico.label = "portico", portico.color = {31, 119, 180};
   for (const Rung& r : rungs) {
     PlotSeries& s = r.program == "radiance" ? radiance : portico;
     s.x.push_back(r.seconds), s.y.push_back(r.own.rms);
@@ -243,31 +263,6 @@ int runComparison(const BenchAnalyzeOptions& o) {
   return 0;
 }
 
-// Work-plane sensors in every room cell (named *room*), from its box: 0.8 m
-// above its floor, every 0.5 m, 0.5 m in from its walls (one at the centre
-// of a room narrower than that), facing up. No furniture test: a sensor may
-// stand in a cupboard (--grid auto skips those).
-uint64_t writeRoomSensors(const SceneStore& store, const fs::path& path, uint64_t& rooms) {
-  std::ofstream out(path);
-  uint64_t count = 0;
-  for (const CellInfo& cell : store.cells()) {
-    if (cell.name.find("room") == std::string::npos) continue;
-    ++rooms;
-    auto positions = [](float lo, float hi) {
-      std::vector<float> p;
-      for (float v = lo + 0.5f; v <= hi - 0.5f + 1e-4f; v += 0.5f) p.push_back(v);
-      if (p.empty()) p.push_back(0.5f * (lo + hi));
-      return p;
-    };
-    for (float x : positions(cell.bounds.lo.x, cell.bounds.hi.x))
-      for (float z : positions(cell.bounds.lo.z, cell.bounds.hi.z)) {
-        out << fmt::format("{} {} {} 0 1 0\n", x, cell.bounds.lo.y + 0.8f, z);
-        ++count;
-      }
-  }
-  return count;
-}
-
 int runScale(const BenchAnalyzeOptions& o) {
   const std::string portico = findProgram("portico");
   const fs::path work = fs::temp_directory_path() / fmt::format("portico-bench-analyze-{}", getpid());
@@ -277,11 +272,11 @@ int runScale(const BenchAnalyzeOptions& o) {
   std::ofstream csv;
   if (!o.csv.empty()) {
     csv.open(o.csv);
-    csv << "building,cells,rooms,sensors,workers,seconds,cpu_seconds,photons,bytes_read,cells_loaded,"
-           "peak_rss_worker_mib,peak_rss_coordinator_mib\n";
+    csv << "building,cells,rooms,sensors,workers,seconds,photon_seconds,sensor_seconds,photons,rays,bytes_read,"
+           "cells_loaded,job_bytes,samples_per_sensor,peak_rss_worker_mib,peak_rss_coordinator_mib\n";
   }
-  std::cout << "| building | rooms | sensors | wall | CPU | photons | bytes read (cells loaded) | peak memory: worker, "
-               "coordinator |\n|---|---|---|---|---|---|---|---|\n";
+  std::cout << "| building | rooms | sensors | wall (job's photon pass, sensors) | photons | cell bytes read (loads) | "
+               "job's files | peak memory: worker, coordinator |\n|---|---|---|---|---|---|---|---|\n";
   for (const std::string& spec : partsOf(o.buildings, ',')) {
     const size_t colon = spec.find(':');
     const std::string preset = spec.substr(0, colon);
@@ -294,36 +289,40 @@ int runScale(const BenchAnalyzeOptions& o) {
       timedChild(generate, work / (preset + "-generate.log"), "generating " + spec);
     }
     const SceneStore scene = SceneStore::open(store.string());
-    uint64_t rooms = 0;
-    const fs::path pts = work / (preset + floors + ".pts");
-    const uint64_t sensors = writeRoomSensors(scene, pts, rooms);
+    // The work-plane grid of `analyze --grid auto`, written first so that
+    // its rooms and points can be counted ("N points in M rooms, ...").
+    const fs::path pts = work / (preset + floors + ".pts"), gridLog = work / (preset + floors + "-grid.log");
+    timedChild({portico, "scene", "grid", store.string(), "-o", pts.string()}, gridLog, "scene grid " + spec);
+    std::smatch counted;
+    const std::string gridSummary = textOf(gridLog);
+    static const std::regex kCounts(R"((\d+) points in (\d+) rooms)");
+    if (!std::regex_search(gridSummary, counted, kCounts))
+      throw std::runtime_error("portico scene grid printed no count: " + gridSummary);
+    const uint64_t sensors = std::stoull(counted[1]), rooms = std::stoull(counted[2]);
     const fs::path out = work / (preset + floors + ".csv");
     std::vector<std::string> argv{portico, "analyze", store.string(), "-o", out.string(), "--sensors", pts.string(),
                                   "--workers", std::to_string(o.workers), "--memory", o.memory};
     for (const std::string& word : partsOf(o.analyzeArguments, ' ')) argv.push_back(word);
-    const double cpuBefore = cpuSeconds(RUSAGE_CHILDREN);
     const double seconds = timedChild(argv, work / (preset + floors + "-analyze.log"), "portico analyze " + spec);
-    const double cpu = cpuSeconds(RUSAGE_CHILDREN) - cpuBefore;
-    PipelineRunStats stats;
-    nlohmann::json statistics;
-    int64_t workerPeak = 0, coordinatorPeak = 0;
-    if (fs::exists(out.string() + ".json")) {
-      statistics = nlohmann::json::parse(textOf(out.string() + ".json"));
-      stats = parsePipelineStatistics(statistics);
-      for (const auto& [key, value] : statistics.value("counters", nlohmann::json::object()).items()) {
-        if (key.rfind("memory.peak_rss.worker.", 0) == 0) workerPeak = std::max<int64_t>(workerPeak, value.get<int64_t>());
-        if (key == "memory.peak_rss.coordinator") coordinatorPeak = value.get<int64_t>();
-      }
-    }
+    // The job's own statistics, beside its results (job_report.cpp's keys).
+    const nlohmann::json stats = nlohmann::json::parse(textOf(out.string() + ".json"));
+    auto number = [&](const char* section, const char* key) { return stats.at(section).value(key, 0.0); };
     const double mib = 1024.0 * 1024.0;
-    std::cout << fmt::format("| {} | {} | {} | {:.1f} s | {:.1f} s | {} | {:.2f} GB ({}) | {:.0f} MiB, {:.0f} MiB |\n", spec,
-                             rooms, sensors, seconds, cpu, stats.emitted, stats.bytesRead / 1e9, stats.cellsLoaded,
-                             workerPeak / mib, coordinatorPeak / mib)
+    const double workerPeak = number("memory", "workers_peak_rss_bytes") / mib;
+    const double coordinatorPeak = number("memory", "coordinator_peak_rss_bytes") / mib;
+    std::cout << fmt::format(
+                     "| {} | {} | {} | {:.1f} s (photons {:.1f} s, sensors {:.1f} s) | {:.0f} | {:.2f} GB ({} loads) | "
+                     "{:.2f} GB | {:.0f} MiB, {:.0f} MiB |\n",
+                     spec, rooms, sensors, seconds, number("time_ms", "photons") / 1e3, number("time_ms", "render") / 1e3,
+                     number("photons", "emitted"), number("cells", "bytes_read") / 1e9, number("cells", "loaded"),
+                     number("disk", "job_bytes") / 1e9, workerPeak, coordinatorPeak)
               << std::flush;
     if (csv.is_open())
-      csv << fmt::format("{},{},{},{},{},{:.2f},{:.2f},{},{},{},{:.1f},{:.1f}\n", spec, scene.cells().size(), rooms,
-                         sensors, o.workers, seconds, cpu, stats.emitted, stats.bytesRead, stats.cellsLoaded,
-                         workerPeak / mib, coordinatorPeak / mib);
+      csv << fmt::format("{},{},{},{},{},{:.2f},{:.2f},{:.2f},{:.0f},{:.0f},{:.0f},{:.0f},{:.0f},{:.0f},{:.1f},{:.1f}\n",
+                         spec, scene.cells().size(), rooms, sensors, o.workers, seconds, number("time_ms", "photons") / 1e3,
+                         number("time_ms", "render") / 1e3, number("photons", "emitted"), number("rays", "traced"),
+                         number("cells", "bytes_read"), number("cells", "loaded"), number("disk", "job_bytes"),
+                         number("analysis", "samples_per_sensor"), workerPeak, coordinatorPeak);
   }
   fs::remove_all(work);
   return 0;

@@ -12,9 +12,9 @@
 // as a table with the time each needs for 5, 2 and 1 % error; --csv, --plot.
 //
 // --buildings tower:10,octagon: the scale run. Each generated building gets
-// work-plane sensors in every room (--grid auto when portico analyze has
-// it, else a .pts written here from the rooms' boxes) and one `portico
-// analyze` with --workers: rooms, sensors, time, bytes read, peak memory.
+// the work-plane grid of `analyze --grid auto` in every room (`portico
+// scene grid`) and one `portico analyze` of it with --workers: rooms,
+// sensors, time, bytes read, peak memory.
 #pragma once
 
 #include <cstdint>
@@ -24,14 +24,17 @@ namespace portico::cli {
 
 struct BenchAnalyzeOptions {
   std::string sceneDirectory;
+  // Russian roulette (-lr -N) rather than rtrace's default -lr 7, which cuts
+  // every path after 7 reflections, ambient ones included: a ladder of -ab
+  // beyond 7 would converge to a darker answer (tests/tools/radiance_reference.py).
   std::string radianceSettings =
-      "-ab 2 -ad 128 -aa 0 -lw 1e-3;-ab 4 -ad 512 -aa 0 -lw 1e-4;-ab 6 -ad 2048 -aa 0 -lw 1e-5;"
-      "-ab 8 -ad 8192 -aa 0 -lw 1e-6";
-  std::string radianceReference = "-ab 20 -ad 8192 -aa 0 -lw 1e-7 -ds 0.01 -dj 0 -dc 1 -dt 0";
+      "-ab 2 -lr -4 -ad 128 -aa 0 -lw 1e-3;-ab 4 -lr -8 -ad 512 -aa 0 -lw 1e-4;-ab 8 -lr -16 -ad 2048 -aa 0 -lw 1e-5;"
+      "-ab 16 -lr -32 -ad 8192 -aa 0 -lw 1e-6";
+  std::string radianceReference = "-ab 40 -lr -80 -ad 8192 -aa 0 -lw 1e-7 -ds 0.01 -dj 0 -dc 1 -dt 0";
   std::string porticoSettings =
-      "--photons 50000 --spp 4 --gather 4;--photons 200000 --spp 16 --gather 4;"
-      "--photons 800000 --spp 64 --gather 4;--photons 3200000 --spp 256 --gather 4";
-  std::string porticoReference = "--photons 8000000 --spp 1024 --gather 8";
+      "--photons 100000 --spp 4 --gather 4;--photons 200000 --spp 16 --gather 8;"
+      "--photons 400000 --spp 64 --gather 16;--photons 800000 --spp 256 --gather 32";
+  std::string porticoReference = "--photons 4000000 --spp 1024 --gather 64";
   uint32_t workers = 2;
   std::string csv, plot;
 
