@@ -48,6 +48,14 @@ std::string FalseColorScale::label(double value) {
   return fmt::format("{:.3g}", value);
 }
 
+double automaticScaleMaximum(std::vector<double> values) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  if (values.empty()) return roundScaleMaximum(0);
+  const auto k = size_t(0.95 * double(values.size() - 1));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return roundScaleMaximum(values[k]);
+}
+
 double roundScaleMaximum(double value) {
   if (!(value > 0) || !std::isfinite(value)) return 1;
   const double power = std::pow(10.0, std::floor(std::log10(value)));

@@ -31,6 +31,12 @@ struct FalseColorScale {
 // The colour at t in [0, 1] along the spectrum.
 Rgb8 spectrumColor(double t);
 
+// The automatic top of a scale for `values`: their 95th percentile (the
+// non-finite left out) rounded up by roundScaleMaximum. Not their largest:
+// a sensor under a lamp, or the lamp seen in an image, would squeeze
+// everything else into the bottom colours; those few take the top colour.
+double automaticScaleMaximum(std::vector<double> values);
+
 // The smallest "round" number (1, 2, 2.5 or 5 times a power of ten) at or
 // above `value`: the maximum of an automatic scale; 1 when value <= 0.
 double roundScaleMaximum(double value);

@@ -17,14 +17,10 @@ LinearImage luminanceImage(const LinearImage& radiance) {
   return image;
 }
 
-double luminancePercentile(const LinearImage& luminance, double fraction) {
-  std::vector<float> values;
-  for (size_t p = 0; p < luminance.rgb.size(); p += 3)
-    if (std::isfinite(luminance.rgb[p])) values.push_back(luminance.rgb[p]);
-  if (values.empty()) return 0;
-  const auto k = size_t(std::clamp(fraction, 0.0, 1.0) * double(values.size() - 1));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
+std::vector<double> luminanceValues(const LinearImage& luminance) {
+  std::vector<double> values;
+  for (size_t p = 0; p < luminance.rgb.size(); p += 3) values.push_back(luminance.rgb[p]);
+  return values;
 }
 
 }  // namespace portico

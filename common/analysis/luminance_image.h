@@ -4,16 +4,15 @@
 // three channels: any viewer shows it grey, and EXR keeps the value.
 #pragma once
 
+#include <vector>
+
 #include "common/image/linear_image.h"
 
 namespace portico {
 
 LinearImage luminanceImage(const LinearImage& radiance);
 
-// The luminance (first channel) that `fraction` of the pixels are at or
-// under, non-finite pixels left out; 0 for an empty image. A false-colour
-// scale's automatic maximum (fraction 0.95: lamps seen directly, a few
-// pixels, do not squeeze the room into the scale's bottom colour).
-double luminancePercentile(const LinearImage& luminance, double fraction);
+// The first channel's values (each pixel's luminance), for a scale.
+std::vector<double> luminanceValues(const LinearImage& luminance);
 
 }  // namespace portico

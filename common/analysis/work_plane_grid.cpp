@@ -264,6 +264,13 @@ void checkOptions(const SceneStore& store, const FloorLevels& floors, const Work
 
 }  // namespace
 
+std::optional<RoomFloor> findRoomFloor(const SceneStore& store, uint32_t cell) {
+  const std::unique_ptr<CellGeometry> geometry = CellGeometry::load(store.cellPath(cell), cell, store.materials().size());
+  const Floor floor = findFloor(geometry->mesh(), geometry->bounds());
+  if (!floor.found) return std::nullopt;
+  return RoomFloor{floor.height, floor.area};
+}
+
 WorkPlaneGrid placeWorkPlaneGrid(const SceneStore& store, const WorkPlaneGridOptions& options) {
   const FloorLevels floors = findFloorLevels(store.cells());
   checkOptions(store, floors, options);

@@ -26,6 +26,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,15 @@ struct WorkPlaneGrid {
   std::vector<Sensor> sensors;        // by cell id, then rows of increasing z, then x
   std::vector<WorkPlaneRoom> rooms;   // the chosen rooms that got a point, by cell id
 };
+
+// The floor of cell `cell` as the grid finds it (above); nullopt when the
+// cell has no up-facing level triangle in its lower half. Throws the
+// store's errors reading the cell file.
+struct RoomFloor {
+  float height = 0;   // y
+  double area = 0;    // m^2 of its triangles
+};
+std::optional<RoomFloor> findRoomFloor(const SceneStore& store, uint32_t cell);
 
 // Throws std::runtime_error naming the option when an option is out of
 // range (height, spacing or inset not finite and positive) or a chosen

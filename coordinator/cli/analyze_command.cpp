@@ -9,18 +9,44 @@
 #include <stdexcept>
 
 #include "common/analysis/pts_file.h"
+#include "common/analysis/pts_file_writer.h"
+#include "common/analysis/result_paths.h"
+#include "common/analysis/room_table.h"
+#include "common/analysis/work_plane_grid.h"
 #include "common/scene/store/scene_store.h"
+#include "common/util/output_path.h"
+#include "coordinator/cli/analysis_report.h"
 #include "coordinator/cli/commands.h"
 
 namespace portico::cli {
 
+namespace {
+
+// --grid auto: the store's work-plane grid, written beside the results
+// (RESULTS.pts) before the job starts, so it can be given again with
+// --sensors or to Radiance. The client reads the store for it.
+std::vector<Sensor> gridSensors(const JobSettings& settings, const WorkPlaneGridOptions& options) {
+  checkOutputPath(settings.output, OutputKind::AnalysisCsv);   // nothing is written beside a bad one
+  const SceneStore store = SceneStore::open(settings.store);
+  WorkPlaneGrid grid = placeWorkPlaneGrid(store, options);
+  if (grid.sensors.empty())
+    throw std::invalid_argument(fmt::format("--grid auto: no room of {} has a point of a {} m grid {} m from its walls",
+                                            settings.store, options.spacing, options.inset));
+  const std::string pts = besideResults(settings.output, ".pts");
+  writePtsFile(pts, grid.sensors);
+  std::cerr << fmt::format("--grid auto: {} sensors in {} rooms, {} m above their floors, {} m apart: {}\n",
+                           grid.sensors.size(), grid.rooms.size(), options.height, options.spacing, pts);
+  return std::move(grid.sensors);
+}
+
+}  // namespace
+
 std::vector<Sensor> prepareAnalysis(JobSettings& settings, const AnalysisOptions& analysis) {
   if (analysis.sensorsFile.empty() == analysis.grid.empty())
     throw std::invalid_argument("an analysis needs its sensors: --sensors FILE.pts or --grid auto (one of them)");
-  if (!analysis.grid.empty())
-    throw std::invalid_argument("--grid auto: work-plane grids are not available yet; give the sensors with --sensors "
-                                "FILE.pts");
-  std::vector<Sensor> sensors = readPtsFile(analysis.sensorsFile);
+  parseThresholds(analysis.thresholds);   // a bad list is refused before anything runs
+  std::vector<Sensor> sensors =
+      analysis.grid.empty() ? readPtsFile(analysis.sensorsFile) : gridSensors(settings, analysis.gridOptions);
   if (analysis.daylightFactor) {
     // DF = 100 E_in / E_out needs the sky whose E_out is the standard's.
     if (settings.daylight.sun || settings.daylight.sunTime || settings.daylight.sky != DaylightSettings::Sky::None)
@@ -56,8 +82,11 @@ int runAnalyze(JobSettings settings, const AnalysisOptions& analysis, const Loca
   const std::vector<Sensor> sensors = prepareAnalysis(settings, analysis);
   warnOfSensorsOutsideCells(settings.store, sensors, analysis.sensorsFile);
   const int status = runRender(settings, local, &sensors);
-  if (status == 0) std::cerr << fmt::format("{} sensors: {}\n", sensors.size(), settings.output);
-  return status;
+  if (status != 0) return status;
+  std::cerr << fmt::format("{} sensors: {}\n", sensors.size(), settings.output);
+  for (const std::string& path : writeAnalysisReport(settings.store, settings.output, parseThresholds(analysis.thresholds)))
+    std::cerr << path << "\n";
+  return 0;
 }
 
 }  // namespace portico::cli

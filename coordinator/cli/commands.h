@@ -10,6 +10,7 @@
 #include <capnp/message.h>
 
 #include "common/analysis/sensor.h"
+#include "common/analysis/work_plane_grid.h"
 #include "common/job/job_settings.h"
 #include "common/scene/import/building_importer.h"
 #include "coordinator/cli/ifc_conversion.h"
@@ -72,6 +73,8 @@ int runRender(const JobSettings& render, const LocalRunOptions& local, const std
 struct AnalysisOptions {
   std::string sensorsFile;   // --sensors FILE.pts
   std::string grid;          // --grid auto
+  WorkPlaneGridOptions gridOptions;        // --grid-height, --grid-spacing, ... (work_plane_grid_command.h)
+  std::string thresholds = "100,300,500";  // analyze's --thresholds: lux of the per-room table (analysis_report.h)
   bool daylightFactor = false;
 };
 // The analysis's sensors, and `settings` made an analysis of them (its

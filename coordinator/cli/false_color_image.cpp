@@ -10,13 +10,12 @@ namespace portico::cli {
 
 namespace {
 
-constexpr double kAutomaticPercentile = 0.95;
 constexpr int kLegendMargin = 16;   // pixels between the image and the legend, and above it
 
 }  // namespace
 
 Canvas drawFalseColorImage(const LinearImage& luminance, FalseColorScale scale, FalseColorScale* resolved) {
-  if (!(scale.maximum > 0)) scale.maximum = roundScaleMaximum(luminancePercentile(luminance, kAutomaticPercentile));
+  if (!(scale.maximum > 0)) scale.maximum = automaticScaleMaximum(luminanceValues(luminance));
   if (resolved) *resolved = scale;
   const int width = int(luminance.width), height = int(luminance.height);
   Canvas canvas(width + kLegendMargin + kLegendWidth, std::max(height, legendHeight(scale) + 2 * kLegendMargin));

@@ -11,8 +11,7 @@
 namespace portico::cli {
 
 // The picture; pixel (x, y) of the image is pixel (x, y) of the canvas.
-// A scale maximum <= 0 is chosen: the 95th percentile of the image's
-// luminance rounded up (roundScaleMaximum). `resolved` receives the scale
+// A scale maximum <= 0 is chosen: automaticScaleMaximum of its pixels. `resolved` receives the scale
 // drawn, when given.
 Canvas drawFalseColorImage(const LinearImage& luminance, FalseColorScale scale,
                            FalseColorScale* resolved = nullptr);

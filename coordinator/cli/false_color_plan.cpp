@@ -158,17 +158,17 @@ std::vector<FalseColorPlan> drawFalseColorPlans(const SceneStore& store, const s
   const FloorLevels floors = findFloorLevels(store.cells());
   std::map<uint32_t, std::vector<size_t>> byFloor;
   std::vector<size_t> drawn;
-  double largest = 0;
+  std::vector<double> drawnValues;
   for (size_t i = 0; i < sensors.size(); ++i) {
     const Sensor& s = sensors[i];
     if (s.cell < 0 || size_t(s.cell) >= store.cells().size() || s.direction.y < kUpFacing * length(s.direction))
       continue;
     byFloor[floors.cellFloor[size_t(s.cell)]].push_back(i);
     drawn.push_back(i);
-    if (std::isfinite(values[i])) largest = std::max(largest, values[i]);
+    drawnValues.push_back(values[i]);
   }
   FalseColorScale scale = options.scale;
-  if (!(scale.maximum > 0)) scale.maximum = roundScaleMaximum(largest);
+  if (!(scale.maximum > 0)) scale.maximum = automaticScaleMaximum(std::move(drawnValues));
   const double cellSize = options.cellSize > 0 ? options.cellSize : medianSpacing(sensors, drawn);
   std::vector<FalseColorPlan> plans;
   for (const auto& [floor, onFloor] : byFloor)

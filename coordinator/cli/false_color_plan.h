@@ -18,7 +18,7 @@
 namespace portico::cli {
 
 struct FalseColorPlanOptions {
-  FalseColorScale scale{.maximum = 0};   // maximum <= 0: roundScaleMaximum of the largest value
+  FalseColorScale scale{.maximum = 0};   // maximum <= 0: automaticScaleMaximum of the values drawn
   double cellSize = 0;      // metres each sensor's square spans; <= 0: the median nearest-neighbour distance
   int panelSize = 1000;     // pixels along the plan's longer side
   std::string title;        // above the plan, after the floor's name ("work plane 0.80 m")

@@ -3,6 +3,9 @@
 // shutdown.
 #include <CLI/CLI.hpp>
 
+#include "coordinator/cli/analysis_report.h"
+#include "coordinator/cli/work_plane_grid_command.h"
+
 #include <memory>
 #include <string>
 
@@ -42,8 +45,12 @@ void addAnalysisOptions(CLI::App& command, AnalysisOptions& analysis) {
                      "the sensors: a Radiance .pts file, one `x y z dx dy dz` a line (a point in metres and the "
                      "direction its measuring plane faces)")
       ->check(CLI::ExistingFile);
-  command.add_option("--grid", analysis.grid, "auto: work-plane grids over every room instead of --sensors")
-      ->check(CLI::IsMember({"auto"}));
+  auto* grid = command
+                   .add_option("--grid", analysis.grid,
+                               "auto: work-plane grids over every room instead of --sensors (written beside the "
+                               "results as .pts; --grid-* options)")
+                   ->check(CLI::IsMember({"auto"}));
+  for (CLI::Option* option : addWorkPlaneGridOptions(command, analysis.gridOptions)) option->needs(grid);
   command.add_flag("--daylight-factor", analysis.daylightFactor,
                    "under the CIE overcast sky, report each sensor's daylight factor DF = 100 E / E_out (%), E_out "
                    "the sky's unobstructed horizontal illuminance");
@@ -62,6 +69,7 @@ void addAnalyze(CLI::App& app, CommandTable& table) {
   analyze->add_option("STORE", o->settings.store, "scene store directory")->required()->check(CLI::ExistingDirectory);
   analyze->add_option("-o,--output", o->settings.output, "the results: a .csv, one row per sensor")->required();
   addAnalysisOptions(*analyze, o->analysis);
+  addThresholdsOption(*analyze, o->analysis.thresholds);
   addLightingOptions(*analyze, o->settings, "samples per sensor");
   addLocalRunOptions(*analyze, o->local);
   table.add(analyze, [o] { return runAnalyze(o->settings, o->analysis, o->local); });
@@ -190,6 +198,7 @@ void addShutdown(CLI::App& app, CommandTable& table) {
 void addJobCommands(CLI::App& app, CommandTable& table) {
   addRender(app, table);
   addAnalyze(app, table);
+  addReportCommand(app, table);
   addSubmit(app, table);
   addStatus(app, table);
   addWait(app, table);

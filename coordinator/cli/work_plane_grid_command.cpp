@@ -10,20 +10,22 @@
 
 namespace portico::cli {
 
-void addWorkPlaneGridOptions(CLI::App& command, WorkPlaneGridOptions& o) {
-  command.add_option("--grid-height", o.height, "work plane: metres above each room's floor")
-      ->capture_default_str()
-      ->check(CLI::Range(0.01, 100.0));
-  command.add_option("--grid-spacing", o.spacing, "metres between grid points (LEED asks at most 0.6)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.01, 100.0));
-  command.add_option("--grid-inset", o.inset, "metres kept from walls and the floor's edges")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 100.0));
-  command.add_option("--grid-rooms", o.roomNames, "only cells whose names match one of these patterns (f0-room-*)")
-      ->delimiter(',');
-  command.add_option("--grid-floors", o.floors, "only cells on these floors (0 = lowest)")->delimiter(',');
-  command.add_option("--grid-cells", o.cells, "only these cell ids")->delimiter(',');
+std::vector<CLI::Option*> addWorkPlaneGridOptions(CLI::App& command, WorkPlaneGridOptions& o) {
+  return {
+      command.add_option("--grid-height", o.height, "work plane: metres above each room's floor")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 100.0)),
+      command.add_option("--grid-spacing", o.spacing, "metres between grid points (LEED asks at most 0.6)")
+          ->capture_default_str()
+          ->check(CLI::Range(0.01, 100.0)),
+      command.add_option("--grid-inset", o.inset, "metres kept from walls and the floor's edges")
+          ->capture_default_str()
+          ->check(CLI::Range(0.0, 100.0)),
+      command.add_option("--grid-rooms", o.roomNames, "only cells whose names match one of these patterns (f0-room-*)")
+          ->delimiter(','),
+      command.add_option("--grid-floors", o.floors, "only cells on these floors (0 = lowest)")->delimiter(','),
+      command.add_option("--grid-cells", o.cells, "only these cell ids")->delimiter(','),
+  };
 }
 
 int runSceneGrid(const std::string& directory, const std::string& output, const WorkPlaneGridOptions& options,

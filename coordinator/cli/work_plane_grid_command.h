@@ -7,12 +7,14 @@
 #include <CLI/CLI.hpp>
 
 #include <string>
+#include <vector>
 
 #include "common/analysis/work_plane_grid.h"
 
 namespace portico::cli {
 
-void addWorkPlaneGridOptions(CLI::App& command, WorkPlaneGridOptions& options);
+// Returns the options added (so `analyze` can make them need --grid auto).
+std::vector<CLI::Option*> addWorkPlaneGridOptions(CLI::App& command, WorkPlaneGridOptions& options);
 
 // Places the grid, writes it to `output` (.pts) and prints per floor the
 // rooms and points (a line per room with `verbose`). Returns 0, or 1 when

@@ -43,6 +43,12 @@ TEST(FalseColorScale, SpectrumEndsAndRoundMaxima) {
   EXPECT_EQ(roundScaleMaximum(210), 250);
   EXPECT_DOUBLE_EQ(roundScaleMaximum(0.013), 0.02);
   EXPECT_EQ(roundScaleMaximum(0), 1);
+  // The 95th percentile: of 0 .. 100 and one outlier, 95 (rounded up to 100), not the outlier.
+  std::vector<double> values;
+  for (int v = 0; v <= 100; ++v) values.push_back(v);
+  values.push_back(1e6);
+  values.push_back(NAN);
+  EXPECT_EQ(automaticScaleMaximum(values), 100);
   EXPECT_EQ(FalseColorScale::label(62.5), "62.5");
   EXPECT_EQ(FalseColorScale::label(1500), "1.5k");
   EXPECT_EQ(FalseColorScale::label(0.25), "0.25");
@@ -62,7 +68,8 @@ TEST(FalseColorPlan, EachSensorsSquareHasTheColourOfItsValue) {
   ASSERT_EQ(plans.size(), 2u);   // one per floor
   EXPECT_EQ(plans[0].floor, 0u);
   EXPECT_EQ(plans[1].floor, 1u);
-  EXPECT_EQ(plans[0].scale.maximum, 2000);   // the largest value, 1550 lx upstairs, rounded up: one scale for both
+  // The 95th percentile of both floors' values (1500 lx, upstairs) rounded up: one scale for both.
+  EXPECT_EQ(plans[0].scale.maximum, 2000);
   EXPECT_EQ(plans[1].scale.maximum, 2000);
   for (size_t i = 0; i < grid.sensors.size(); ++i) {
     const Sensor& s = grid.sensors[i];

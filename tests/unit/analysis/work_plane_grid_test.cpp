@@ -120,6 +120,10 @@ TEST(WorkPlaneGrid, PointsKeepTheInsetFromTheFloorsEdges) {
   EXPECT_EQ(positions.count({2.0f, 2.0f}), 0u);   // 0.5 m from the inner corner diagonally: less than 0.5 from its edges
   EXPECT_EQ(positions.count({2.0f, 3.0f}), 0u);
   EXPECT_NEAR(grid.rooms.at(0).floorArea, 20.0, 1e-4);
+  const std::optional<RoomFloor> floor = findRoomFloor(SceneStore::open(dir / "store"), 0);
+  ASSERT_TRUE(floor.has_value());
+  EXPECT_NEAR(floor->area, 20.0, 1e-4);
+  EXPECT_FLOAT_EQ(floor->height, 0.0f);
 }
 
 TEST(WorkPlaneGrid, CellsOpenToTheSkyAreNoRooms) {
