@@ -247,15 +247,17 @@ void queuePhotonEmission(JobStore& store, uint64_t job, wire::JobSpec::Reader sp
   // The cell and portal pictures need no light: the photon phase is empty.
   if (spec.getAov() != wire::Aov::RADIANCE) return;
   // The scene's lights, then the daylight's emitters (light ids on from
-  // the scene's light count: CellKernel::emitPhotons).
+  // the scene's light count: CellKernel::emitPhotons). A daylight-factor
+  // job's lamps are off (lampsLit): no photons, their ids kept.
+  const JobSettings settings = jobSettingsFromWire(spec);
   std::vector<Vec3> powers;
   std::vector<uint32_t> cells;
   for (const AreaLight& light : scene.lights()) {
-    powers.push_back(light.power());
+    powers.push_back(lampsLit(settings) ? light.power() : Vec3(0.0f));
     cells.push_back(light.cell);
   }
   if (spec.hasDaylight()) {
-    const DaylightEmitters daylight(scene, jobSettingsFromWire(spec).daylight);
+    const DaylightEmitters daylight(scene, settings.daylight);
     for (size_t e = 0; e < daylight.count(); ++e) {
       powers.push_back(daylight.power(e));
       cells.push_back(daylight.cell(e));

@@ -34,11 +34,21 @@ Rgb8 spectrumColor(double t) {
   return color;
 }
 
-Rgb8 FalseColorScale::colorOf(double value) const { return spectrumColor(value / maximum); }
+double FalseColorScale::positionOf(double value) const {
+  if (!(value > 0)) return 0;   // also NaN
+  const double t = decades > 0 ? 1 + std::log10(value / maximum) / decades : value / maximum;
+  return std::clamp(t, 0.0, 1.0);
+}
+
+double FalseColorScale::valueAt(double t) const {
+  return decades > 0 ? maximum * std::pow(10.0, (t - 1) * decades) : maximum * t;
+}
+
+Rgb8 FalseColorScale::colorOf(double value) const { return spectrumColor(positionOf(value)); }
 
 std::vector<double> FalseColorScale::legendValues() const {
   std::vector<double> values;
-  for (int k = 0; k <= steps; ++k) values.push_back(maximum * k / steps);
+  for (int k = 0; k <= steps; ++k) values.push_back(valueAt(double(k) / steps));
   return values;
 }
 

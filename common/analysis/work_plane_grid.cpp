@@ -14,6 +14,7 @@
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/floor_levels.h"
 #include "common/scene/store/mesh_slice.h"
+#include "common/transport/daylight_openings.h"
 
 namespace portico {
 
@@ -175,10 +176,51 @@ std::vector<float> latticeAlong(float lo, float hi, float spacing, float inset) 
   return positions;
 }
 
+// A polygon in plan (x, z pairs).
+using PlanPolygon = std::vector<std::pair<float, float>>;
+
+bool insidePlanPolygon(const PlanPolygon& polygon, float x, float z) {
+  bool inside = false;   // crossing number of a ray towards +x
+  for (size_t i = 0, j = polygon.size() - 1; i < polygon.size(); j = i++) {
+    const auto [xi, zi] = polygon[i];
+    const auto [xj, zj] = polygon[j];
+    if ((zi > z) != (zj > z) && x < xi + (z - zi) * (xj - xi) / (zj - zi)) inside = !inside;
+  }
+  return inside;
+}
+
+// The portals of `cell` that open upwards into another indoor cell (a
+// gallery or mezzanine over the room, the voxel cell above), above the work
+// plane at `plane`, in plan.
+std::vector<PlanPolygon> indoorOpeningsAbove(const SceneStore& store, uint32_t cell, float plane) {
+  std::vector<PlanPolygon> openings;
+  for (const Portal& portal : store.portals()) {
+    if (portal.cellA != cell && portal.cellB != cell) continue;
+    const uint32_t other = portal.cellA == cell ? portal.cellB : portal.cellA;
+    if (isOutdoorCell(store.cells()[other].name) || portal.polygon.size() < 3) continue;
+    Vec3 normal, centre;
+    for (size_t i = 0; i < portal.polygon.size(); ++i) {
+      normal += cross(portal.polygon[i], portal.polygon[(i + 1) % portal.polygon.size()]);
+      centre += portal.polygon[i];
+    }
+    centre = centre / float(portal.polygon.size());
+    if (!(std::abs(normal.y) > 0.5f * length(normal)) || centre.y <= plane) continue;   // not a floor above
+    PlanPolygon polygon;
+    for (const Vec3& v : portal.polygon) polygon.push_back({v.x, v.z});
+    openings.push_back(std::move(polygon));
+  }
+  return openings;
+}
+
 class RoomGrid {
  public:
-  RoomGrid(const CellGeometry& cell, const Floor& floor, const WorkPlaneGridOptions& options)
-      : mesh_(cell.mesh()), index_(cell.mesh(), cell.bounds()), floor_(floor), options_(options) {
+  RoomGrid(const CellGeometry& cell, const Floor& floor, const WorkPlaneGridOptions& options,
+           std::vector<PlanPolygon> openingsAbove)
+      : mesh_(cell.mesh()),
+        index_(cell.mesh(), cell.bounds()),
+        floor_(floor),
+        options_(options),
+        openingsAbove_(std::move(openingsAbove)) {
     std::vector<PlanSegment> walls;
     sliceMesh(mesh_, floor.height + kWallSliceHeight, walls);
     index_.addWalls(std::move(walls), options.inset);
@@ -200,7 +242,7 @@ class RoomGrid {
     for (float z : latticeAlong(floor_.extent.lo.z, floor_.extent.hi.z, options_.spacing, options_.inset))
       for (float x : latticeAlong(floor_.extent.lo.x, floor_.extent.hi.x, options_.spacing, options_.inset))
         if (insetFromEdges(x, z) && index_.wallDistance(x, z, options_.inset) >= options_.inset - kEdgeSlack &&
-            verticalFree(x, z, plane - kPlaneTolerance, plane + kHeadroom))
+            verticalFree(x, z, plane - kPlaneTolerance, plane + kHeadroom) && indoors(x, z))
           points.push_back(Vec3(x, plane, z));
     return true;
   }
@@ -228,6 +270,17 @@ class RoomGrid {
       if (index_.verticalHit(t, x, z, y) && y > y0 && y < y1) return false;
     return true;
   }
+  // The point on the work plane at (x, z) is under a ceiling or roof of
+  // the cell, or under an opening into an indoor cell above. Not so: it
+  // lies outside the building's envelope though inside the cell's box,
+  // as where a pitched roof comes down lower than the work plane (FZK-Haus'
+  // attic gallery at its eaves: the points 4 cm over the roof's outer face
+  // saw the open sky, daylight factors of 100 % and more).
+  bool indoors(float x, float z) const {
+    if (coveredAbove(x, z)) return true;
+    return std::any_of(openingsAbove_.begin(), openingsAbove_.end(),
+                       [&](const PlanPolygon& opening) { return insidePlanPolygon(opening, x, z); });
+  }
   // Some triangle of the cell (a ceiling, a roof) lies above the work plane at (x, z).
   bool coveredAbove(float x, float z) const {
     const float plane = floor_.height + options_.height;
@@ -241,6 +294,7 @@ class RoomGrid {
   PlanIndex index_;
   const Floor& floor_;
   const WorkPlaneGridOptions& options_;
+  const std::vector<PlanPolygon> openingsAbove_;
 };
 
 void checkOptions(const SceneStore& store, const FloorLevels& floors, const WorkPlaneGridOptions& options) {
@@ -282,7 +336,8 @@ WorkPlaneGrid placeWorkPlaneGrid(const SceneStore& store, const WorkPlaneGridOpt
     const Floor floor = findFloor(cell->mesh(), cell->bounds());
     if (!floor.found) continue;
     std::vector<Vec3> points;
-    if (!RoomGrid(*cell, floor, options).place(points) || points.empty()) continue;
+    const RoomGrid roomGrid(*cell, floor, options, indoorOpeningsAbove(store, info.id, floor.height + options.height));
+    if (!roomGrid.place(points) || points.empty()) continue;
     WorkPlaneRoom room;
     room.cell = info.id;
     room.name = info.name;

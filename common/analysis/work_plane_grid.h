@@ -19,7 +19,11 @@
 //       plane to kHeadroom above it: it is not inside or under furniture
 //       (cupboards, shelves, counters, monitors, chair backs). Furniture
 //       lower than the work plane (desks, tables, beds) keeps its points:
-//       they measure the light arriving over it, as on a Radiance grid;
+//       they measure the light arriving over it, as on a Radiance grid,
+//     - it lies under a ceiling or roof of the cell (some triangle above
+//       it), or under a portal into an indoor cell above (a gallery, the
+//       voxel cell above): a point over the low end of a pitched roof lies
+//       outside the building though inside the cell's box;
 //  * a cell whose floor is less than half covered by its own triangles (a
 //    ceiling, a roof) is outdoors, no room, and gets no points; a room
 //    partly open to a gallery above keeps the points under the opening.

@@ -152,6 +152,14 @@ struct JobSettings {
   bool operator==(const JobSettings&) const = default;
 };
 
+// Whether the scene's lamps (area lights, emissive objects, IES luminaires)
+// light the job. A daylight-factor analysis is lit by the CIE overcast sky
+// alone: DF = 100 E_in / E_out compares the sky's light indoors with the
+// same sky's outdoors, and a lamp left on would count as daylight (an
+// imported house's ceiling lamps read as DF of 100 % and more under them).
+// Its lamps emit no photons, and no shadow ray is drawn to them.
+inline bool lampsLit(const JobSettings& settings) { return !(settings.analysis && settings.analysis->daylightFactor); }
+
 // Why the settings' camera choice cannot be taken ("" when it can): a store
 // camera by name and a camera of the job's own both given.
 std::string cameraChoiceProblem(const JobSettings& settings);

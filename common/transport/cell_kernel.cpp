@@ -73,7 +73,9 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       irradiance_(indirect && indirect->irradiance ? &*indirect->irradiance : nullptr),
       lights_(scene.lights()) {
   if (parameters.width && parameters.height) camera_.emplace(cameraOf(parameters, scene), parameters.width, parameters.height);
-  std::vector<uint32_t> candidates = LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops);
+  // A daylight-factor analysis samples the sky's openings only (lampsLit).
+  std::vector<uint32_t> candidates;
+  if (lampsLit(parameters)) candidates = LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops);
   if (parameters.daylight.any()) {
     daylight_.emplace(scene, parameters.daylight);
     outdoors_.emplace(scene);
@@ -114,6 +116,9 @@ void CellKernel::emitPhotons(uint32_t lightId, uint64_t firstPath, uint32_t coun
     }
     return;
   }
+  if (!lampsLit(parameters_))
+    throw std::invalid_argument("an emission batch names lamp " + std::to_string(lightId) +
+                                " of a daylight-factor job, whose lamps are off");
   const AreaLight& light = scene_.lights().at(lightId);
   const Vec3 normal = light.normal();
   const Vec3 power = light.power() / float(photonsOfLight);

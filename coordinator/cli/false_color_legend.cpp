@@ -16,7 +16,7 @@ void drawLegend(Canvas& canvas, int left, int top, const FalseColorScale& scale)
   const int barTop = top + kBarTop, barHeight = kStepHeight * scale.steps;
   canvas.text(left, top, scale.unit, kBlack);
   for (int y = 0; y <= barHeight; ++y) {
-    const Rgb8 c = scale.colorOf(scale.maximum * double(barHeight - y) / barHeight);
+    const Rgb8 c = spectrumColor(double(barHeight - y) / barHeight);
     canvas.fill(left, barTop + y, left + kBarWidth - 1, barTop + y, {c[0], c[1], c[2]});
   }
   const std::vector<double> values = scale.legendValues();

@@ -91,6 +91,17 @@ class Building {
                                          {"edge2", {r.edge2.x, r.edge2.y, r.edge2.z}}}},
                                {"radiance", {radiance, radiance, radiance}}});
   }
+  // An IES point luminaire at `position` aimed down, candela `downward`
+  // cos(gamma) over the lower hemisphere (a file of one plane, 0-90 deg).
+  void luminaire(const std::string& cell, Vec3 position, double downward) {
+    std::string ies = "IESNA:LM-63-2002\n[TEST] portico cie171_test\nTILT=NONE\n1 -1 1 7 1 1 2 0 0 0\n1 1 10\n";
+    for (int v = 0; v <= 6; ++v) ies += fmt::format("{} ", 15 * v);
+    ies += "\n0\n";
+    for (int v = 0; v <= 6; ++v) ies += fmt::format("{} ", downward * std::cos(15 * v * kPiD / 180));
+    files_.push_back({"downlight.ies", ies + "\n"});
+    json_["lights"].push_back(
+        {{"name", "downlight"}, {"cell", cell}, {"ies", "downlight.ies"}, {"position", {position.x, position.y, position.z}}});
+  }
   void portal(const std::string& a, const std::string& b, const Rect& r) {
     const Vec3 p[4] = {r.corner, r.corner + r.edge1, r.corner + r.edge1 + r.edge2, r.corner + r.edge2};
     nlohmann::json polygon = nlohmann::json::array();
@@ -113,6 +124,7 @@ class Building {
         base += 4;
       }
     }
+    for (const auto& [name, text] : files_) std::ofstream(dir / name) << text;
     std::ofstream(dir / "building.json") << json_.dump(1);
     return dir / "building.json";
   }
@@ -120,6 +132,7 @@ class Building {
  private:
   nlohmann::json json_ = {{"units", "metres"}, {"objects", nlohmann::json::array()}};
   std::vector<std::pair<std::string, std::vector<Rect>>> objects_;
+  std::vector<std::pair<std::string, std::string>> files_;   // written beside the json: name, text
 };
 
 // Four faces of the box [lo, hi]: the floor and the walls at z = lo, z = hi
@@ -360,6 +373,7 @@ TEST_F(Cie171, AClosedRoomOfUniformReflectanceMatchesTheIntegratingSphereFormula
 // / 3, the closed forms above (Lz: 10 000 lx on the ground).
 struct SkyCase {
   bool roof = true;
+  double albedo = 0.0;   // of every surface of the room (0: the sky component alone)
   static constexpr float kPlane = 0.75f;
   std::vector<SensorAt> sensors() const {
     if (roof)
@@ -410,7 +424,7 @@ struct SkyCase {
       b.cell("outside", Vec3(6, 0, 0), Vec3(10, 3, 6));
       b.portal("room", "outside", {Vec3(6, 1, 2), Vec3(0, 0, 2), Vec3(0, 1.5f, 0)});
     }
-    b.object("black", "room", 0.0, faces);
+    b.object("black", "room", albedo, faces);
     b.camera({0.5f, 1.5f, 0.5f}, {3, 1, 3});
     return b;
   }
@@ -470,6 +484,57 @@ TEST_F(Cie171, AFacadeWindowsSkyComponentUnderTheUniformAndOvercastSkies) {
   checkSkyCase(facade, "facade", [&](const std::string& name, const std::vector<std::string>& options) {
     return analyze(store, name, facade.sensors(), options);
   });
+}
+
+// ---- A daylight-factor run is lit by the sky alone -------------------------
+
+// DF = 100 E_in / E_out compares the overcast sky's light indoors with the
+// same sky's outdoors: the room's lamps must not count. A grey room (light
+// reflected inside, so photons matter too) with the facade window, measured
+// with --daylight-factor bare, with an IES luminaire (a point: no geometry,
+// so the run must give the very same bytes), and with the luminaire and a
+// ceiling panel (the panel's 0.2 m square is geometry: the paths that meet
+// it go otherwise, within 2 %). The same lamps under --sky overcast without
+// --daylight-factor add a quarter or more at every sensor: were they counted,
+// the comparison would fail.
+TEST_F(Cie171, ADaylightFactorRunIsLitByTheOvercastSkyAloneNotByTheRoomsLamps) {
+  SkyCase window{false, 0.5};
+  const std::vector<std::string> options{"--photons", "100000", "--spp", "32", "--light-samples", "4", "--gather", "8"};
+  const auto with = [&](std::vector<std::string> more) {
+    more.insert(more.begin(), options.begin(), options.end());
+    return more;
+  };
+  const auto withLamps = [&](bool panel) {
+    Building b = window.building();
+    b.luminaire("room", {1.5f, 2.9f, 4.5f}, 10000);
+    if (panel) ceilingLamp(b, {3, 2.999f, 3}, 0.2, 20000 / (kEfficacy * kPiD * 0.04));   // 20 000 lm
+    return b;
+  };
+  const fs::path bare = import(window.building(), "df-bare");
+  const fs::path luminaire = import(withLamps(false), "df-luminaire");
+  const fs::path lamps = import(withLamps(true), "df-lamps");
+  const auto bareRows = analyze(bare, "df-bare", window.sensors(), with({"--daylight-factor"}));
+  const auto luminaireRows = analyze(luminaire, "df-luminaire", window.sensors(), with({"--daylight-factor"}));
+  const auto lampRows = analyze(lamps, "df-lamps", window.sensors(), with({"--daylight-factor"}));
+  EXPECT_EQ(readFile(dir_ / "df-luminaire.csv"), readFile(dir_ / "df-bare.csv"));
+  ASSERT_EQ(lampRows.size(), bareRows.size());
+  const std::vector<double> bareFactor = [&] {
+    std::vector<double> f;
+    for (const auto& row : bareRows) f.push_back(row.at("daylight_factor"));
+    return f;
+  }();
+  std::vector<double> lampFactor;
+  for (const auto& row : lampRows) lampFactor.push_back(row.at("daylight_factor"));
+  for (size_t i = 0; i < bareFactor.size(); ++i) {
+    EXPECT_GT(bareFactor[i], 0) << "sensor " << i;
+    EXPECT_NEAR(lampFactor[i], bareFactor[i], 0.02 * bareFactor[i]) << "sensor " << i;
+  }
+  RecordProperty("panel_worst_difference_percent", fmt::format("{:.3f}", 100 * worstError(lampFactor, bareFactor)));
+  // The lamps are bright beside the sky: lit, they add a quarter or more (the tolerance is 2 %).
+  const auto litRows = analyze(lamps, "df-lamps-lit", window.sensors(), with({"--sky", "overcast"}));
+  ASSERT_EQ(litRows.size(), bareRows.size());
+  for (size_t i = 0; i < litRows.size(); ++i)
+    EXPECT_GT(litRows[i].at("lux"), 1.25 * bareRows[i].at("lux")) << "sensor " << i;
 }
 
 }  // namespace

@@ -59,11 +59,19 @@ inline TestCell boxRoom(const std::string& name, float floorY) {
   return cell;
 }
 
-// Writes the cells (one grey material, no portals, the camera in cell 0)
+// A portal between two cells, a polygon.
+struct TestPortal {
+  uint32_t cellA = 0, cellB = 0;
+  std::vector<Vec3> polygon;
+};
+
+// Writes the cells (one grey material, the camera in cell 0) and portals
 // as a scene store at `directory`.
-inline void writeTestStore(const std::string& directory, const std::vector<TestCell>& cells) {
+inline void writeTestStore(const std::string& directory, const std::vector<TestCell>& cells,
+                           const std::vector<TestPortal>& portals = {}) {
   SceneStoreWriter writer(directory);
   writer.addMaterial("grey", Vec3(0.5f));
+  for (const TestPortal& portal : portals) writer.addPortal(portal.cellA, portal.cellB, portal.polygon);
   for (uint32_t id = 0; id < cells.size(); ++id) {
     CellContent content;
     content.id = id;

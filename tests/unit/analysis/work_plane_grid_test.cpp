@@ -137,6 +137,63 @@ TEST(WorkPlaneGrid, CellsOpenToTheSkyAreNoRooms) {
   EXPECT_EQ(grid.sensors.size(), 77u);
 }
 
+TEST(WorkPlaneGrid, PointsOverALowPitchedRoofAreOutsideTheBuilding) {
+  // A 6 x 4 m attic whose roof, 10 cm thick, rises from 0.3 m (inner face)
+  // at z = 0 to 3.3 m at z = 4: y = 0.3 + 0.75 z inside, 0.4 + 0.75 z outside.
+  TempDirectory dir;
+  TestCell attic{"attic", Bounds3(Vec3(0, 0, 0), Vec3(6, 3.5f, 4)), {}};
+  attic.mesh.level(0, 0, 6, 4, 0, true);
+  const auto roof = [&](float lift, bool down) {
+    const Vec3 a(0, 0.3f + lift, 0), b(6, 0.3f + lift, 0), c(6, 3.3f + lift, 4), d(0, 3.3f + lift, 4);
+    if (down) attic.mesh.quad(a, b, c, d); else attic.mesh.quad(a, d, c, b);
+  };
+  roof(0.0f, true);
+  roof(0.1f, false);
+  attic.mesh.wallX(0, 0, 4, 0, 3.5f);
+  attic.mesh.wallX(6, 0, 4, 0, 3.5f);
+  attic.mesh.wallZ(4, 0, 6, 0, 3.5f);
+  attic.mesh.wallZ(0, 0, 6, 0, 0.3f);
+  writeTestStore(dir / "store", {attic});
+  const WorkPlaneGrid grid = placeWorkPlaneGrid(SceneStore::open(dir / "store"), {});
+  // Rows z = 0.5 .. 3.5. At z = 0.5 the roof's outer face is 0.775 m up,
+  // under the 0.8 m plane: those points are outdoors. z = 1.0 .. 2.0: the
+  // roof within 1 m above the plane, or within 0.5 m of its 1.5 m cut. Kept:
+  // z = 2.5, 3.0, 3.5, 11 points each.
+  const auto positions = planPositions(grid.sensors);
+  EXPECT_EQ(grid.sensors.size(), 33u);
+  for (float x : {0.5f, 3.0f, 5.5f}) {
+    EXPECT_EQ(positions.count({x, 0.5f}), 0u) << x;
+    EXPECT_EQ(positions.count({x, 2.5f}), 1u) << x;
+  }
+}
+
+TEST(WorkPlaneGrid, PointsUnderAnOpeningKeepTheirPlaceOnlyUnderAnIndoorCell) {
+  // A hall 6 x 4 x 3 m with a ceiling over x < 3.25 only; over the rest a portal
+  // into the cell above: a gallery (indoors), or the sky (an outdoor cell).
+  const auto gridWithAbove = [](const std::string& above) {
+    TempDirectory dir;
+    TestCell hall{"hall", Bounds3(Vec3(0, 0, 0), Vec3(6, 3, 4)), {}};
+    hall.mesh.level(0, 0, 6, 4, 0, true);
+    hall.mesh.level(0, 0, 3.25f, 4, 3, false);
+    hall.mesh.wallX(0, 0, 4, 0, 3);
+    hall.mesh.wallX(6, 0, 4, 0, 3);
+    hall.mesh.wallZ(0, 0, 6, 0, 3);
+    hall.mesh.wallZ(4, 0, 6, 0, 3);
+    TestCell upper{above, Bounds3(Vec3(0, 3, 0), Vec3(6, 6, 4)), {}};
+    upper.mesh.level(0, 0, 3.25f, 4, 3, true);
+    writeTestStore(dir / "store", {hall, upper},
+                   {{0, 1, {Vec3(3.25f, 3, 0), Vec3(6, 3, 0), Vec3(6, 3, 4), Vec3(3.25f, 3, 4)}}});
+    WorkPlaneGridOptions options;
+    options.cells = {0};
+    return placeWorkPlaneGrid(SceneStore::open(dir / "store"), options);
+  };
+  // x 0.5 .. 5.5 (11) by z 0.5 .. 3.5 (7); under the ceiling x <= 3.0 (6 columns).
+  EXPECT_EQ(gridWithAbove("gallery").sensors.size(), 77u);
+  const WorkPlaneGrid open = gridWithAbove("outside-1");
+  EXPECT_EQ(open.sensors.size(), 42u);
+  for (const Sensor& s : open.sensors) EXPECT_LT(s.position.x, 3.25f);
+}
+
 TEST(WorkPlaneGrid, RoomsAreChosenByNameFloorAndCell) {
   TempDirectory dir;
   TestCell upstairs = boxRoom("f1-office", 3.0f);
