@@ -17,8 +17,10 @@
 //   no more deposit records than photons.deposits + photons.portal_copies;
 //   no film.
 // - render lease: rays.camera = its camera batches' pixels x spp (sensor
-//   batches' sensors x spp); rays handed
-//   on <= rays.crossings; rays.invalid <= rays received; no deposits; film value
+//   batches' sensors x spp); sensors.measured = its sensors; every ray
+//   started ended once: camera + emission + received + shadow + gather =
+//   rays.finished + rays.invalid + rays handed on; rays handed on <=
+//   rays.crossings; rays.invalid <= rays received; no deposits; film value
 //   in [0, the film's range] on a pixel of the image; film.out_of_range 0.
 // - every counter is >= 0.
 #pragma once
@@ -43,6 +45,7 @@ struct LeaseExpectation {
   int64_t photonsToEmit = 0;    // EmitRange counts
   int64_t raysIn = 0;           // rays of its ray batches
   int64_t cameraSamples = 0;    // CameraRange pixels (and sensors) x spp
+  int64_t sensors = 0;          // sensors of its sensor batches
   void add(wire::RayBatch::Reader batch, uint32_t spp);
 };
 

@@ -37,7 +37,7 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
   figures.moreCells = int64_t(assign.getMoreCells().size());
   figures.started = started;
   figures.startedTimes = startedTimes;
-  applyTestFault(traced.out);
+  applyTestFault(traced.out, lease.renderPhase);
   auto message = encodeResult(assign, traced.out, figures);
   applyTestFault(message->getRoot<wire::Envelope>().getResult());
   spdlog::debug("lease {} cell {}: {} batches, {} deposits, {} crossing cells, {} pixels in {:.1f} ms",

@@ -21,7 +21,7 @@ const std::string& testFault() {
 }
 }  // namespace
 
-void applyTestFault(KernelOutputs& out) {
+void applyTestFault(KernelOutputs& out, bool renderLease) {
   const std::string& fault = testFault();
   if (fault == "zero-deposits") {
     for (auto& [cell, records] : out.deposits) std::memset(records.data(), 0, records.size() * sizeof(PhotonRecord));
@@ -29,14 +29,16 @@ void applyTestFault(KernelOutputs& out) {
     c.photonsEmitted = c.photonDeposits = c.photonsAbsorbed = c.photonsEscaped = c.photonCrossings = c.photonCopies = 0;
   } else if (fault == "drop-crossings") {
     out.crossings.clear();
-  } else if (fault == "duplicate-crossings") {
-    // Render leases only: they trace camera, shadow or gather rays.
-    const TraceCounters& c = out.counters;
-    if (c.cameraRays + c.emissionRays + c.shadowRays + c.gatherRays == 0) return;
+  } else if (fault == "duplicate-crossings" && renderLease) {
     for (auto& [cell, rays] : out.crossings) {
       const std::vector<RayState> copy = rays;
       rays.insert(rays.end(), copy.begin(), copy.end());
     }
+  } else if (fault == "drop-render-crossings" && renderLease) {
+    out.crossings.clear();
+  } else if (fault == "uncounted-rays" && renderLease) {
+    TraceCounters& c = out.counters;
+    c.emissionRays = c.shadowRays = c.gatherRays = c.raysFinished = 0;
   }
 }
 

@@ -7,6 +7,10 @@
 //   drop-crossings  rays handed on to other cells left out, counters honest
 //   negative-film   every film value negated
 //   duplicate-crossings  a render lease's rays handed on sent twice
+//   drop-render-crossings  a render lease's rays handed on left out, its
+//                   counters honest: rays lost between cells
+//   uncounted-rays  a render lease's emission, shadow, gather and finished
+//                   ray counters zeroed: a worker that says it traced none
 // Unset (always, outside tests): nothing changes.
 #pragma once
 
@@ -16,7 +20,7 @@
 namespace portico {
 
 // Before the Result is encoded (deposits, crossings, counters).
-void applyTestFault(KernelOutputs& out);
+void applyTestFault(KernelOutputs& out, bool renderLease);
 // After (film values).
 void applyTestFault(wire::Result::Builder result);
 

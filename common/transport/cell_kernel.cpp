@@ -264,6 +264,7 @@ void CellKernel::cross(RayState ray, const CellEvent& event, KernelOutputs& out)
       // own samples count the sky seen this way.
       if (outdoors_->outdoors(next)) {
         ++out.counters.shadowBlocked;
+        ++out.counters.raysFinished;
         return;
       }
     } else {
@@ -318,6 +319,7 @@ void CellKernel::traceSkyProbe(const RayState& probe, KernelOutputs& out) {
 void CellKernel::reachSky(const RayState& ray, KernelOutputs& out) {
   if (ray.kind == RayKind::Shadow) {
     ++out.counters.shadowReached;
+    ++out.counters.raysFinished;
     addToFilm(ray.pixel, ray.weight, out);
     return;
   }
@@ -386,6 +388,7 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
     switch (event.kind) {
       case CellEvent::Kind::Leave:
         ++out.counters.raysEscaped;
+        ++out.counters.raysFinished;
         // Out of the building: the sky shows, and the sun's disc (its
         // share: seenByThisRay).
         if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current)) {
@@ -400,7 +403,10 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         ++out.counters.rayCrossings;
         // Light emitted beyond the camera's cell is the shaded samples'
         // share (emissionSeenByThisRay): an emission ray ends here.
-        if (isEmissionRay(current)) return;
+        if (isEmissionRay(current)) {
+          ++out.counters.raysFinished;
+          return;
+        }
         // A camera ray never bounces: its depth counts the portals it crossed.
         ++current.depth;
         cross(current, event, out);
@@ -422,6 +428,7 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
           passOrReflect(current, event, material);
           continue;
         }
+        ++out.counters.raysFinished;   // here it ends: what it adds is its hit's
         if (parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current))
           addEmission(current, event, out);
         if (isEmissionRay(current)) return;
@@ -534,12 +541,16 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
   // Through glass panes (or off them) to the surface the ray lands on.
   const CellEvent event = traceThroughGlass(ray, out);
   switch (event.kind) {
-    case CellEvent::Kind::Leave: ++out.counters.raysEscaped; return;
+    case CellEvent::Kind::Leave:
+      ++out.counters.raysEscaped;
+      ++out.counters.raysFinished;
+      return;
     case CellEvent::Kind::Portal:
       ++out.counters.rayCrossings;
       cross(ray, event, out);
       return;
     case CellEvent::Kind::Surface: {
+      ++out.counters.raysFinished;   // it lands: its estimate is read now or with the pending ones
       // Emission is not gathered: direct light is sampled with shadow rays.
       const Material& material = materialAt(event.primitive);
       if (!photons_ || photons_->size() == 0 || !(maxComponent(material.albedo) > 0)) return;
@@ -688,7 +699,10 @@ void CellKernel::traceShadowRay(const RayState& shadow, KernelOutputs& out) {
     // Glass panes let through their transmittance of the light.
     const CellEvent event = traceThroughGlass(ray, out);
     switch (event.kind) {
-      case CellEvent::Kind::Surface: ++out.counters.shadowBlocked; return;
+      case CellEvent::Kind::Surface:
+        ++out.counters.shadowBlocked;
+        ++out.counters.raysFinished;
+        return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
         cross(ray, event, out);
@@ -697,20 +711,24 @@ void CellKernel::traceShadowRay(const RayState& shadow, KernelOutputs& out) {
     }
     if (!(ray.tMax < kInfinity)) {
       // Out of the building: the sky is what a ray towards it reaches.
-      if (ray.toSky)
+      if (ray.toSky) {
         reachSky(ray, out);
-      else
+      } else {
         ++out.counters.raysEscaped;
+        ++out.counters.raysFinished;
+      }
       return;
     }
     // Nothing in this cell before tMax: the light is reached only if the
     // segment ends inside this cell; otherwise it left the building.
     if (!tracer_.cell().bounds().contains(ray.origin + ray.direction * ray.tMax)) {
       ++out.counters.raysEscaped;
+      ++out.counters.raysFinished;
       return;
     }
     if (!ray.toSky) {
       ++out.counters.shadowReached;
+      ++out.counters.raysFinished;
       addToFilm(ray.pixel, ray.weight, out);
       return;
     }

@@ -48,6 +48,7 @@ void CellKernel::measureSensors(const std::vector<SensorTask>& sensors, KernelOu
         direct.direction = normal;
         direct.weight = weight;
         ++out.counters.cameraRays;
+        ++out.counters.raysFinished;   // the sample is its sensor's hit: its light comes by the rays below
         for (uint32_t i = 0; i < lightSamples; ++i) {
           const uint32_t index = k * lightSamples + i;
           sampleLight(direct, point, normal, irradianceBrdf, choices.value(index), onLights.point(index), lightSamples,

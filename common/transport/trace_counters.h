@@ -49,6 +49,11 @@ struct TraceCounters {
   int64_t raysEscaped = 0;        // camera and shadow rays that left the building
   int64_t raySegments = 0;        // rays traced through one cell (all kinds)
   int64_t raysInvalid = 0;        // malformed rays received and dropped
+  // Render rays (camera, emission, shadow, gather) that ended in this lease:
+  // shaded, read, blocked, reached their light or the sky, escaped. With the
+  // rays handed on, they balance the rays started (result_check.h):
+  // camera + emission + received + shadow + gather = finished + invalid + handed on.
+  int64_t raysFinished = 0;
   int64_t nonFiniteContributions = 0;
   int64_t filmOutOfRange = 0;     // contributions refused: a pixel's sum would leave the film's range
 
@@ -63,7 +68,8 @@ struct TraceCounters {
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},
-            {"rays.invalid", raysInvalid},         {"film.non_finite", nonFiniteContributions},
+            {"rays.invalid", raysInvalid},         {"rays.finished", raysFinished},
+            {"film.non_finite", nonFiniteContributions},
             {kFilmOutOfRangeCounter, filmOutOfRange}};
   }
 };

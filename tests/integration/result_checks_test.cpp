@@ -114,6 +114,20 @@ TEST_F(ResultChecks, ARenderResultHandingOnMoreRaysThanItCountedCrossingsIsRefus
   expectOutvoted("duplicate-crossings", "portal crossings", {"--forward-rays", "0"});
 }
 
+// A render lease's rays handed on left out, its counters honest: fewer
+// rays than crossings is no longer enough, every ray it started must end
+// in it or be handed on (before: accepted, and the image lost their light).
+TEST_F(ResultChecks, ARenderResultThatLosesTheRaysItHandsOnIsRefused) {
+  expectOutvoted("drop-render-crossings", "its rays do not add up", {"--forward-rays", "0"});
+}
+
+// Counters that say no shadow, gather or emission ray was traced and none
+// finished, the film and crossings intact: the rays do not add up
+// (before: accepted, and the job's statistics counted rays never traced).
+TEST_F(ResultChecks, ARenderResultWhoseRayCountersDoNotAddUpIsRefused) {
+  expectOutvoted("uncounted-rays", "its rays do not add up");
+}
+
 TEST_F(ResultChecks, TwoWorkersWhoseResultsDoNotAddUpFailTheJobNamingBoth) {
   expectTwoAgreeingWorkersFailTheJob("zero-deposits", "its lease asked for");
 }
