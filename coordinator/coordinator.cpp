@@ -209,10 +209,11 @@ void Coordinator::runRound() {
     if (now - lastHeartbeatMs_ >= options_.heartbeatMs) {
       lastHeartbeatMs_ = now;
       checkLiveness();
+      checkLeaseProgress();
       checkStores();
       for (auto& [identity, worker] : workers_) {
         capnp::MallocMessageBuilder message;
-        message.initRoot<wire::Envelope>().setHeartbeat();
+        message.initRoot<wire::Envelope>().initHeartbeat();
         send(identity, message);
       }
     }
@@ -361,11 +362,22 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
     if (auto it = workers_.find(identity); it != workers_.end()) it->second.lastSeenMs = nowMs();
     switch (envelope.which()) {
       case wire::Envelope::HELLO: onHello(identity, envelope.getHello()); break;
-      case wire::Envelope::HEARTBEAT:
+      case wire::Envelope::HEARTBEAT: {
+        auto worker = workers_.find(identity);
         // A worker of this coordinator's previous run: it rejoins at once
         // instead of waiting out its liveness timeout.
-        if (role != net::Role::Client && !workers_.count(identity)) sendError(identity, net::kUnknownWorkerError);
+        if (worker == workers_.end()) {
+          if (role != net::Role::Client) sendError(identity, net::kUnknownWorkerError);
+          break;
+        }
+        const auto beat = envelope.getHeartbeat();
+        worker->second.tracingLease = beat.getTracingLease();
+        if (beat.getProgress() != worker->second.progress) {
+          worker->second.progress = beat.getProgress();
+          noteProgress(worker->second);
+        }
         break;
+      }
       case wire::Envelope::READY: onReady(identity); break;
       case wire::Envelope::RESULT: onResult(identity, envelope.getResult()); break;
       case wire::Envelope::FAILURE: onFailure(identity, envelope.getFailure()); break;
@@ -387,6 +399,17 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
       }
       default:
         spdlog::warn("dropped a message from {}: unexpected type {}", shortId(identity), int(envelope.which()));
+    }
+    // What only a worker whose leases move sends; noted once handled, so
+    // that the time the coordinator took to answer a fetch is not the worker's.
+    switch (envelope.which()) {
+      case wire::Envelope::RESULT:
+      case wire::Envelope::FAILURE:
+      case wire::Envelope::FETCH_PHOTONS:
+      case wire::Envelope::FETCH_FILE:
+        if (auto worker = workers_.find(identity); worker != workers_.end()) noteProgress(worker->second);
+        break;
+      default: break;
     }
   } catch (const kj::Exception& e) {
     spdlog::warn("dropped a malformed message from {}: {}", shortId(identity), e.getDescription().cStr());
@@ -606,6 +629,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
     }
   }
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
+  if (worker.leases.empty()) worker.progressMs = nowMs();   // its lease clock starts with its first lease
   WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}, expected};
   for (const auto& [cell, extra] : moreCells) {
     int64_t work = 0;
@@ -722,6 +746,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     return;
   }
   refusedResults_.erase({lease->job, lease->cell});
+  takenBack_.erase({lease->job, lease->cell});
   retries_.erase({lease->job, lease->cell});
   if (active) advanceIfPhaseDone(lease->job);
 }
@@ -965,6 +990,10 @@ std::vector<std::string> Coordinator::waitingReasons(uint64_t job) const {
                                   "(--store-gone-timeout)",
                                   utcTime(trouble->second.sinceMs), trouble->second.reason,
                                   utcTime(trouble->second.sinceMs + options_.storeGoneTimeoutMs)));
+  for (auto it = takenBack_.lower_bound({job, 0}); it != takenBack_.end() && it->first.first == job; ++it)
+    reasons.push_back(fmt::format("cell {}: its lease was taken back from worker {} at {}: {}; traced again by "
+                                  "another worker",
+                                  it->first.second, it->second.worker, utcTime(it->second.atMs), it->second.reason));
   for (auto it = refusedResults_.lower_bound({job, 0}); it != refusedResults_.end() && it->first.first == job; ++it)
     if (!it->second.empty())
       reasons.push_back(fmt::format("cell {}: the Result of worker {} was refused ({}); traced again",
@@ -1258,6 +1287,56 @@ void Coordinator::releaseWorker(const std::string& identity, const std::string& 
   workers_.erase(it);
 }
 
+void Coordinator::noteProgress(WorkerInfo& worker) {
+  worker.progressMs = nowMs();
+  if (worker.stalledSinceMs == 0) return;
+  spdlog::info("worker {} moves again, {:.1f} s after its leases were taken back; it takes leases again", worker.name,
+               (worker.progressMs - worker.stalledSinceMs) / 1000.0);
+  worker.stalledSinceMs = 0;
+  worker.stallReason.clear();
+}
+
+void Coordinator::checkLeaseProgress() {
+  const int64_t now = nowMs();
+  for (auto& [identity, worker] : workers_)
+    if (!worker.leases.empty() && now - worker.progressMs > options_.leaseTimeoutMs)
+      takeBackLeases(worker, now - worker.progressMs);
+}
+
+// Its heartbeats say it is alive, yet nothing of its leases moved for
+// leaseTimeoutMs: its tracing thread is stuck (a read that never returns:
+// a hung file system, a FIFO) or its work is lost. Its leases go back to
+// the queue, for other workers to trace with the same bits; the one it was
+// tracing counts against its cell as a reported failure does (a cell that
+// hangs every worker fails its job after --max-cell-failures), those
+// queued behind it against nothing; a Result that still comes for any of
+// them is dropped (the lease is gone, and with it its deposit region); and
+// the worker gets no lease until it moves again (noteProgress).
+void Coordinator::takeBackLeases(WorkerInfo& worker, int64_t stillMs) {
+  const std::string why = fmt::format("no progress for {:.1f} s (--lease-timeout-s {:g})", stillMs / 1000.0,
+                                      options_.leaseTimeoutMs / 1000.0);
+  worker.stalledSinceMs = nowMs();
+  worker.stallReason = fmt::format("{}, since {}", why, utcTime(wallMs() - stillMs));
+  worker.leases.clear();
+  for (const LeaseRecord& lease : store_.openLeasesOf(worker.identity)) {
+    if (!store_.lease(lease.id)) continue;   // its job failed as an earlier one was taken back
+    depositRegions_.erase(lease.id);
+    takenBack_[{lease.job, lease.cell}] = {worker.name, why, wallMs()};
+    const bool tracing = lease.id == worker.tracingLease;
+    spdlog::error("lease {} (job {} cell {}) taken back from worker {}: {}{}; its work is traced again", lease.id,
+                  lease.job, lease.cell, worker.name, why, tracing ? ", stuck tracing it" : ", queued there");
+    {
+      sql::Transaction tx(store_.database());
+      store_.addCounter(lease.job, "leases.taken_back", 1);
+      if (!tracing) store_.requeueLease(lease.id);
+      tx.commit();
+    }
+    if (tracing)
+      recordCellFailure(lease, fmt::format("cell {}: its lease was taken back from worker {}: {}", lease.cell,
+                                           worker.name, why));
+  }
+}
+
 void Coordinator::checkLiveness() {
   const int64_t now = nowMs();
   std::vector<std::string> dead;
@@ -1382,6 +1461,7 @@ void Coordinator::withdrawDamagedLender(uint64_t lender, const std::string& reas
 
 void Coordinator::forgetEndedJob(uint64_t jobId) {
   storeTrouble_.erase(jobId);
+  std::erase_if(takenBack_, [&](const auto& entry) { return entry.first.first == jobId; });
   std::erase_if(refusedResults_, [&](const auto& entry) { return entry.first.first == jobId; });
 }
 

@@ -50,6 +50,11 @@ struct CoordinatorOptions {
   // A job whose scene store the coordinator cannot read (deleted, moved,
   // unmounted) waits this long for it to come back, then fails saying so.
   int64_t storeGoneTimeoutMs = 600000;
+  // A worker that holds leases and shows no progress for this long (no
+  // Result, Failure or fetch, and heartbeats whose progress did not move)
+  // has them taken back and traced elsewhere: its tracing is stuck (a read
+  // that never returns) though its heartbeats go on.
+  int64_t leaseTimeoutMs = 120000;
 };
 
 class Coordinator {
@@ -148,6 +153,14 @@ class Coordinator {
   void finishJob(uint64_t job);
   void failJob(uint64_t job, const std::string& error);
   void checkLiveness();
+  // A sign that the worker's leases move (a Result, a Failure, a fetch, a
+  // heartbeat whose progress grew): its lease clock starts again, and a
+  // worker taken for stuck takes leases again.
+  void noteProgress(WorkerInfo& worker);
+  // Each heartbeat: the leases of a worker with none of those signs for
+  // leaseTimeoutMs are taken back (takeBackLeases).
+  void checkLeaseProgress();
+  void takeBackLeases(WorkerInfo& worker, int64_t stillMs);
   void releaseWorker(const std::string& identity, const std::string& reason);
   JobContext& context(uint64_t job);
 
@@ -190,6 +203,14 @@ class Coordinator {
   };
   std::map<std::pair<uint64_t, uint32_t>, std::vector<Refusal>> refusedResults_;
   std::map<std::string, int64_t> refusalsByWorker_;   // worker name -> its Results refused, all jobs
+  // Cells whose lease was taken back from a worker that stopped moving,
+  // until their next accepted Result: from whom, why and when (wall clock).
+  struct TakenBack {
+    std::string worker;
+    std::string reason;
+    int64_t atMs = 0;
+  };
+  std::map<std::pair<uint64_t, uint32_t>, TakenBack> takenBack_;
   static constexpr int64_t kRefusalsBeforeSidelined = 3;
   // Disk trouble: no leasing before diskPausedUntilMs_ (steady clock); the
   // pause doubles with each failed round; requeueUntracedLeases is owed

@@ -277,6 +277,8 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
                     {"last_seen_ms_ago", nowMs - w.lastSeenMs},
                     {"cells_held", w.cells.size()},
                     {"cells", cells}});
+    // Its leases were taken back: it heartbeats, but its tracing does not move.
+    if (w.stalledSinceMs != 0) list.back()["stalled"] = w.stallReason;
   }
   return list;
 }

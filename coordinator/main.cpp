@@ -48,6 +48,12 @@ int main(int argc, char** argv) {
                  "it fails saying so")
       ->capture_default_str()
       ->check(portico::cli::realNumber(0.001, 1e9));
+  double leaseTimeoutSeconds = double(options.leaseTimeoutMs) / 1000;
+  app.add_option("--lease-timeout-s", leaseTimeoutSeconds,
+                 "seconds a worker may hold leases with no progress (no Result, and heartbeats saying its tracing did "
+                 "not move: a read that never returns) before they are taken back and traced by other workers")
+      ->capture_default_str()
+      ->check(portico::cli::realNumber(0.1, 1e7));
   app.add_option("--keys", options.keysDirectory,
                  "CURVE keys directory (`portico keys generate`): encrypt, and admit only the keys of "
                  "{client,worker,operator}.public, each in its role; required beyond loopback. Without it, "
@@ -64,6 +70,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   options.depositRegions = !noDepositRegions;
   options.storeGoneTimeoutMs = static_cast<int64_t>(storeGoneSeconds * 1000);
+  options.leaseTimeoutMs = static_cast<int64_t>(leaseTimeoutSeconds * 1000);
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
   // Every Result is unpacked into fresh segments and its batches re-packed:

@@ -22,6 +22,15 @@ struct WorkerInfo {
   uint64_t memoryBytes = 0;
   int64_t lastSeenMs = 0;
   bool ready = false;         // sent Ready: it takes leases
+  // Whether its leases move (Coordinator::checkLeaseProgress): the progress
+  // its heartbeats last reported, when it last showed progress (steady
+  // clock), the lease its tracing thread is in (0: none), and since when it
+  // is taken for stuck (0: it is not), with why; meanwhile it gets no lease.
+  uint64_t progress = 0;
+  int64_t progressMs = 0;
+  uint64_t tracingLease = 0;
+  int64_t stalledSinceMs = 0;
+  std::string stallReason;
   // Its leases in flight: when each was sent, and the work it holds.
   struct LeaseInFlight {
     int64_t sentMs = 0;
@@ -45,14 +54,14 @@ struct WorkerInfo {
   static constexpr size_t kMostLeasesInFlight = 8;
   static constexpr double kQueuedSeconds = 0.005;
   bool wantsLease() const {
-    if (!ready) return false;
+    if (!ready || stalledSinceMs != 0) return false;
     if (leases.size() < kLeasesInFlight) return true;
     if (leases.size() >= kMostLeasesInFlight || workPerSecond <= 0) return false;
     int64_t held = 0;
     for (const auto& [id, lease] : leases) held += lease.work;
     return double(held) < workPerSecond * kQueuedSeconds;
   }
-  bool idle() const { return ready && leases.empty(); }   // shown by status
+  bool idle() const { return ready && leases.empty() && stalledSinceMs == 0; }   // shown by status
   CellCacheModel cells;        // what it likely holds
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.
   double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured

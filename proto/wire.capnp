@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 16;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on)
+const protocolVersion :UInt32 = 17;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving)
 
 enum Phase {
   photons @0;
@@ -246,6 +246,15 @@ struct Hello {
   memoryBytes @3 :UInt64;
 }
 
+# A worker's heartbeat says how far its leases have come, so that the
+# coordinator can tell a worker whose tracing is stuck (a read that never
+# returns) from one that traces: its heartbeats alone would hold its leases
+# for good. The coordinator's heartbeats leave both 0.
+struct Heartbeat {
+  progress @0 :UInt64;      # grows as its leases move: rays traced, cells loaded, files and photons received, leases done
+  tracingLease @1 :UInt64;  # the lease its tracing thread is in (0: none)
+}
+
 struct Welcome {
   version @0 :UInt32;
   heartbeatMs @1 :UInt32;
@@ -378,7 +387,7 @@ struct Envelope {
   union {
     hello @0 :Hello;
     welcome @1 :Welcome;
-    heartbeat @2 :Void;
+    heartbeat @2 :Heartbeat;
     ready @3 :Void;
     assign @4 :Assign;
     result @5 :Result;

@@ -109,7 +109,8 @@ LinkEvent CoordinatorLink::receive(int wakeFd, std::chrono::milliseconds wait) {
   if (!socket_ && !connect()) return LinkEvent{};
   if (steadyMs() - lastSentMs_ >= options_.heartbeatMs) {
     capnp::MallocMessageBuilder message;
-    message.initRoot<wire::Envelope>().setHeartbeat();
+    auto beat = message.initRoot<wire::Envelope>().initHeartbeat();
+    if (options_.describeProgress) options_.describeProgress(beat);
     send(message);
   }
   LinkEvent event;

@@ -13,6 +13,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -30,6 +31,9 @@ struct LinkOptions {
   uint64_t memoryBytes = 0;
   int heartbeatMs = 1000;
   int livenessMs = 10000;      // coordinator silence before reconnecting
+  // Fills each heartbeat with how far the worker's leases have come
+  // (Heartbeat.progress, tracingLease); none: both 0.
+  std::function<void(wire::Heartbeat::Builder)> describeProgress;
 };
 
 // What CoordinatorLink::receive saw.

@@ -24,11 +24,14 @@ std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, Accelera
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::string> photonRecords,
                                                       const std::string& storeDirectory, int64_t forwardRays,
-                                                      const std::atomic<bool>* stop) {
+                                                      const std::atomic<bool>* stop,
+                                                      std::atomic<uint64_t>* progress) {
   const auto started = std::chrono::steady_clock::now();
   const ThreadTimes startedTimes = threadTimes();
+  stallIfTestFault();
   const LoadedLease lease = loadLease(cache, chooser, assign, std::move(photonRecords), storeDirectory);
-  TracedLease traced = traceLoadedLease(cache, chooser, lease, assign, forwardRays, stop);
+  if (progress) progress->fetch_add(1, std::memory_order_relaxed);
+  TracedLease traced = traceLoadedLease(cache, chooser, lease, assign, forwardRays, stop, progress);
   LeaseFigures figures;
   figures.cache = cache.takeStatistics();
   figures.irradiancePoints = lease.irradiancePoints;

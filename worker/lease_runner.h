@@ -36,11 +36,13 @@ struct MoreCellError : std::runtime_error {
 // in the lease too, up to max(forwardRays, the lease's own work) rays (0:
 // none); see forwardToHeldCells in lease_trace.cpp. Throws TracingStopped
 // (cell_kernel.h) soon after `stop` is set: its job was cancelled, or the
-// worker is stopping; nothing is reported for such a lease.
+// worker is stopping; nothing is reported for such a lease. `progress` (if
+// any) counts up as the lease moves: loaded, then piece by piece traced.
 std::unique_ptr<capnp::MallocMessageBuilder> runLease(CellCache& cache, AcceleratorChooser& chooser,
                                                       wire::Assign::Reader assign,
                                                       std::optional<std::string> photonRecords,
                                                       const std::string& storeDirectory, int64_t forwardRays,
-                                                      const std::atomic<bool>* stop = nullptr);
+                                                      const std::atomic<bool>* stop = nullptr,
+                                                      std::atomic<uint64_t>* progress = nullptr);
 
 }  // namespace portico

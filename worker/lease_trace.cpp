@@ -66,7 +66,8 @@ int64_t workOf(capnp::List<wire::RayBatch>::Reader batches) {
 // The photon pass's more cells (Assign.moreCells), each in its own kernel;
 // a failure names its cell.
 void traceMoreCells(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
-                    wire::Assign::Reader assign, const std::atomic<bool>* stop, KernelOutputs& out) {
+                    wire::Assign::Reader assign, const std::atomic<bool>* stop, std::atomic<uint64_t>* progress,
+                    KernelOutputs& out) {
   const SceneStore& scene = *lease.scene;
   for (auto more : assign.getMoreCells()) {
     const uint32_t moreId = more.getCell();
@@ -76,6 +77,7 @@ void traceMoreCells(CellCache& cache, AcceleratorChooser& chooser, const LoadedL
       LoadedCell& moreCell = loadMoreCell(cache, chooser, lease, moreId, workOf(more.getBatches()));
       CellKernel kernel(scene, *moreCell.tracer, lease.parameters, nullptr);
       kernel.setStopFlag(stop);
+      kernel.setProgressCounter(progress);
       traceBatches(scene, kernel, lease.parameters, moreId, more.getBatches(), out);
     } catch (const TracingStopped&) {
       throw;
@@ -97,11 +99,11 @@ void traceMoreCells(CellCache& cache, AcceleratorChooser& chooser, const LoadedL
 // tables are sorted by content and film sums are exact. At most `limit`
 // rays are forwarded (the last destination's in full), so a lease stays
 // about a lease's work. Returns the rays forwarded.
-int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t limit,
-                           KernelOutputs& out, const std::atomic<bool>* stop) {
+int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t limit, KernelOutputs& out,
+                           const std::atomic<bool>* stop, std::atomic<uint64_t>* progress) {
   int64_t forwarded = 0;
-  for (bool progress = true; progress && forwarded < limit;) {
-    progress = false;
+  for (bool forwardedSome = true; forwardedSome && forwarded < limit;) {
+    forwardedSome = false;
     for (auto it = out.crossings.begin(); it != out.crossings.end() && forwarded < limit;) {
       const uint32_t destination = it->first;
       LoadedCell* held = cache.heldCell(lease.store, destination, lease.accel);
@@ -114,10 +116,11 @@ int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t l
       it = out.crossings.erase(it);   // tracing may add crossings to other cells; this one stays valid
       CellKernel kernel(*lease.scene, *held->tracer, lease.parameters, photons);
       kernel.setStopFlag(stop);
+      kernel.setProgressCounter(progress);
       for (const RayState& ray : rays) kernel.trace(ray, out);
       kernel.finishGathers(out);
       forwarded += int64_t(rays.size());
-      progress = true;
+      forwardedSome = true;
     }
   }
   return forwarded;
@@ -125,7 +128,8 @@ int64_t forwardToHeldCells(CellCache& cache, const LoadedLease& lease, int64_t l
 }  // namespace
 
 TracedLease traceLoadedLease(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
-                             wire::Assign::Reader assign, int64_t forwardRays, const std::atomic<bool>* stop) {
+                             wire::Assign::Reader assign, int64_t forwardRays, const std::atomic<bool>* stop,
+                             std::atomic<uint64_t>* progress) {
   TracedLease traced;
   // More cells come only in the photon pass (they need no photon map).
   if (assign.getMoreCells().size() > 0 && lease.renderPhase)
@@ -133,15 +137,16 @@ TracedLease traceLoadedLease(CellCache& cache, AcceleratorChooser& chooser, cons
   {
     CellKernel kernel(*lease.scene, *lease.cell->tracer, lease.parameters, lease.indirect);
     kernel.setStopFlag(stop);
+    kernel.setProgressCounter(progress);
     traceBatches(*lease.scene, kernel, lease.parameters, assign.getCell(), assign.getBatches(), traced.out);
   }
-  traceMoreCells(cache, chooser, lease, assign, stop, traced.out);
+  traceMoreCells(cache, chooser, lease, assign, stop, progress, traced.out);
   // The lease's own rays, before any are forwarded: what auto learns from.
   lease.cell->raysTraced += traced.out.counters.raySegments;
   chooser.learn(lease.renderPhase, assign.getLeaseWork(), traced.out.counters.raySegments);
   if (forwardRays > 0)
     traced.forwarded = forwardToHeldCells(cache, lease, std::max(forwardRays, assign.getLeaseWork()),
-                                          traced.out, stop);
+                                          traced.out, stop, progress);
   return traced;
 }
 

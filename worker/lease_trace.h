@@ -19,8 +19,10 @@ struct TracedLease {
 };
 
 // Throws MoreCellError (lease_runner.h) naming a more cell that failed, and
-// TracingStopped soon after `stop` is set.
+// TracingStopped soon after `stop` is set. `progress` (if any) counts up as
+// the tracing moves (CellKernel::setProgressCounter).
 TracedLease traceLoadedLease(CellCache& cache, AcceleratorChooser& chooser, const LoadedLease& lease,
-                             wire::Assign::Reader assign, int64_t forwardRays, const std::atomic<bool>* stop);
+                             wire::Assign::Reader assign, int64_t forwardRays, const std::atomic<bool>* stop,
+                             std::atomic<uint64_t>* progress = nullptr);
 
 }  // namespace portico

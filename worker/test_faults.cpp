@@ -2,9 +2,12 @@
 
 #include <spdlog/spdlog.h>
 
+#include <atomic>
+#include <chrono>
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace portico {
@@ -40,6 +43,19 @@ void applyTestFault(KernelOutputs& out, bool renderLease) {
     TraceCounters& c = out.counters;
     c.emissionRays = c.shadowRays = c.gatherRays = c.raysFinished = 0;
   }
+}
+
+void stallIfTestFault() {
+  const std::string& fault = testFault();
+  if (fault != "hang-in-lease" && fault != "stall-in-lease") return;
+  static std::atomic<bool> stalled{false};
+  if (stalled.exchange(true)) return;   // the first lease only
+  spdlog::warn("PORTICO_TEST_FAULT={}: this lease's tracing thread stops moving", fault);
+  if (fault == "stall-in-lease") {
+    std::this_thread::sleep_for(std::chrono::seconds(4));
+    return;
+  }
+  for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
 }
 
 void applyTestFault(wire::Result::Builder result) {

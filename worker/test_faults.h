@@ -11,6 +11,10 @@
 //                   counters honest: rays lost between cells
 //   uncounted-rays  a render lease's emission, shadow, gather and finished
 //                   ray counters zeroed: a worker that says it traced none
+//   hang-in-lease   the first lease blocks for good before its cell is read,
+//                   as in a read that never returns (a hung file system):
+//                   its tracing thread stuck, its heartbeats going on
+//   stall-in-lease  the same for 4 s, after which the lease goes on
 // Unset (always, outside tests): nothing changes.
 #pragma once
 
@@ -23,5 +27,7 @@ namespace portico {
 void applyTestFault(KernelOutputs& out, bool renderLease);
 // After (film values).
 void applyTestFault(wire::Result::Builder result);
+// As a lease starts, on the tracing thread (hang-in-lease, stall-in-lease).
+void stallIfTestFault();
 
 }  // namespace portico

@@ -60,10 +60,19 @@ WorkerSession::WorkerSession(WorkerOptions options)
     keys_ = net::loadClientKeys(keys, net::Role::Worker);
   if (!options_.cacheDirectory.empty()) mirror_ = std::make_unique<StoreMirror>(options_.cacheDirectory);
   spdlog::debug("accelerator cost model (for --accel auto): {}", chooser_.model().origin);
-  link_ = std::make_unique<CoordinatorLink>(
-      LinkOptions{options_.connect, options_.name, options_.threads, options_.memoryBytes, options_.heartbeatMs,
-                  options_.livenessMs},
-      keys_);
+  LinkOptions link;
+  link.endpoint = options_.connect;
+  link.name = options_.name;
+  link.cores = options_.threads;
+  link.memoryBytes = options_.memoryBytes;
+  link.heartbeatMs = options_.heartbeatMs;
+  link.livenessMs = options_.livenessMs;
+  link.describeProgress = [this](wire::Heartbeat::Builder beat) {
+    beat.setProgress(progress_.load(std::memory_order_relaxed));
+    std::lock_guard lock(chain_.mutex);
+    beat.setTracingLease(chain_.running ? chain_.runningLease : 0);
+  };
+  link_ = std::make_unique<CoordinatorLink>(std::move(link), keys_);
 }
 
 WorkerSession::~WorkerSession() { ::close(leaseFinishedFd_); }
@@ -75,7 +84,8 @@ FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::option
     done.lease = assign.getLease();
     const std::string store = assign.getSpec().getStore();
     done.message = runLease(cache_, chooser_, assign, std::move(photonRecords),
-                            mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays, &stopLease_);
+                            mirror_ ? mirror_->localDirectory(store) : store, options_.forwardRays, &stopLease_,
+                            &progress_);
   } catch (const TracingStopped&) {
     done.stopped = true;
   } catch (const MoreCellError& e) {
@@ -118,11 +128,13 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
       chain_.runningJob = assign->envelope().getAssign().getJob();
       chain_.runningLease = assign->envelope().getAssign().getLease();
       chain_.runningSinceMs = steadyMilliseconds();
+      progress_.fetch_add(1, std::memory_order_relaxed);
       stopLease_ = chain_.abandon || stopping_ || chain_.cancelledJobs.count(chain_.runningJob) != 0;
     }
     // Fault injection: the cell crashes the worker (reported, then fatal).
     if (options_.crashInLease > 0 && ++leasesStarted_ == options_.crashInLease) ::raise(SIGSEGV);
     FinishedLease done = traceLease(*assign, std::move(photonRecords));
+    progress_.fetch_add(1, std::memory_order_relaxed);
     photonRecords.reset();
     assign.reset();
     // What the finished lease pinned may go now; and before the readiness
@@ -210,6 +222,7 @@ void WorkerSession::onFileChunk(wire::FileChunk::Reader chunk) {
     return;
   }
   preparing_->waitingForFile = false;
+  progress_.fetch_add(1, std::memory_order_relaxed);
   try {
     mirror_->accept(chunk);
   } catch (const std::exception& e) {
@@ -224,6 +237,7 @@ void WorkerSession::onPhotons(wire::PhotonsReply::Reader reply) {
   auto assign = preparing_->assign->envelope().getAssign();
   if (reply.getJob() != assign.getJob() || reply.getCell() != assign.getCell()) return;
   preparing_->waitingForPhotons = false;
+  progress_.fetch_add(1, std::memory_order_relaxed);
   if (reply.hasError() && reply.getError().size() > 0) {
     failLease(reply.getError().cStr());
     return;

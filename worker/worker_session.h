@@ -148,6 +148,11 @@ class WorkerSession {
   // The lease being traced gives up (runLease's stop): its job was
   // cancelled, or the worker is leaving or reconnecting.
   std::atomic<bool> stopLease_{false};
+  // Counts up whenever its leases move (a piece traced, a cell loaded, a
+  // file or photons received, a lease done); its heartbeats carry it, so
+  // that the coordinator takes back the leases of a worker that stopped
+  // moving (a read that never returns) while its heartbeats go on.
+  std::atomic<uint64_t> progress_{0};
   int leasesStarted_ = 0;   // by the tracing thread (--crash-in-lease)
   bool stalled_ = false;    // a lease outlived --lease-limit-s: leaving with status 1
 };

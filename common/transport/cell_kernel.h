@@ -86,9 +86,13 @@ class CellKernel {
   // TracingStopped. Each ray's output depends on the ray alone, so where
   // the checks fall changes no bit of what is traced.
   void setStopFlag(const std::atomic<bool>* stop) { stop_ = stop; }
+  // Counted up at each of those checks: the worker's heartbeats carry it,
+  // so that the coordinator tells a lease that traces from a stuck one.
+  void setProgressCounter(std::atomic<uint64_t>* progress) { progress_ = progress; }
 
  private:
   void checkStop() const {
+    if (progress_) progress_->fetch_add(1, std::memory_order_relaxed);
     if (stop_ && stop_->load(std::memory_order_relaxed)) throw TracingStopped();
   }
   void tracePhoton(RayState photon, KernelOutputs& out);
@@ -232,6 +236,7 @@ class CellKernel {
   // that traces them (none with daylight: the sky shows through openings).
   std::optional<EmitterPixels> emitterPixels_;
   const std::atomic<bool>* stop_ = nullptr;
+  std::atomic<uint64_t>* progress_ = nullptr;
 };
 
 }  // namespace portico

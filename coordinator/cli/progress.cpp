@@ -123,9 +123,12 @@ std::string describeStatus(const nlohmann::json& s) {
   if (s.contains("workers")) {
     text += fmt::format("workers: {}\n", s["workers"].size());
     for (const auto& w : s["workers"]) {
+      const bool stalled = w.contains("stalled");
       text += fmt::format("  {} {} ({} leases), holds {} cells, recent:", w.value("name", "?"),
-                          w.value("idle", false) ? "idle" : "busy", w.value("leases", int64_t{0}), w.value("cells_held", int64_t{0}));
+                          stalled ? "stalled" : w.value("idle", false) ? "idle" : "busy", w.value("leases", int64_t{0}),
+                          w.value("cells_held", int64_t{0}));
       for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", int64_t{0}));
+      if (stalled) text += fmt::format("; its leases were taken back: {}", w.value("stalled", ""));
       if (const int64_t refused = w.value("refused_results", int64_t{0}); refused > 0)
         text += fmt::format("; {} of its Results refused", refused);
       text += "\n";

@@ -17,22 +17,8 @@ namespace {
 
 using namespace harness;
 
-class ResultChecks : public DemoStoreSuite<ResultChecks> {
+class ResultChecks : public DemoReferenceSuite<ResultChecks> {
  protected:
-  static void SetUpTestSuite() {
-    DemoStoreSuite::SetUpTestSuite();
-    if (::testing::Test::HasFatalFailure()) return;
-    LocalCluster cluster(dir_ / "reference", 1);
-    const auto status = cluster.render(store_, dir_ / "reference.exr", kPhotons, 1);
-    ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
-  }
-  // The worker's command line run with PORTICO_TEST_FAULT=fault.
-  static std::function<std::vector<std::string>(std::vector<std::string>)> withFault(const std::string& fault) {
-    return [fault](std::vector<std::string> argv) {
-      argv.insert(argv.begin(), {"/usr/bin/env", "PORTICO_TEST_FAULT=" + fault});
-      return argv;
-    };
-  }
   static ClusterOptions patientCoordinator() {
     // A cell refused from the faulty worker alone is retried on it until the
     // honest worker joins: more tries than the default three before failing.
@@ -47,7 +33,7 @@ class ResultChecks : public DemoStoreSuite<ResultChecks> {
     const fs::path dir = dir_ / fault;
     LocalCluster cluster(dir, 0, {}, patientCoordinator());
     const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-    cluster.addWorker(faultyWorkerExtra, withFault(fault));
+    cluster.addWorker(faultyWorkerExtra, withTestFault(fault));
     ASSERT_TRUE(waitUntil([&] { return readFile(dir / "coordinator.log").find(refusal) != std::string::npos; },
                           std::chrono::seconds(60)))
         << readFile(dir / "coordinator.log");
@@ -62,18 +48,15 @@ class ResultChecks : public DemoStoreSuite<ResultChecks> {
         EXPECT_GE(worker.value("refused_results", 0), 1) << status.dump(2);
       else
         EXPECT_EQ(worker.value("refused_results", -1), 0) << status.dump(2);
-    const auto stats = nlohmann::json::parse(readFile(dir / "image.exr.json"));
-    expectConservation(stats);
-    EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(dir_ / "reference.exr.json"))["photons"]);
-    EXPECT_EQ(differingFloats(dir / "image.exr", dir_ / "reference.exr"), 0u);
+    expectReferenceBits(dir / "image.exr");
   }
   // Two workers with the same fault: the job fails naming both.
   static void expectTwoAgreeingWorkersFailTheJob(const std::string& fault, const std::string& reason) {
     const fs::path dir = dir_ / (fault + "-both");
     LocalCluster cluster(dir, 0);
     const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
-    cluster.addWorker({}, withFault(fault));
-    cluster.addWorker({}, withFault(fault));
+    cluster.addWorker({}, withTestFault(fault));
+    cluster.addWorker({}, withTestFault(fault));
     const auto status = cluster.wait(job);
     ASSERT_EQ(status.value("state", ""), "failed") << status.dump(2) << readFile(dir / "coordinator.log");
     const std::string error = status.value("error", "");
@@ -83,7 +66,6 @@ class ResultChecks : public DemoStoreSuite<ResultChecks> {
         << error;
     EXPECT_FALSE(fs::exists(dir / "image.exr"));
   }
-  static constexpr uint64_t kPhotons = 30000;
 };
 
 // Negative film values used to fail the whole job at once, blaming the

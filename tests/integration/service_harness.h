@@ -123,6 +123,15 @@ class DemoStoreSuite : public ::testing::Test {
   static inline fs::path dir_, store_;
 };
 
+// The worker's command line run with PORTICO_TEST_FAULT=fault: a test hook
+// that makes it misbehave on purpose (worker/test_faults.h).
+inline std::function<std::vector<std::string>(std::vector<std::string>)> withTestFault(const std::string& fault) {
+  return [fault](std::vector<std::string> argv) {
+    argv.insert(argv.begin(), {"/usr/bin/env", "PORTICO_TEST_FAULT=" + fault});
+    return argv;
+  };
+}
+
 inline std::string importVoxelStore(const std::string& name, int grid, const fs::path& store) {
   const fs::path log = store.string() + ".import.log";
   const int code = runCommand({kBin + "portico", "scene", "import", "--grid", std::to_string(grid),
@@ -252,6 +261,39 @@ class LocalCluster {
   std::unique_ptr<ChildProcess> coordinator_;
   std::vector<ChildProcess> workers_;
   std::string endpoint_;
+};
+
+// SIGTERM, then waits up to `limit` for the process to exit: the seconds it
+// took, or -1 if it is still running.
+inline double secondsToExitOnSigterm(ChildProcess& process, std::chrono::seconds limit) {
+  const auto sent = std::chrono::steady_clock::now();
+  process.kill(SIGTERM);
+  if (!waitUntil([&] { return !process.running(); }, limit)) return -1;
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+}
+
+// A DemoStoreSuite with a clean run of its building (kPhotons photons, 1
+// spp, one worker) in reference.exr and its .json: the bits that runs with
+// misbehaving workers must keep.
+template <class Suite>
+class DemoReferenceSuite : public DemoStoreSuite<Suite> {
+ protected:
+  using Base = DemoStoreSuite<Suite>;
+  static constexpr uint64_t kPhotons = 30000;
+  static void SetUpTestSuite() {
+    Base::SetUpTestSuite();
+    if (::testing::Test::HasFatalFailure()) return;
+    LocalCluster cluster(Base::dir_ / "reference", 1);
+    const auto status = cluster.render(Base::store_, Base::dir_ / "reference.exr", kPhotons, 1);
+    ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
+  }
+  // `image` (and its .json) has the reference's bits and photons, every photon accounted for.
+  static void expectReferenceBits(const fs::path& image) {
+    const auto stats = nlohmann::json::parse(readFile(image.string() + ".json"));
+    expectConservation(stats);
+    EXPECT_EQ(stats["photons"], nlohmann::json::parse(readFile(Base::dir_ / "reference.exr.json"))["photons"]);
+    EXPECT_EQ(differingFloats(image, Base::dir_ / "reference.exr"), 0u);
+  }
 };
 
 }  // namespace portico::harness
