@@ -47,10 +47,17 @@ void applyTestFault(KernelOutputs& out, bool renderLease) {
 
 void stallIfTestFault() {
   const std::string& fault = testFault();
-  if (fault != "hang-in-lease" && fault != "stall-in-lease") return;
+  if (fault != "hang-in-lease" && fault != "stall-in-lease" && fault != "busy-in-lease") return;
   static std::atomic<bool> stalled{false};
   if (stalled.exchange(true)) return;   // the first lease only
   spdlog::warn("PORTICO_TEST_FAULT={}: this lease's tracing thread stops moving", fault);
+  if (fault == "busy-in-lease") {
+    // Works for 4 s without counting (as a long accelerator build does).
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(4);
+    volatile uint64_t spins = 0;
+    while (std::chrono::steady_clock::now() < until) spins = spins + 1;
+    return;
+  }
   if (fault == "stall-in-lease") {
     std::this_thread::sleep_for(std::chrono::seconds(4));
     return;

@@ -15,6 +15,9 @@
 //                   as in a read that never returns (a hung file system):
 //                   its tracing thread stuck, its heartbeats going on
 //   stall-in-lease  the same for 4 s, after which the lease goes on
+//   busy-in-lease   the first lease's tracing thread computes for 4 s
+//                   without counting progress, as a long accelerator or
+//                   photon map build does: its CPU time is its progress
 // Unset (always, outside tests): nothing changes.
 #pragma once
 
@@ -27,7 +30,7 @@ namespace portico {
 void applyTestFault(KernelOutputs& out, bool renderLease);
 // After (film values).
 void applyTestFault(wire::Result::Builder result);
-// As a lease starts, on the tracing thread (hang-in-lease, stall-in-lease).
+// As a lease starts, on the tracing thread (hang-, stall-, busy-in-lease).
 void stallIfTestFault();
 
 }  // namespace portico

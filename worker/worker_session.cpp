@@ -17,6 +17,8 @@
 #include <thread>
 #include <xmmintrin.h>
 #include <pmmintrin.h>
+#include <pthread.h>
+#include <ctime>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -68,14 +70,25 @@ WorkerSession::WorkerSession(WorkerOptions options)
   link.heartbeatMs = options_.heartbeatMs;
   link.livenessMs = options_.livenessMs;
   link.describeProgress = [this](wire::Heartbeat::Builder beat) {
-    beat.setProgress(progress_.load(std::memory_order_relaxed));
     std::lock_guard lock(chain_.mutex);
+    creditTracingCpu();
+    beat.setProgress(progress_.load(std::memory_order_relaxed));
     beat.setTracingLease(chain_.running ? chain_.runningLease : 0);
   };
   link_ = std::make_unique<CoordinatorLink>(std::move(link), keys_);
 }
 
 WorkerSession::~WorkerSession() { ::close(leaseFinishedFd_); }
+
+void WorkerSession::creditTracingCpu() {
+  if (!chain_.running || !chain_.tracingClock) return;
+  timespec used{};
+  if (::clock_gettime(*chain_.tracingClock, &used) != 0) return;
+  const int64_t ticks = (int64_t(used.tv_sec) * 1'000'000'000 + used.tv_nsec) / kCpuTickNs;
+  if (ticks <= chain_.cpuTicksCredited) return;
+  progress_.fetch_add(uint64_t(ticks - chain_.cpuTicksCredited), std::memory_order_relaxed);
+  chain_.cpuTicksCredited = ticks;
+}
 
 FinishedLease WorkerSession::traceLease(const net::Decoded& decoded, std::optional<std::string> photonRecords) {
   FinishedLease done;
@@ -121,6 +134,12 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
   _MM_SET_FLUSH_ZERO_MODE(_MM_FLUSH_ZERO_ON);
   _MM_SET_DENORMALS_ZERO_MODE(_MM_DENORMALS_ZERO_ON);
   crash_report::enterTracingThread();
+  {
+    clockid_t clock;
+    std::lock_guard lock(chain_.mutex);
+    chain_.cpuTicksCredited = 0;   // a new thread's clock starts at zero
+    if (::pthread_getcpuclockid(::pthread_self(), &clock) == 0) chain_.tracingClock = clock;
+  }
   std::unique_ptr<net::Decoded> assign = std::move(first);
   while (assign) {
     {
@@ -153,6 +172,7 @@ void WorkerSession::runChain(std::unique_ptr<net::Decoded> first, std::optional<
         chain_.queued.pop_front();
       } else {
         chain_.running = false;
+        chain_.tracingClock.reset();   // this thread ends: its clock goes with it
       }
     }
     const uint64_t one = 1;
@@ -460,6 +480,7 @@ void WorkerSession::abandonLeases() {
   chain_.finished.clear();
   chain_.abandon = false;
   chain_.running = false;
+  chain_.tracingClock.reset();
   chain_.cancelledJobs.clear();
 }
 

@@ -143,7 +143,17 @@ class WorkerSession {
     uint64_t runningLease = 0;                          // and the lease
     int64_t runningSinceMs = 0;                         // steady clock: when it started
     std::set<uint64_t> cancelledJobs;                   // told by the coordinator (Cancel)
+    // The tracing thread's CPU clock (set by the thread as it starts) and
+    // how many of its kCpuTick it has been credited in progress_.
+    std::optional<clockid_t> tracingClock;
+    int64_t cpuTicksCredited = 0;
   } chain_;
+  // A tracing thread that uses the CPU is moving, even in a step that counts
+  // nothing (reading a cell, building its accelerator or photon map); one
+  // stuck in a read that never returns uses none. Each 100 ms of its CPU
+  // time counts as progress (creditTracingCpu, at every heartbeat).
+  static constexpr int64_t kCpuTickNs = 100'000'000;
+  void creditTracingCpu();   // under chain_.mutex
   std::atomic<bool> stopping_{false};
   // The lease being traced gives up (runLease's stop): its job was
   // cancelled, or the worker is leaving or reconnecting.

@@ -131,6 +131,22 @@ TEST_F(LeaseBound, TheLateResultOfATakenBackLeaseIsDroppedAndTheImageKeepsItsBit
   EXPECT_NE(log.find("dropped a result for lease"), std::string::npos) << log;
 }
 
+// A worker whose tracing thread computes for 4 s without counting anything
+// (a long accelerator or photon map build) is moving: its CPU time counts as
+// progress, so a 1.5 s bound does not take its lease back, and it finishes
+// the job alone with the clean run's bits.
+TEST_F(LeaseBound, ALeaseThatComputesLongerThanTheBoundIsNotTakenBack) {
+  const fs::path dir = dir_ / "busy";
+  LocalCluster cluster(dir, 0, {}, leaseTimeout("1.5"));
+  const uint64_t job = cluster.submit(store_, dir / "image.exr", kPhotons, 1);
+  cluster.addWorker({}, withTestFault("busy-in-lease"));
+  expectDoneWithReferenceBits(cluster.wait(job), dir);
+  const std::string log = readFile(dir / "coordinator.log");
+  EXPECT_EQ(log.find("taken back"), std::string::npos) << log;
+  const std::string workerLog = readFile(dir / "worker-0.log");
+  EXPECT_NE(workerLog.find("busy-in-lease"), std::string::npos) << "the fault never ran: " << workerLog;
+}
+
 // Cancel frees the leases of a worker whose tracing thread is stuck at once
 // (no waiting out the bound), and SIGTERM ends that worker.
 TEST_F(LeaseBound, CancelFreesTheLeasesOfAStuckWorkerAndSigtermEndsIt) {
