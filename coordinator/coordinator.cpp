@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <bit>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -26,6 +27,7 @@
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_planner.h"
+#include "coordinator/job_activity.h"
 #include "coordinator/job_report.h"
 #include "coordinator/peer_rights.h"
 #include "coordinator/photon_reuse.h"
@@ -183,6 +185,7 @@ void Coordinator::runRound() {
         else if (name == kTrianglesLoadedCounter) trianglesLoaded = counter.getValue();
       }
       worker->second.recordLease(lease, wallMs(), workerMicros);
+      ++worker->second.leasesDone;
       worker->second.recordLoads(trianglesLoaded, loadMicros);
       if (auto sent = worker->second.leases.find(lease); sent != worker->second.leases.end()) {
         arrivedLeases_[lease] = sent->second;
@@ -387,6 +390,8 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
       case wire::Envelope::SUBMIT: onSubmit(identity, envelope.getSubmit()); break;
       case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
       case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
+      case wire::Envelope::JOB_DETAIL: onJobDetail(identity, envelope.getJobDetail()); break;
+      case wire::Envelope::FETCH_PREVIEW: onFetchPreview(identity, envelope.getFetchPreview()); break;
       case wire::Envelope::GOODBYE: onGoodbye(identity); break;
       case wire::Envelope::SHUTDOWN: {
         spdlog::info("shutdown requested by {}", shortId(identity));
@@ -631,6 +636,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
   if (worker.leases.empty()) worker.progressMs = nowMs();   // its lease clock starts with its first lease
   WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}, expected};
+  inFlight.job = chosen->job, inFlight.cell = chosen->cell, inFlight.phase = opened.phase;
   for (const auto& [cell, extra] : moreCells) {
     int64_t work = 0;
     for (const QueuedBatch& batch : extra) work += batch.work;
@@ -827,6 +833,8 @@ void Coordinator::recordResultCounters(const std::string& identity, const LeaseR
     const std::string_view name = counter.getName().cStr();
     if (name == kPeakResidentCounter) {
       store_.raiseCounter(lease.job, fmt::format("{}{}", kWorkerPeakResidentPrefix, workerName), counter.getValue());
+      if (worker != workers_.end())
+        worker->second.peakResidentBytes = std::max(worker->second.peakResidentBytes, counter.getValue());
       continue;
     }
     store_.addCounter(lease.job, name, counter.getValue());
@@ -1255,6 +1263,47 @@ void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Rea
     spdlog::info("job {} cancelled", job->id);
   }
   replyStatus(identity, job->id);
+}
+
+void Coordinator::onJobDetail(const std::string& identity, wire::JobDetailRequest::Reader request) {
+  const auto job = store_.job(request.getJob());
+  if (!job) {
+    sendError(identity, fmt::format("job {} does not exist", request.getJob()));
+    return;
+  }
+  nlohmann::json detail = cellActivity(store_, *job, workers_);
+  detail["log"] = options_.jobLog ? options_.jobLog->lines(job->id) : std::vector<std::string>();
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initJobDetailReply().setJson(detail.dump());
+  send(identity, message);
+}
+
+void Coordinator::onFetchPreview(const std::string& identity, wire::FetchPreview::Reader request) {
+  capnp::MallocMessageBuilder message;
+  auto reply = message.initRoot<wire::Envelope>().initPreview();
+  reply.setJob(request.getJob());
+  try {
+    const auto job = store_.job(request.getJob());
+    if (!job) throw std::runtime_error(fmt::format("job {} does not exist", request.getJob()));
+    // The spec as stored (resolved at submit): no need to open the store.
+    net::PackedReader stored(job->spec.data(), job->spec.size());
+    const auto spec = stored.root<wire::JobSpec>();
+    if (spec.hasAnalysis()) throw std::runtime_error(fmt::format("job {} is a lighting analysis: no image", job->id));
+    const int64_t cameraRays = store_.counters(job->id)["rays.camera"];
+    if (job->state == JobState::Photons || cameraRays == 0)
+      throw std::runtime_error(fmt::format("job {} has rendered nothing yet", job->id));
+    const LinearImage preview = shrinkImage(filmImage(store_, *job, spec), request.getMaxSide());
+    reply.setWidth(preview.width);
+    reply.setHeight(preview.height);
+    static_assert(std::endian::native == std::endian::little, "PreviewReply.rgb is little-endian float32");
+    reply.setRgb(capnp::Data::Reader(reinterpret_cast<const kj::byte*>(preview.rgb.data()),
+                                     preview.rgb.size() * sizeof(float)));
+    reply.setExposure(spec.getExposure());
+    reply.setCameraRaysDone(cameraRays);
+  } catch (const std::exception& e) {
+    reply.setError(e.what());
+  }
+  send(identity, message);
 }
 
 void Coordinator::onGoodbye(const std::string& identity) { releaseWorker(identity, "left"); }

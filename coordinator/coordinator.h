@@ -21,6 +21,7 @@
 #include "common/util/log_throttle.h"
 #include "common/scene/store/scene_store.h"
 #include "coordinator/deposit_regions.h"
+#include "coordinator/job_log.h"
 #include "coordinator/job_store.h"
 #include "coordinator/router_security.h"
 #include "coordinator/worker_registry.h"
@@ -55,6 +56,9 @@ struct CoordinatorOptions {
   // has them taken back and traced elsewhere: its tracing is stuck (a read
   // that never returns) though its heartbeats go on.
   int64_t leaseTimeoutMs = 120000;
+  // The recent log lines of each job, for JobDetail (the dashboard); null:
+  // none kept. portico-coordinator adds it to spdlog's sinks.
+  std::shared_ptr<JobLog> jobLog;
 };
 
 class Coordinator {
@@ -109,6 +113,10 @@ class Coordinator {
   void onStatus(const std::string& identity, wire::StatusRequest::Reader request);
   void replyStatus(const std::string& identity, uint64_t job);   // job 0: all jobs
   void onCancel(const std::string& identity, wire::CancelRequest::Reader request);
+  // The dashboard's (coordinator/job_activity.h): a job's cells and log
+  // lines, and its film so far, made small.
+  void onJobDetail(const std::string& identity, wire::JobDetailRequest::Reader request);
+  void onFetchPreview(const std::string& identity, wire::FetchPreview::Reader request);
   void onGoodbye(const std::string& identity);
 
   void dispatch();

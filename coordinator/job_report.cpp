@@ -271,9 +271,18 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
     nlohmann::json cells = nlohmann::json::array();
     for (auto it = w.cells.cells().rbegin(); it != w.cells.cells().rend() && cells.size() < kListedCells; ++it)
       cells.push_back({{"job", it->job}, {"cell", it->cell}});
+    nlohmann::json current = nlohmann::json::array();
+    for (const auto& [lease, inFlight] : w.leases)
+      current.push_back({{"lease", lease}, {"job", inFlight.job}, {"cell", inFlight.cell},
+                         {"phase", inFlight.phase == 0 ? "photons" : "render"}});
     list.push_back({{"name", w.name},
                     {"idle", w.idle()},
                     {"leases", w.leases.size()},
+                    {"leases_in_flight", current},
+                    {"leases_done", w.leasesDone},
+                    {"cores", w.cores},
+                    {"memory_budget_bytes", w.memoryBytes},
+                    {"peak_rss_bytes", w.peakResidentBytes},
                     {"last_seen_ms_ago", nowMs - w.lastSeenMs},
                     {"cells_held", w.cells.size()},
                     {"cells", cells}});
@@ -283,7 +292,6 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
   return list;
 }
 
-namespace {
 LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
   const uint32_t width = spec.getWidth(), height = spec.getHeight();
   const uint64_t pixels = uint64_t(width) * height;
@@ -303,8 +311,6 @@ LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Read
   }
   return image;
 }
-
-}  // namespace
 
 void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene) {
   // The directory was checked at submit; it is never created here, on

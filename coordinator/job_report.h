@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "common/image/linear_image.h"
 #include "common/scene/store/scene_store.h"
 #include "coordinator/job_store.h"
 #include "coordinator/worker_registry.h"
@@ -31,6 +32,11 @@ inline constexpr std::string_view kPhotonBytesFromResultsCounter = "disk.photon_
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);
+
+// The job's film as radiance: the sum of its passes over the passes done
+// (at least one), as written at the end; mid-pass, the pass under way adds
+// to it, pixel range by pixel range.
+LinearImage filmImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 
 // Resolves the film into radiance (an analysis job's: into its sensors'
 // readings, analysis_results.h) and writes spec.output and spec.output +

@@ -73,6 +73,9 @@ int main(int argc, char** argv) {
   options.leaseTimeoutMs = static_cast<int64_t>(leaseTimeoutSeconds * 1000);
   spdlog::set_level(spdlog::level::from_str(logLevel));
   spdlog::set_pattern("[%H:%M:%S.%e] [coordinator] [%l] %v");
+  // Each job's recent lines, for `portico dashboard` (coordinator/job_log.h).
+  options.jobLog = std::make_shared<portico::JobLog>();
+  spdlog::default_logger()->sinks().push_back(options.jobLog);
   // Every Result is unpacked into fresh segments and its batches re-packed:
   // keep what they free (a bounded amount, whatever the queues hold).
   portico::keepFreedMemory(uint64_t(256) << 20);

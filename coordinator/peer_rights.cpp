@@ -27,6 +27,8 @@ bool clientMay(Which type) {
     case Which::STATUS:
     case Which::CANCEL:
     case Which::FETCH_IMAGE:
+    case Which::JOB_DETAIL:
+    case Which::FETCH_PREVIEW:
     case Which::HEARTBEAT: return true;
     default: return false;
   }
@@ -45,6 +47,8 @@ std::string_view nameOf(Which type) {
     case Which::STATUS: return "Status";
     case Which::CANCEL: return "Cancel";
     case Which::FETCH_IMAGE: return "FetchImage";
+    case Which::JOB_DETAIL: return "JobDetail";
+    case Which::FETCH_PREVIEW: return "FetchPreview";
     case Which::SHUTDOWN: return "Shutdown";
     default: return "this message";
   }

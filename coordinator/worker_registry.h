@@ -39,6 +39,9 @@ struct WorkerInfo {
     // lease (LeaseLogEntry) for the cluster model; never read to schedule.
     std::vector<std::pair<uint32_t, int64_t>> moreCellWork;
     LeaseExpectation expected;   // what its Result must add up to (result_check.h)
+    uint64_t job = 0;            // shown by status (the dashboard's workers table)
+    uint32_t cell = 0;
+    int phase = 0;
   };
   std::map<uint64_t, LeaseInFlight> leases;
   // A worker holds up to two leases: the next one is on its way (or already
@@ -66,6 +69,10 @@ struct WorkerInfo {
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.
   double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured
   int64_t lastResultMs = 0;   // when its last Result arrived
+  // Shown by status: Results applied so far (the dashboard's leases per
+  // second) and the largest resident memory its Results reported.
+  int64_t leasesDone = 0;
+  int64_t peakResidentBytes = 0;
 
   static constexpr double kLeaseSeconds = 1.0;
   static constexpr int64_t kMinLeaseWork = 1000;

@@ -23,7 +23,10 @@ packages=(
   libcli11-dev nlohmann-json3-dev libspdlog-dev libfmt-dev
   libtbb-dev libassimp-dev zlib1g-dev
   liberfa-dev
+  libcpp-httplib-dev
   python3 python3-yaml python3-venv
+  # `portico dashboard`'s test drives the page in a headless browser (tests/dashboard/).
+  chromium chromium-driver python3-selenium
 )
 
 for arg in "$@"; do

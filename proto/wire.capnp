@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 17;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving)
+const protocolVersion :UInt32 = 18;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far)
 
 enum Phase {
   photons @0;
@@ -383,6 +383,37 @@ struct ImageReply {
   error @4 :Text;           # non-empty: no image (the job is not done, or it cannot be encoded)
 }
 
+# What `portico dashboard` shows of a job beyond its status: its cells'
+# state (queued, leased and to which worker, done) and loads, and its recent
+# log lines.
+struct JobDetailRequest {
+  job @0 :UInt64;
+}
+
+struct JobDetailReply {
+  # {"job", "phase", "cells": [{"cell", "pending", "leased_by", "done", "loads"}], "log": [lines]}
+  # (coordinator/job_activity.h)
+  json @0 :Text;
+}
+
+# A job's film so far (render phase, or done), averaged over the passes done
+# and box-filtered down to at most maxSide pixels on its longer side: linear
+# radiance the dashboard tone-maps with the exposure its viewer picks.
+struct FetchPreview {
+  job @0 :UInt64;
+  maxSide @1 :UInt32;      # 0: the film's own size (at most 1024 either way)
+}
+
+struct PreviewReply {
+  job @0 :UInt64;
+  width @1 :UInt32;
+  height @2 :UInt32;
+  rgb @3 :Data;            # width * height * 3 little-endian float32, row 0 at the top
+  exposure @4 :Float32;    # the job's --exposure
+  cameraRaysDone @5 :Int64;  # what the film holds so far: a new value, a new image
+  error @6 :Text;          # non-empty: no film yet (photon pass, analysis, unknown job)
+}
+
 struct Envelope {
   union {
     hello @0 :Hello;
@@ -406,5 +437,9 @@ struct Envelope {
     fileChunk @18 :FileChunk;
     fetchImage @19 :FetchImage;
     image @20 :ImageReply;
+    jobDetail @21 :JobDetailRequest;
+    fetchPreview @22 :FetchPreview;
+    preview @23 :PreviewReply;
+    jobDetailReply @24 :JobDetailReply;
   }
 }

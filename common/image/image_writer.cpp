@@ -37,14 +37,6 @@ void writeWithModule(const std::string& path, const LinearImage& image, bool isF
 }
 }  // namespace
 
-uint8_t toneMapToByte(float radiance, float exposure) {
-  float v = radiance * exposure;
-  if (!(v > 0.0f)) return 0;   // also maps NaN to black
-  v = std::min(v, 1.0f);
-  const float srgb = v <= 0.0031308f ? 12.92f * v : 1.055f * std::pow(v, 1.0f / 2.4f) - 0.055f;
-  return static_cast<uint8_t>(std::lround(srgb * 255.0f));
-}
-
 void writeImage(const std::string& path, const LinearImage& image, float exposure) {
   if (image.rgb.size() != size_t(image.width) * image.height * 3)
     throw std::runtime_error(fmt::format("image {}: {} values for {}x{} pixels", path, image.rgb.size(),

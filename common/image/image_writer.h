@@ -10,14 +10,12 @@
 #include <string>
 
 #include "common/image/linear_image.h"
+#include "common/image/png_file.h"   // toneMapToByte
 
 namespace portico {
 
 // Throws std::runtime_error naming the path on failure. The image is written
 // to a temporary file beside `path` and renamed, so a reader never sees half a file.
 void writeImage(const std::string& path, const LinearImage& image, float exposure = 1.0f);
-
-// sRGB OETF of clamp(v * exposure) to 8 bits.
-uint8_t toneMapToByte(float radiance, float exposure);
 
 }  // namespace portico

@@ -111,6 +111,28 @@ std::unique_ptr<Decoded> CoordinatorClient::fetchImage(uint64_t job) {
   return reply;
 }
 
+std::string CoordinatorClient::jobDetailJson(uint64_t job) {
+  capnp::MallocMessageBuilder message;
+  message.initRoot<wire::Envelope>().initJobDetail().setJob(job);
+  auto reply = request(message, true);
+  if (reply->envelope().which() != wire::Envelope::JOB_DETAIL_REPLY)
+    throw std::runtime_error("coordinator sent an unexpected reply to JobDetail");
+  return reply->envelope().getJobDetailReply().getJson();
+}
+
+std::unique_ptr<Decoded> CoordinatorClient::fetchPreview(uint64_t job, uint32_t maxSide) {
+  capnp::MallocMessageBuilder message;
+  auto request = message.initRoot<wire::Envelope>().initFetchPreview();
+  request.setJob(job);
+  request.setMaxSide(maxSide);
+  auto reply = this->request(message, true);
+  if (reply->envelope().which() != wire::Envelope::PREVIEW)
+    throw std::runtime_error("coordinator sent an unexpected reply to FetchPreview");
+  if (reply->envelope().getPreview().getError().size())
+    throw std::runtime_error(fmt::format("coordinator at {}: {}", endpoint_, reply->envelope().getPreview().getError().cStr()));
+  return reply;
+}
+
 void CoordinatorClient::shutdown() {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().setShutdown();

@@ -35,6 +35,11 @@ class CoordinatorClient {
   std::string cancel(uint64_t job);
   // A done job's encoded image; throws naming the job when it has none.
   std::unique_ptr<Decoded> fetchImage(uint64_t job);
+  // The dashboard's: a job's cells and log lines (JobDetailReply's JSON),
+  // and its film so far, at most maxSide pixels a side (PreviewReply; throws
+  // with its error when it has none).
+  std::string jobDetailJson(uint64_t job);
+  std::unique_ptr<Decoded> fetchPreview(uint64_t job, uint32_t maxSide);
   void shutdown();   // needs the operator role
 
  private:

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "common/util/trusted_path.h"
+
 namespace portico::net {
 
 namespace fs = std::filesystem;
@@ -33,46 +35,9 @@ bool isZ85Key(const std::string& text) {
   return zmq_z85_decode(binary, text.c_str()) != nullptr;
 }
 
-// Keys are trusted only where no other user could have put them, as ssh's
-// StrictModes: the key directory and each key file owned by this user or
-// root and writable by no one else, and each folder above owned likewise
-// and writable by others only when sticky (/tmp), where no one may move
-// another's entry. Otherwise a user who made the folder beforehand would
-// hold the keys of every role (an operator's included) of our coordinator.
-void requireOwnedByUs(const fs::path& path, const struct stat& info, const char* what) {
-  const uid_t us = ::geteuid();
-  if (info.st_uid != us && info.st_uid != 0)
-    throw std::runtime_error(fmt::format("{} {}: owned by uid {}, not by uid {} (this user) or root: refusing keys "
-                                         "another user could have put there; remove it, or chown it",
-                                         what, path.string(), info.st_uid, us));
-}
-
-void requireTrustedKeyPath(const fs::path& path, bool directory) {
-  struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) return;   // missing: the open that follows says so
-  const char* what = directory ? "key directory" : "key file";
-  requireOwnedByUs(path, info, what);
-  // On a read-only mount (a Kubernetes Secret volume, mode 1777) no one can write, whatever the mode says.
-  struct statvfs mount {};
-  const bool readOnly = ::statvfs(path.c_str(), &mount) == 0 && (mount.f_flag & ST_RDONLY);
-  if (!readOnly && (info.st_mode & (S_IWGRP | S_IWOTH)))
-    throw std::runtime_error(fmt::format("{} {}: writable by other users (mode {:o}): refusing it; chmod go-w it",
-                                         what, path.string(), info.st_mode & 07777));
-  if (!directory) return;
-  std::error_code error;
-  const fs::path resolved = fs::canonical(path, error);
-  if (error) return;
-  for (fs::path above = resolved.parent_path();; above = above.parent_path()) {
-    if (::stat(above.c_str(), &info) == 0) {
-      requireOwnedByUs(above, info, "folder above the key directory");
-      if ((info.st_mode & (S_IWGRP | S_IWOTH)) && !(info.st_mode & S_ISVTX))
-        throw std::runtime_error(fmt::format("folder above the key directory {}: writable by other users (mode {:o}), "
-                                             "who could swap the keys: refusing it",
-                                             above.string(), info.st_mode & 07777));
-    }
-    if (above == above.root_path() || above.empty()) break;
-  }
-}
+// Keys are trusted only where no other user could have put them
+// (common/util/trusted_path.h).
+void requireTrustedKeyPath(const fs::path& path, bool directory) { requireTrustedPath(path, directory, "key"); }
 
 // Every key in the file, in order; comments and blank lines skipped.
 std::vector<std::string> readKeys(const fs::path& path) {

@@ -120,5 +120,7 @@ class CommandTable;
 void addSceneCommands(CLI::App& app, CommandTable& table);
 void addJobCommands(CLI::App& app, CommandTable& table);
 void addKeysCommands(CLI::App& app, CommandTable& table);
+// `dashboard` (dashboard/dashboard_command.cpp).
+void addDashboardCommand(CLI::App& app, CommandTable& table);
 
 }  // namespace portico::cli

@@ -205,6 +205,7 @@ void addJobCommands(CLI::App& app, CommandTable& table) {
   addCancel(app, table);
   addFetchImage(app, table);
   addShutdown(app, table);
+  addDashboardCommand(app, table);
 }
 
 }  // namespace portico::cli

@@ -75,17 +75,9 @@ class PlanDrawer {
   // Leaves out empty cells covering half the building's footprint or more:
   // a sky or an outdoors would hide every room under it.
   void chooseCells() {
-    Bounds3 building;
+    drawn_ = cellsToDraw(store_);
     for (const CellInfo& cell : store_.cells())
-      if (cell.triangleCount > 0) building.extend(cell.bounds);
-    if (building.empty())
-      for (const CellInfo& cell : store_.cells()) building.extend(cell.bounds);
-    const float buildingArea = footprintArea(building);
-    drawn_.resize(store_.cells().size());
-    for (const CellInfo& cell : store_.cells()) {
-      drawn_[cell.id] = cell.triangleCount > 0 || footprintArea(cell.bounds) < 0.5f * buildingArea;
       if (drawn_[cell.id]) frame_.extend(cell.bounds);
-    }
   }
 
   void layout(int panelSize) {
@@ -244,6 +236,19 @@ class PlanDrawer {
 };
 
 }  // namespace
+
+std::vector<bool> cellsToDraw(const SceneStore& store) {
+  Bounds3 building;
+  for (const CellInfo& cell : store.cells())
+    if (cell.triangleCount > 0) building.extend(cell.bounds);
+  if (building.empty())
+    for (const CellInfo& cell : store.cells()) building.extend(cell.bounds);
+  const float buildingArea = footprintArea(building);
+  std::vector<bool> drawn(store.cells().size());
+  for (const CellInfo& cell : store.cells())
+    drawn[cell.id] = cell.triangleCount > 0 || footprintArea(cell.bounds) < 0.5f * buildingArea;
+  return drawn;
+}
 
 Canvas drawFloorPlans(const SceneStore& store, int floor, int panelSize) {
   return PlanDrawer(store, floor, panelSize).draw();

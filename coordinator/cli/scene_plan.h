@@ -15,10 +15,16 @@
 //  * Lights: small yellow squares at their centres.
 #pragma once
 
+#include <vector>
+
 #include "common/scene/store/scene_store.h"
 #include "coordinator/cli/png_canvas.h"
 
 namespace portico::cli {
+
+// Per cell id: whether a plan draws it (every cell but an empty one
+// covering half the building's footprint or more: a sky, the outdoors).
+std::vector<bool> cellsToDraw(const SceneStore& store);
 
 // The plans of every floor (floor < 0) or of one. panelSize: pixels along a
 // panel's longer side, reduced when the picture would be too big. Throws

@@ -17,12 +17,18 @@ TEST(PeerRights, WorkersLeaseAndFetchButNeitherSubmitNorShutDown) {
     EXPECT_TRUE(refusalFor(Role::Worker, type)) << int(type);
   EXPECT_EQ(refusalFor(Role::Worker, Which::SUBMIT).value_or(""),
             "Submit refused: a worker may not send it (it needs a client or operator key)");
+  // The dashboard's requests are a client's.
+  EXPECT_EQ(refusalFor(Role::Worker, Which::FETCH_PREVIEW).value_or(""),
+            "FetchPreview refused: a worker may not send it (it needs a client or operator key)");
+  EXPECT_EQ(refusalFor(Role::Worker, Which::JOB_DETAIL).value_or(""),
+            "JobDetail refused: a worker may not send it (it needs a client or operator key)");
   EXPECT_EQ(refusalFor(Role::Worker, Which::SHUTDOWN).value_or(""),
             "Shutdown refused: a worker may not send it (it needs an operator key)");
 }
 
 TEST(PeerRights, ClientsAskAboutJobsButNeitherLeaseNorFetchFilesNorShutDown) {
-  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::FETCH_IMAGE})
+  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::FETCH_IMAGE, Which::JOB_DETAIL,
+                     Which::FETCH_PREVIEW})
     EXPECT_FALSE(refusalFor(Role::Client, type)) << int(type);
   for (Which type : {Which::HELLO, Which::READY, Which::RESULT, Which::FAILURE, Which::FETCH_PHOTONS, Which::FETCH_FILE,
                      Which::SHUTDOWN})
