@@ -137,8 +137,8 @@ def main():
         # Two jobs: A renders in passes (its preview changes with each), B
         # has a long photon pass and waits behind A, to be cancelled.
         job_a = int(farm.portico("submit", "--coordinator", farm.endpoint, f"{work}/store", "-o", f"{work}/a.png",
-                                 "--photons", "400000", "--spp", "2", "--max-passes", "12", "--width", "240",
-                                 "--height", "160").strip())
+                                 "--photons", "400000", "--spp", "2", "--max-passes", "16", "--width", "320",
+                                 "--height", "200").strip())
         job_b = int(farm.portico("submit", "--coordinator", farm.endpoint, f"{work}/store", "-o", f"{work}/b.png",
                                  "--photons", "20000000").strip())
 

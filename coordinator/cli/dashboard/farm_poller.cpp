@@ -70,10 +70,9 @@ std::optional<PreviewFrame> FarmPoller::preview(uint64_t job) {
 
 // What the jobs table shows of a job: its state and phase, progress and
 // ETA, photons and rays per second (over the last poll), its error.
-nlohmann::json FarmPoller::summary(const nlohmann::json& status) {
+nlohmann::json FarmPoller::summary(const nlohmann::json& status, Clock::time_point now) {
   const uint64_t job = status.value("job", uint64_t(0));
   const std::string state = status.value("state", "");
-  const auto now = Clock::now();
   const auto rate = [&](const char* what, int64_t value) {
     return rates_[fmt::format("job {} {}", job, what)].update(value, now);
   };
@@ -173,7 +172,7 @@ void FarmPoller::pollRound(net::CoordinatorClient& client) {
     if (active ? activePolled++ >= settings_.polledJobs : known != knownState.end() && known->second == state) continue;
     nlohmann::json status = nlohmann::json::parse(client.statusJson(id));
     if (status.value("job", uint64_t(0)) != id) continue;   // a late answer to another request
-    fresh[id] = {{"status", status}, {"summary", summary(status)}};
+    fresh[id] = {{"status", status}, {"summary", summary(status, now)}};
   }
 
   std::map<uint64_t, nlohmann::json> details;
@@ -233,6 +232,9 @@ void FarmPoller::pollRound(net::CoordinatorClient& client) {
   for (auto it = previews_.begin(); it != previews_.end();) it = keep.count(it->first) ? std::next(it) : previews_.erase(it);
   for (auto it = detailPolled_.begin(); it != detailPolled_.end();)
     it = watchers_.count(it->first) ? std::next(it) : detailPolled_.erase(it);
+  // Rates of jobs and workers gone, and those not updated this round.
+  for (auto it = rates_.begin(); it != rates_.end();)
+    it = it->second.samples.empty() || it->second.samples.back().first != now ? rates_.erase(it) : std::next(it);
   error_.clear();
   ++version_;
   changed_.notify_all();

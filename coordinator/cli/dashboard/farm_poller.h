@@ -68,7 +68,8 @@ class FarmPoller {
   };
   void run();
   void pollRound(net::CoordinatorClient& client);
-  nlohmann::json summary(const nlohmann::json& status);
+  // Rates are sampled at `now`, the round's time: a rate not sampled in a round is dropped.
+  nlohmann::json summary(const nlohmann::json& status, std::chrono::steady_clock::time_point now);
 
   ConnectOptions connect_;
   PollSettings settings_;
