@@ -20,6 +20,7 @@ import ifcopenshell
 
 from . import cell_partition as cp
 from .clip import distribute
+from .closing import CLOSING_ALBEDO, CLOSING_MATERIAL, close_spaces
 from .glazing import outdoor_cells, window_panes
 from .ifc_model import read_ifc
 from .lights_cameras import fixture_lamps, space_cameras, space_panels
@@ -122,8 +123,13 @@ def _match_openings(openings, portals, cells, lines, cell_of_point):
         labels = [cells[s].label if s is not None else None for s in sides]
         joined = _joined_through(ends[0], ends[1], axis, portals_between, lines, cell_of_point)
         found.append({"kind": o.kind, "name": o.name, "sides": labels,
-                      "portal": joined, "between_two_regions": labels[0] != labels[1]})
+                      "portal": joined, "between_two_regions": labels[0] != labels[1],
+                      "lo": _rounded(o.lo), "hi": _rounded(o.hi)})
     return found
+
+
+def _rounded(point):
+    return [round(float(x), 4) for x in point]
 
 
 def _site_json(site):
@@ -153,19 +159,22 @@ def _pane_objects(panes, lines, owner, cells, names, out_dir):
 
 def _glazing_summary(glazing, model, panes, paneless, objects, openings):
     """Counts of glazed windows for the summary; sets each window's "glass" in `openings`."""
-    glass_of = {p.window: list(p.transmittance) for p in panes}
+    glass_of = {p.window: list(p.transmittance) for p in panes if not p.curtain}
     for o in openings:
         if o["kind"] == "window":
             o["glass"] = glass_of.get(o["name"])
+    curtain = {g.name for g in model.glazings if g.curtain}
     return {"glazing": glazing,
-            "windows_glazed": len(panes),
-            "windows_at_opening": sum(1 for p in panes if p.at_opening),
+            "windows_glazed": sum(1 for p in panes if not p.curtain),
+            "windows_at_opening": sum(1 for p in panes if p.at_opening and not p.curtain),
             "windows_without_glass": len(model.unglazed_windows),
-            "windows_glass_unplaced": len(paneless),
+            "windows_glass_unplaced": sum(1 for name in paneless if name not in curtain),
+            "curtain_plates_glazed": sum(1 for p in panes if p.curtain),
+            "curtain_plates_unplaced": sum(1 for name in paneless if name in curtain),
             "glass_objects": sum(1 for o in objects if "glass" in o)}
 
 
-def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
+def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", closing=True):
     started = time.time()
     model = read_ifc(ifc_path, glazing)
     read_seconds = time.time() - started
@@ -176,9 +185,16 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
     outer_lo = building_lo - np.array([MARGIN, SKY_INSET * 2, MARGIN])
     outer_hi = building_hi + MARGIN
 
+    holes = [(o.lo, o.hi) for o in model.openings + model.unfilled_openings]
+    # Glass bounds a room too: curtain walls' plates and windows' glass.
+    bounding = [e.mesh for e in model.elements if e.sealing] + [g.glass for g in model.glazings]
+    closings, closing_areas = close_spaces(model.spaces, bounding, holes) if closing else ([], [])
     lines = cp.grid_lines(model.spaces, outer_lo, outer_hi, [e.mesh for e in model.elements])
     labels = cp.label_boxes(lines, model.spaces)
     cells, owner = cp.merge_boxes(labels, lines)
+    if all(c.label == cp.AIR for c in cells):
+        raise SystemExit(f"{ifc_path}: none of its {len(model.spaces)} IfcSpaces holds the centre of a grid box "
+                         "(all thinner than the grid between them): no room to cut")
     sealers = [(e.mesh, e.mesh.bounds()) for e in model.elements if e.sealing]
     portals = cp.find_portals(cells, owner, lines, sealers)
 
@@ -207,8 +223,11 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
     os.makedirs(os.path.join(out_dir, "meshes"), exist_ok=True)
     objects = []
     groups = [(e.mesh.corners(), e.material_of_triangle) for e in model.elements]
-    material_names = [m[0] for m in model.materials] + ["ground", "sky"]
-    material_albedo = [m[1] for m in model.materials] + [GROUND_ALBEDO, SKY_ALBEDO]
+    material_names = [m[0] for m in model.materials] + ["ground", "sky", CLOSING_MATERIAL]
+    material_albedo = [m[1] for m in model.materials] + [GROUND_ALBEDO, SKY_ALBEDO, CLOSING_ALBEDO]
+    closing_triangles = np.concatenate(closings) if closings else np.zeros((0, 3, 3))
+    if len(closing_triangles):
+        groups.append((closing_triangles, np.full(len(closing_triangles), len(model.materials) + 2)))
     if outdoors == "closed":
         ground, sky = _enclosure(outer_lo + SKY_INSET, outer_hi - SKY_INSET)
         groups.append((ground, np.full(len(ground), len(model.materials))))
@@ -253,6 +272,14 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
     with open(os.path.join(out_dir, "building.json"), "w") as f:
         json.dump(building, f, indent=1)
 
+    # The spaces' own solids, for checks that need points inside a space
+    # (python -m portico_ifc.watertight); not part of the scene.
+    os.makedirs(os.path.join(out_dir, "spaces"), exist_ok=True)
+    space_files = []
+    for i, space in enumerate(model.spaces):
+        path = os.path.join("spaces", f"{i:04d}.obj")
+        _write_obj(os.path.join(out_dir, path), space.mesh.corners())
+        space_files.append({"name": space.name, "obj": path})
     openings = _match_openings(model.openings, portals, cells, lines, cell_of_point)
     summary = {
         "schema": model.schema,
@@ -268,6 +295,10 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
         "windows": sum(1 for o in openings if o["kind"] == "window"),
         "doors_with_portal": sum(1 for o in openings if o["kind"] == "door" and o["portal"]),
         "windows_with_portal": sum(1 for o in openings if o["kind"] == "window" and o["portal"]),
+        "openings_without_filling": len(model.unfilled_openings),
+        "closing": closing,
+        "spaces_closed": sum(1 for a in closing_areas if a > 0),
+        "closing_m2": round(sum(closing_areas), 2),
         **_glazing_summary(glazing, model, panes, paneless, objects, openings),
         "outdoors": outdoors,
         "outdoor_cells": len(outdoor),
@@ -282,7 +313,10 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open"):
         "seconds": round(time.time() - started, 2),
     }
     with open(os.path.join(out_dir, "conversion.json"), "w") as f:
-        json.dump({"summary": summary, "openings": openings}, f, indent=1)
+        closed = [{"space": sp.name, "m2": round(a, 2)} for sp, a in zip(model.spaces, closing_areas) if a > 0]
+        json.dump({"summary": summary, "openings": openings, "spaces": space_files, "closed_spaces": closed,
+                   "openings_without_filling": [{"name": o.name, "lo": _rounded(o.lo), "hi": _rounded(o.hi)}
+                                                for o in model.unfilled_openings]}, f, indent=1)
     return summary
 
 
@@ -298,12 +332,15 @@ def main(argv=None):
     parser.add_argument("--outdoors", choices=("open", "closed"), default="open",
                         help="open: the air around the building is outdoors (cells outside-N), for daylight; "
                              "closed: black sky and grey ground boxes close the scene")
+    parser.add_argument("--no-closing", dest="closing", action="store_false",
+                        help="leave the faces of spaces that no wall, slab, roof or covering bounds open "
+                             "(default: close them with the space's own faces)")
     args = parser.parse_args(argv)
     if not os.path.isfile(args.ifc):
         print(f"{args.ifc}: does not exist", file=sys.stderr)
         return 2
     try:
-        summary = convert(args.ifc, args.out_dir, args.lights, args.glazing, args.outdoors)
+        summary = convert(args.ifc, args.out_dir, args.lights, args.glazing, args.outdoors, args.closing)
     except (RuntimeError, ifcopenshell.Error) as error:       # IfcOpenShell's parse errors
         print(f"{args.ifc}: not a readable IFC model: {error}", file=sys.stderr)
         return 1

@@ -30,6 +30,7 @@ class Pane:
     corners: np.ndarray       # (4, 3): a rectangle across `axis`
     transmittance: tuple
     at_opening: bool          # on an opening to the outdoors (else on its glass's plane)
+    curtain: bool = False     # a curtain wall's plate
 
 
 def outdoor_cells(cells, portals, outer_lo, outer_hi):
@@ -114,5 +115,5 @@ def window_panes(glazings, openings, cells, outdoor, portals, lines, cell_of_poi
         if lo[u] >= hi[u] or lo[v] >= hi[v]:
             missed.append(g.name)
             continue
-        panes.append(Pane(g.name, _rectangle(axis, at, lo, hi), g.transmittance, face is not None))
+        panes.append(Pane(g.name, _rectangle(axis, at, lo, hi), g.transmittance, face is not None, g.curtain))
     return panes, missed

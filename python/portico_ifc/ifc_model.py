@@ -96,6 +96,7 @@ class Glazing:
     guid: str
     glass: Mesh
     transmittance: tuple
+    curtain: bool = False         # a plate of a curtain wall (else a window's glass)
 
 
 @dataclass
@@ -126,6 +127,7 @@ class IfcModel:
     fixtures: list = field(default_factory=list)
     materials: list = field(default_factory=list)     # [(name, (r, g, b))]
     glazings: list = field(default_factory=list)
+    unfilled_openings: list = field(default_factory=list)  # Openings (kind "unfilled"): voids no door or window fills
     unglazed_windows: list = field(default_factory=list)   # names of windows without a transparent part
     site: Site = None
 
@@ -186,6 +188,24 @@ def _fixture_lumens(product):
 def _fixture_kelvin(product):
     # The importer accepts 1667-25000 K (docs/photometric-lights.md).
     return _fixture_property(product, ("ColourTemperature", "ColorTemperature"), 1667.0, 25000.0)
+
+
+def _in_curtain_wall(product):
+    """Whether the product is a part of an IfcCurtainWall (its plates are the glazing)."""
+    for rel in getattr(product, "Decomposes", None) or []:
+        if rel.RelatingObject.is_a("IfcCurtainWall"):
+            return True
+    return False
+
+
+def _curtain_transmittance(model, geometry):
+    """A curtain wall's plate is glass: its style's transmittance where the
+    style is glass, else clear glass's (NAMED_GLASS_TRANSPARENCY)."""
+    for material in geometry.materials:
+        transmittance = _glass_transmittance(model, material)
+        if transmittance is not None:
+            return transmittance
+    return (NAMED_GLASS_TRANSPARENCY,) * 3
 
 
 def _opening_of(product):
@@ -366,10 +386,16 @@ def read_ifc(path, glazing=True):
         host = _host_of(opening) if opening else ()
         holes[(opening or p).id()] = (p, "door" if p.is_a("IfcDoor") else "window", host)
     windows = {p.id() for p in model.by_type("IfcWindow")} if glazing else set()
+    curtain_plates = {p.id() for p in model.by_type("IfcPlate") if _in_curtain_wall(p)} if glazing else set()
+    # Voids nothing fills: holes the model leaves open on purpose or by mistake (reported).
+    unfilled = {o.id(): _host_of(o) for o in model.by_type("IfcOpeningElement")
+                if o.id() not in holes and not getattr(o, "HasFillings", None)}
+    fillers = {filled.id() for filled, _, _ in holes.values()}
     wanted = (surfaces + list(model.by_type("IfcSpace")) + [model.by_id(i) for i in holes] +
-              [model.by_id(i) for i in windows])
+              [model.by_id(i) for i in windows] + [model.by_id(i) for i in unfilled] + [model.by_id(i) for i in fillers])
     wanted = [p for p in {p.id(): p for p in wanted if p.Representation is not None}.values()]
 
+    filler_bounds, holes_found = {}, set()
     for product, geometry in _iterate_shapes(model, wanted):
         vertices = to_portico_axes(geometry.verts)
         triangles = np.asarray(geometry.faces, dtype=np.int64).reshape(-1, 3)
@@ -377,10 +403,23 @@ def read_ifc(path, glazing=True):
             continue
         mesh = Mesh(vertices, triangles)
         name = product.Name or product.GlobalId
+        if product.id() in fillers:
+            filler_bounds[product.id()] = mesh.bounds()
+            if product.id() not in holes and product.id() not in windows:
+                continue
         if product.id() in holes:
+            holes_found.add(product.id())
             filled, kind, host = holes[product.id()]
             lo, hi = mesh.bounds()
             result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi, host, filler=filled.GlobalId))
+        if product.id() in unfilled:
+            lo, hi = mesh.bounds()
+            result.unfilled_openings.append(Opening("unfilled", name, lo, hi, unfilled[product.id()]))
+            continue
+        if product.id() in curtain_plates:
+            result.glazings.append(Glazing(name, product.GlobalId, mesh, _curtain_transmittance(model, geometry),
+                                           curtain=True))
+            continue
         if product.id() in windows:
             _read_window(model, product, geometry, mesh, materials, result)
         if product.is_a("IfcSpace"):
@@ -396,8 +435,14 @@ def read_ifc(path, glazing=True):
         of_triangle = _triangle_materials(geometry, materials, len(triangles))
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))
+    # An opening element IfcOpenShell cannot tessellate (some exporters write
+    # attributes it refuses): the door's or window's own box stands for its hole.
+    for key, (filled, kind, host) in holes.items():
+        if key not in holes_found and filled.id() in filler_bounds:
+            lo, hi = filler_bounds[filled.id()]
+            result.openings.append(Opening(kind, filled.Name or filled.GlobalId, lo, hi, host, filler=filled.GlobalId))
     element_bounds = {e.guid: e.mesh.bounds() for e in result.elements}
-    for o in result.openings:
+    for o in result.openings + result.unfilled_openings:
         boxes = [element_bounds[g] for g in o.host if g in element_bounds]
         _through_host(o, (np.min([b[0] for b in boxes], axis=0), np.max([b[1] for b in boxes], axis=0))
                       if boxes else None)
@@ -413,6 +458,7 @@ def read_ifc(path, glazing=True):
     result.elements.sort(key=lambda e: (e.guid, e.ifc_type))
     result.spaces.sort(key=lambda s: (s.name, s.guid))
     result.openings.sort(key=lambda o: (o.kind, o.name, tuple(o.lo)))
+    result.unfilled_openings.sort(key=lambda o: (o.name, tuple(o.lo)))
     result.fixtures.sort(key=lambda f: (f.name, tuple(f.lo)))
     result.glazings.sort(key=lambda g: (g.guid, g.name))
     result.unglazed_windows.sort()

@@ -112,7 +112,41 @@ def space_cameras(spaces, cells):
                 continue
             corners = [np.array([x, floor + 1.0, z]) for x in (lo[0], hi[0]) for z in (lo[2], hi[2])]
             target = max(corners, key=lambda p: (float(np.hypot(p[0] - cx, p[2] - cz)), tuple(p)))
-            cameras.append({"name": space.name, "origin": origin.tolist(), "target": target.tolist(),
-                            "up": [0, 1, 0], "fov_y_deg": 70, "width": 512, "height": 384})
+            cameras.append(_camera(space.name, origin, target))
             break
+        else:
+            camera = _camera_anywhere(space, own, cells)
+            if camera is not None:
+                cameras.append(camera)
     return cameras
+
+
+def _camera(name, origin, target):
+    return {"name": name, "origin": [float(x) for x in origin], "target": [float(x) for x in target],
+            "up": [0, 1, 0], "fov_y_deg": 70, "width": 512, "height": 384}
+
+
+def _camera_anywhere(space, own, cells):
+    """A space none of whose cells' centres lies inside it (an L or a ring
+    drawn as one space): the camera at eye height over the point of a 9 x 9
+    grid over its box, inside it and in one of its cells, nearest the box's
+    centre, looking at the box's centre."""
+    lo, hi = space.mesh.bounds()
+    centre = (lo + hi) / 2
+    candidates = []
+    for x in np.linspace(lo[0], hi[0], 11)[1:-1]:
+        for z in np.linspace(lo[2], hi[2], 11)[1:-1]:
+            floor, ceiling = _floor_and_ceiling(space, x, z)
+            if not np.isfinite(floor) or not np.isfinite(ceiling):
+                continue
+            y = min(floor + EYE_HEIGHT, (floor + ceiling) / 2)
+            point = np.array([x, y, z])
+            if any(np.all(point > cells[c].lo) and np.all(point < cells[c].hi) for c in own):
+                candidates.append((float(np.hypot(x - centre[0], z - centre[2])), x, z, point))
+    for _, _, _, point in sorted(candidates, key=lambda c: c[:3]):
+        if inside_mesh(point[None, :], space.mesh)[0]:
+            target = np.array([centre[0], point[1], centre[2]])
+            if np.hypot(*(target - point)[[0, 2]]) < 0.5:
+                target = np.array([hi[0], point[1], hi[2]])
+            return _camera(space.name, point, target)
+    return None

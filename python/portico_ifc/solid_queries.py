@@ -14,6 +14,8 @@ import numpy as np
 # an edge shared by two triangles and is counted twice or not at all.
 JITTER = np.array([1.234567e-4, 2.345671e-4, 3.456712e-4])
 _CHUNK = 4_000_000   # points x triangles per numpy step
+_RAY_CHUNK = 3_000_000   # rays x triangles per numpy step of nearest_hits
+_PARALLEL = 1e-9         # |det| below this: the ray runs along the triangle
 
 
 def _other_axes(axis):
@@ -131,3 +133,30 @@ def first_hit_along(points, mesh, axis, upward=True):
     masked = np.where(hits, height, np.inf if upward else -np.inf)
     best = masked.min(axis=1) if upward else masked.max(axis=1)
     return np.where(np.isfinite(best), best, np.nan)
+
+
+def nearest_hits(origins, directions, corners):
+    """(n,) distance along each ray to the nearest triangle it crosses, either
+    side (Moeller-Trumbore); inf where it crosses none. Component by
+    component: numpy's cross and einsum are slow on a last axis of 3."""
+    ax, ay, az = corners[:, 0, 0], corners[:, 0, 1], corners[:, 0, 2]
+    e1 = corners[:, 1] - corners[:, 0]
+    e2 = corners[:, 2] - corners[:, 0]
+    e1x, e1y, e1z, e2x, e2y, e2z = e1[:, 0], e1[:, 1], e1[:, 2], e2[:, 0], e2[:, 1], e2[:, 2]
+    nearest = np.full(len(origins), np.inf)
+    step = max(1, _RAY_CHUNK // max(1, len(corners)))
+    for start in range(0, len(origins), step):
+        o, d = origins[start:start + step], directions[start:start + step]
+        dx, dy, dz = d[:, 0:1], d[:, 1:2], d[:, 2:3]
+        px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+        det = px * e1x + py * e1y + pz * e1z
+        sx, sy, sz = o[:, 0:1] - ax, o[:, 1:2] - ay, o[:, 2:3] - az
+        qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            u = (sx * px + sy * py + sz * pz) * inv
+            v = (dx * qx + dy * qy + dz * qz) * inv
+            t = (qx * e2x + qy * e2y + qz * e2z) * inv
+            ok = (np.abs(det) > _PARALLEL) & (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 1e-6)
+        nearest[start:start + step] = np.where(ok, t, np.inf).min(axis=1)
+    return nearest

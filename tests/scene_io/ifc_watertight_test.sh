@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Watertightness of imported IFC models (docs/ifc-corpus.md,
+# "Watertightness" and "Closing"): rays from random points inside every
+# space leave the building only through doors, windows and voids, for the
+# sample models and the small corpus models that have spaces; and a model
+# whose base slab is deleted (FZK-Haus without its "Bodenplatte") leaks
+# through the missing floor unless the importer closes the spaces' floors.
+# Usage: ifc_watertight_test.sh SOURCE_DIR
+set -euo pipefail
+src="$1"
+work="$(mktemp -d)"; trap 'rm -rf "$work"' EXIT
+python="${PORTICO_PYTHON:-$src/.venv/bin/python3}"
+[ -x "$python" ] || { echo "$python: no python3 with IfcOpenShell (run deploy/install-deps.sh, or set PORTICO_PYTHON)"; exit 1; }
+export PYTHONPATH="$src/python"
+# Leak share allowed: under 1 % of the rays from inside the spaces.
+threshold=0.01
+
+leak_share() {   # converted_dir -> prints the check's JSON line
+  "$python" -m portico_ifc.watertight "$1"
+}
+
+for model in "$src/tests/scenes/ifc/AC20-FZK-Haus.ifc" "$src/tests/scenes/ifc/Duplex_A_20110907.ifc" \
+             "$src/tests/scenes/ifc/corpus/PCERT-Building-Architecture.ifc"; do
+  out="$work/$(basename "$model" .ifc)"
+  "$python" -m portico_ifc "$model" "$out" > /dev/null
+  leak_share "$out" | python3 -c '
+import json, sys
+r = json.load(sys.stdin); name, threshold = sys.argv[1], float(sys.argv[2])
+if r["rays"] < 64 * r["spaces"] // 2 or r["leak_share"] >= threshold:
+    print(f"{name}: {r}"); sys.exit(1)
+print("ok %s: %d of %d rays leak, %d through openings" % (name, r["leaks"], r["rays"], r["through_openings"]))' \
+    "$(basename "$model")" "$threshold"
+done
+
+# The same house without its base slab: its ground-floor spaces have no floor.
+"$python" - "$src/tests/scenes/ifc/AC20-FZK-Haus.ifc" "$work/no-floor.ifc" <<'PY'
+import sys, ifcopenshell, ifcopenshell.api
+model = ifcopenshell.open(sys.argv[1])
+slabs = [s for s in model.by_type("IfcSlab") if s.Name == "Bodenplatte"]
+assert len(slabs) == 1, "FZK-Haus has one base slab (Bodenplatte)"
+ifcopenshell.api.run("root.remove_product", model, product=slabs[0])
+model.write(sys.argv[2])
+PY
+"$python" -m portico_ifc --no-closing "$work/no-floor.ifc" "$work/open" > /dev/null
+"$python" -m portico_ifc "$work/no-floor.ifc" "$work/closed" > /dev/null
+python3 - "$(leak_share "$work/open")" "$(leak_share "$work/closed")" "$work/closed/conversion.json" "$threshold" <<'PY'
+import json, sys
+open_, closed = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+conversion, threshold = json.load(open(sys.argv[3])), float(sys.argv[4])
+s = conversion["summary"]
+problems = []
+# Rays go down in half the directions; those from ground-floor rooms that
+# reach the missing floor before a wall leak: well over 5 % of all rays.
+if open_["leak_share"] < 0.05:
+    problems.append(f"without closing, only {open_['leak_share']} of the rays leak: {open_}")
+if closed["leak_share"] >= threshold:
+    problems.append(f"with closing, {closed['leak_share']} of the rays leak: {closed}")
+if s["spaces_closed"] < 1 or s["closing_m2"] < 20:
+    problems.append(f"closing counted {s['spaces_closed']} spaces, {s['closing_m2']} m2")
+if problems:
+    print("; ".join(problems)); sys.exit(1)
+print(f"ok no base slab: {open_['leaks']} of {open_['rays']} rays leak without closing, {closed['leaks']} with "
+      f"({s['spaces_closed']} spaces closed, {s['closing_m2']} m2)")
+PY
