@@ -77,7 +77,9 @@ def markdown(rows, threshold):
            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "error" in r:
-            out.append(f"| `{r['model']}` | {r['size_mb']} | not imported: {r['error']} |" + " |" * 13)
+            # The converter's line without the file name, up to its first clause.
+            reason = r["error"].split(": ", 1)[-1].split(";")[0]
+            out.append(f"| `{r['model']}` | {r['size_mb']} | not imported: {reason} |" + " |" * 12 + " no |")
             continue
         w = r["watertight"]
         tight = w["leak_share"] is not None and w["leak_share"] < threshold
