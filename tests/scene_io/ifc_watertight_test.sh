@@ -4,7 +4,8 @@
 # space leave the building only through doors, windows and voids, for the
 # sample models and the small corpus models that import (PCERT's building;
 # Renga's house, closed where its doors and windows are: IfcOpenShell
-# tessellates none of them); and a model whose base slab is deleted
+# tessellates none of them; SampleHouse4, whose curtain walls' plates become
+# glass), each with its unfilled openings counted; and a model whose base slab is deleted
 # (FZK-Haus without its "Bodenplatte") leaks through the missing floor
 # unless the importer closes the spaces' floors.
 # Usage: ifc_watertight_test.sh SOURCE_DIR
@@ -21,18 +22,23 @@ leak_share() {   # converted_dir -> prints the check's JSON line
   "$python" -m portico_ifc.watertight "$1"
 }
 
-for model in "$src/tests/scenes/ifc/AC20-FZK-Haus.ifc" "$src/tests/scenes/ifc/Duplex_A_20110907.ifc" \
-             "$src/tests/scenes/ifc/corpus/PCERT-Building-Architecture.ifc" \
-             "$src/tests/scenes/ifc/corpus/Renga-House.ifc"; do
+# model, then what its conversion.json must count: unfilled openings, curtain wall plates glazed
+for case in "ifc/AC20-FZK-Haus.ifc 1 0" "ifc/Duplex_A_20110907.ifc 12 0" \
+            "ifc/corpus/PCERT-Building-Architecture.ifc 0 0" "ifc/corpus/Renga-House.ifc 0 0" \
+            "ifc/corpus/Revit2015-SampleHouse4.ifc 0 6"; do
+  read -r model unfilled plates <<< "$case"
   out="$work/$(basename "$model" .ifc)"
-  "$python" -m portico_ifc "$model" "$out" > /dev/null
+  "$python" -m portico_ifc "$src/tests/scenes/$model" "$out" > /dev/null
   leak_share "$out" | python3 -c '
 import json, sys
-r = json.load(sys.stdin); name, threshold = sys.argv[1], float(sys.argv[2])
-if r["rays"] < 64 * r["spaces"] // 2 or r["leak_share"] >= threshold:
-    print(f"{name}: {r}"); sys.exit(1)
-print("ok %s: %d of %d rays leak, %d through openings" % (name, r["leaks"], r["rays"], r["through_openings"]))' \
-    "$(basename "$model")" "$threshold"
+r = json.load(sys.stdin); name, threshold, conversion = sys.argv[1], float(sys.argv[2]), json.load(open(sys.argv[3]))
+s = conversion["summary"]
+counts = (s["openings_without_filling"], len(conversion["openings_without_filling"]), s["curtain_plates_glazed"])
+if r["rays"] < 64 * r["spaces"] // 2 or r["leak_share"] >= threshold or counts != (int(sys.argv[4]),) * 2 + (int(sys.argv[5]),):
+    print(f"{name}: {r}; unfilled openings and glazed curtain plates {counts}"); sys.exit(1)
+print("ok %s: %d of %d rays leak, %d through openings; %d unfilled openings, %d curtain plates glazed"
+      % (name, r["leaks"], r["rays"], r["through_openings"], counts[0], counts[2]))' \
+    "$(basename "$model")" "$threshold" "$out/conversion.json" "$unfilled" "$plates"
 done
 
 # The same house without its base slab: its ground-floor spaces have no floor.

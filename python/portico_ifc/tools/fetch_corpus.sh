@@ -6,7 +6,6 @@ set -euo pipefail
 dir="${1:?usage: fetch_corpus.sh DIR}"
 mkdir -p "$dir"
 web_ifc=https://raw.githubusercontent.com/ThatOpen/engine_web-ifc/233e3aa7118d7364606dcb171206a89b3ed62657
-xbim=https://raw.githubusercontent.com/xBimTeam/XbimEssentials/e3c877712aeff39813219b9dd13383c266d07055
 fetch() {   # url file
   [ -s "$dir/$2" ] && return 0
   curl -fsSL --retry 3 -o "$dir/$2.part" "$1" && mv "$dir/$2.part" "$dir/$2"
@@ -15,4 +14,3 @@ fetch() {   # url file
 fetch "$web_ifc/tests/ifcfiles/public/Office_A_20110811.ifc" Office_A_20110811.ifc
 fetch "$web_ifc/tests/ifcfiles/public/ISSUE_005_haus.ifc" ISSUE_005_haus.ifc
 fetch "$web_ifc/tests/ifcfiles/public/ISSUE_021_Mini%20Project.ifc" "ISSUE_021_Mini Project.ifc"
-fetch "$xbim/Tests/TestFiles/SampleHouse4.ifc" SampleHouse4.ifc
