@@ -37,6 +37,7 @@ void addImport(CLI::App& scene, CommandTable& table) {
     std::string store;
     IfcOptions ifc;
     bool noGlazing = false;
+    std::string cells = "given";
   };
   auto o = std::make_shared<Options>();
   auto* import = scene.add_subcommand("import", "import a building.json, or mesh files, into a scene store");
@@ -44,6 +45,20 @@ void addImport(CLI::App& scene, CommandTable& table) {
                      "cut the scene into RGxRGxRG uniform voxel cells instead of its own cells (0: off)")
       ->capture_default_str()
       ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
+  import->add_option("--cells", o->cells,
+                     "the cells: the input's own (given: a building.json's, else one cell), or rooms and portals "
+                     "found in the geometry (rooms: for meshes with no topology, docs/room-finding.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"given", "rooms"}));
+  import->add_option("--voxel-size", o->import.rooms.voxelSize,
+                     "--cells rooms: the voxel edge of the room search, in scene units (metres); grown on very "
+                     "large meshes to bound memory")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01f, 10.0f));
+  import->add_option("--opening-width", o->import.rooms.openingWidth,
+                     "--cells rooms: free space narrower than this (doors, windows, stair openings) separates rooms")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1f, 100.0f));
   import->add_option("--camera", o->import.camera,
                      "the store's default camera: the building.json's camera of this name (default: the first; every "
                      "camera is stored, for render --camera NAME)");
@@ -65,6 +80,7 @@ void addImport(CLI::App& scene, CommandTable& table) {
   import->positionals_at_end();   // INPUT... takes all but the last positional, STORE the last
   table.add(import, [o] {
     o->ifc.glazing = !o->noGlazing;
+    o->import.findRooms = o->cells == "rooms";
     return runSceneImport(o->inputs, o->import, o->store, o->ifc);
   });
 }

@@ -91,6 +91,21 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
                              100.0 * double(read) / double(objects),
                              std::chrono::duration<double>(now - started).count());
   };
+  std::string lastStage;
+  withProgress.rooms.onProgress = [&](const std::string& stage, double fraction) {
+    const auto now = std::chrono::steady_clock::now();
+    // Only for searches long enough to wonder about (a building of a few floors takes under a second).
+    if (now - started < std::chrono::seconds(1) || (stage == lastStage && now - lastShown < std::chrono::seconds(1)))
+      return;
+    lastStage = stage;
+    lastShown = now;
+    std::cerr << fmt::format("finding rooms: {} ({:.0f} %, {:.1f} s)\n", stage, 100.0 * fraction,
+                             std::chrono::duration<double>(now - started).count());
+  };
+  withProgress.onRoomsFound = [&](uint32_t rooms, size_t cells, size_t portals) {   // always: what was found
+    std::cerr << fmt::format("found {} rooms: {} box cells, {} portals ({:.1f} s)\n", rooms, cells, portals,
+                             std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  };
   ImportSummary summary;
   if (inputs.size() == 1 && isIfcFile(inputs[0])) {
     // The converter's files live beside the store while it is written, then go.

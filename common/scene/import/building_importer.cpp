@@ -391,7 +391,9 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
 
   // A scene store as input: re-cut a generated or imported building (--grid).
   const bool store = inputs.size() == 1 && isSceneStore(inputs.front());
-  if (store && options.gridResolution == 0)
+  if (options.findRooms && options.gridResolution > 0)
+    throw std::runtime_error("scene import: --cells rooms and --grid are alternatives; give one");
+  if (store && options.gridResolution == 0 && !options.findRooms)
     throw std::runtime_error(fmt::format("scene import: {} is already a scene store; give --grid RG to re-cut it "
                                          "into uniform cells", inputs.front()));
   // Images embedded in mesh files wait here until the store copies them.
@@ -400,6 +402,15 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   const ImportedScene scene = store      ? sceneFromStore(inputs.front())
                               : building ? sceneFromBuildingJson(inputs.front(), options, imageDirectory)
                                          : sceneFromMeshFiles(inputs, imageDirectory);
+
+  // The rooms are found before the store is created: a mesh without rooms leaves nothing behind.
+  std::optional<FoundRooms> rooms;
+  if (options.findRooms) {
+    std::string source = inputs.front();
+    for (size_t k = 1; k < inputs.size(); ++k) source += ", " + inputs[k];
+    rooms = findRooms(scene, source, options.rooms);
+    if (options.onRoomsFound) options.onRoomsFound(rooms->rooms, rooms->cells.size(), rooms->portals.size());
+  }
 
   nlohmann::json sources = nlohmann::json::array();
   for (const std::string& input : inputs) sources.push_back(fs::absolute(input).lexically_normal().string());
@@ -410,6 +421,7 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   writer.setMeta("cells",
                  options.gridResolution > 0
                      ? fmt::format("grid {}^3", options.gridResolution)
+                     : rooms ? fmt::format("rooms found: {} rooms, {} m voxels", rooms->rooms, rooms->voxelSize)
                      : (scene.cells.size() == 1 && scene.portals.empty() ? "one cell" : "given"));
   if (scene.site) writer.setSite(*scene.site);
   for (const ImportedMaterial& material : scene.materials) {
@@ -417,7 +429,9 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
     if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);
     if (maxComponent(material.transmittance) > 0.0f) writer.setMaterialGlass(id, material.transmittance, material.ior);
   }
-  if (options.gridResolution > 0)
+  if (rooms)
+    writeRoomCells(scene, *rooms, writer);
+  else if (options.gridResolution > 0)
     writeVoxelCells(scene, VoxelGrid(padded(scene.bounds), options.gridResolution), writer);
   else
     writeGivenCells(scene, writer);

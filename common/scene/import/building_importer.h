@@ -12,7 +12,8 @@
 //
 // With ImportOptions::gridResolution = RG > 0 the scene is cut into RG^3
 // voxel cells instead of its own cells (voxel_cells.h): the same building can
-// be rendered with topological or uniform cells.
+// be rendered with topological or uniform cells. With findRooms its rooms
+// are found in the geometry (room_cells.h).
 //
 // Everything is read and checked before the store is created, so a failed
 // import leaves no directory behind: every error is a std::runtime_error of
@@ -25,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "common/scene/import/room_cells.h"
+
 namespace portico {
 
 struct ImportOptions {
@@ -36,6 +39,12 @@ struct ImportOptions {
   // Called after each object's mesh file is read (objects read, objects in
   // all): reading tens of thousands of mesh files takes a minute.
   std::function<void(size_t read, size_t objects)> onMeshRead;
+  // Find rooms and portals in the geometry instead (room_cells.h, `--cells
+  // rooms`): for meshes that carry no topology. Not with gridResolution.
+  bool findRooms = false;
+  RoomFinderOptions rooms;
+  // After a room search: rooms found, cells (boxes) and portals.
+  std::function<void(uint32_t rooms, size_t cells, size_t portals)> onRoomsFound;
 };
 
 // The largest gridResolution accepted (16.7 million cells).

@@ -1,7 +1,5 @@
 // Voxel cells: the grid's planes, portal rectangles, light pieces, and the
-// triangles binned per voxel in two passes (count, then fill one flat
-// reference array), so that each cell is assembled and written on its own
-// while only the input meshes and one output cell are held in full.
+// triangles binned per voxel (binned_cells.h).
 #include "common/scene/import/voxel_cells.h"
 
 #include <fmt/format.h>
@@ -10,6 +8,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/scene/import/binned_cells.h"
 #include "common/triangle_box_overlap.h"
 
 namespace portico {
@@ -40,9 +39,6 @@ std::vector<float> cutPoints(const VoxelGrid& grid, int axis, float start, float
   if (end < start) std::reverse(points.begin(), points.end());
   return points;
 }
-
-// A reference to one input triangle: object index and triangle index.
-uint64_t packReference(size_t object, size_t triangle) { return (uint64_t(object) << 32) | uint64_t(triangle); }
 
 template <typename Visit>
 void forEachTouchedVoxel(const VoxelGrid& grid, const ImportedObject& object, size_t triangle, Visit&& visit) {
@@ -202,59 +198,13 @@ void writeVoxelCells(const ImportedScene& scene, const VoxelGrid& grid, SceneSto
       writer.addCamera(camera);
   }
 
-  // Pass 1: how many triangles each voxel gets. Pass 2: the references,
-  // voxel by voxel, in input order (so the output does not depend on anything
-  // but the input).
-  const uint32_t cellCount = grid.cellCount();
-  std::vector<uint64_t> offsets(size_t{cellCount} + 1, 0);
-  for (size_t o = 0; o < scene.objects.size(); ++o)
-    for (size_t t = 0; t < scene.objects[o].triangleCount(); ++t)
-      forEachTouchedVoxel(grid, scene.objects[o], t, [&](uint32_t cell) { ++offsets[cell + 1]; });
-  for (uint32_t cell = 0; cell < cellCount; ++cell) offsets[cell + 1] += offsets[cell];
-  std::vector<uint64_t> references(offsets.back());
-  {
-    std::vector<uint64_t> next(offsets.begin(), offsets.end() - 1);
-    for (size_t o = 0; o < scene.objects.size(); ++o)
-      for (size_t t = 0; t < scene.objects[o].triangleCount(); ++t)
-        forEachTouchedVoxel(grid, scene.objects[o], t,
-                            [&](uint32_t cell) { references[next[cell]++] = packReference(o, t); });
-  }
-
-  // Each voxel's vertices: an input vertex is copied once per voxel; `stamp`
-  // says for which voxel `remap` holds its index (no clearing between voxels).
-  std::vector<uint64_t> firstVertex(scene.objects.size() + 1, 0);
-  for (size_t o = 0; o < scene.objects.size(); ++o)
-    firstVertex[o + 1] = firstVertex[o] + scene.objects[o].positions.size() / 3;
-  std::vector<uint32_t> stamp(firstVertex.back(), 0), remap(firstVertex.back(), 0);
-  for (uint32_t id = 0; id < cellCount; ++id) {
-    CellContent cell;
-    cell.id = id;
-    cell.name = VoxelGrid::cellName(grid.coordinates(id));
-    cell.bounds = grid.cellBounds(id);
-    bool textured = false;
-    for (uint64_t r = offsets[id]; r < offsets[id + 1]; ++r) {
-      const size_t o = references[r] >> 32, t = references[r] & 0xffffffffu;
-      const ImportedObject& object = scene.objects[o];
-      for (int corner = 0; corner < 3; ++corner) {
-        const uint32_t local = object.indices[3 * t + corner];
-        const uint64_t global = firstVertex[o] + local;
-        if (stamp[global] != id + 1) {
-          stamp[global] = id + 1;
-          remap[global] = static_cast<uint32_t>(cell.positions.size() / 3);
-          cell.positions.insert(cell.positions.end(), &object.positions[3 * size_t{local}],
-                                &object.positions[3 * size_t{local}] + 3);
-          // uvs for every vertex (zeros for untextured objects), dropped below if none is textured.
-          const float* uv = object.uvs.empty() ? nullptr : &object.uvs[2 * size_t{local}];
-          cell.uvs.insert(cell.uvs.end(), {uv ? uv[0] : 0.0f, uv ? uv[1] : 0.0f});
-        }
-        cell.indices.push_back(remap[global]);
-      }
-      cell.materials.push_back(object.material);
-      textured = textured || !object.uvs.empty();
-    }
-    if (!textured) cell.uvs.clear();
-    writer.writeCell(cell);
-  }
+  writeBinnedCells(
+      scene, grid.cellCount(),
+      [&](const ImportedObject& object, size_t triangle, const std::function<void(uint32_t)>& visit) {
+        forEachTouchedVoxel(grid, object, triangle, visit);
+      },
+      [&](uint32_t id) { return VoxelGrid::cellName(grid.coordinates(id)); },
+      [&](uint32_t id) { return grid.cellBounds(id); }, writer);
 }
 
 }  // namespace portico

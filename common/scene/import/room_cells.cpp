@@ -1,0 +1,396 @@
+// The room finder's passes (room_cells.h): solid voxels, distances, cores,
+// regions, boxes, portals. Flat arrays over the voxel grid, one byte or word
+// per voxel each; every pass visits voxels in index order so the result
+// depends on the input only.
+#include "common/scene/import/room_cells.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include "common/scene/import/binned_cells.h"
+#include "common/triangle_box_overlap.h"
+
+namespace portico {
+
+namespace {
+
+constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+constexpr uint16_t kFar = std::numeric_limits<uint16_t>::max();
+
+struct Grid {
+  std::array<uint32_t, 3> n{};
+  uint64_t count() const { return uint64_t(n[0]) * n[1] * n[2]; }
+  std::array<uint32_t, 3> coordinates(uint64_t i) const {
+    return {uint32_t(i % n[0]), uint32_t((i / n[0]) % n[1]), uint32_t(i / (uint64_t(n[0]) * n[1]))};
+  }
+  uint64_t step(int axis) const { return axis == 0 ? 1 : (axis == 1 ? n[0] : uint64_t(n[0]) * n[1]); }
+};
+
+void report(const RoomFinderOptions& options, const char* stage, double fraction) {
+  if (options.onProgress) options.onProgress(stage, fraction);
+}
+
+// Calls visit(v) for each voxel v triangle t of `object` touches (the voxel
+// grown by a hair, so rounding only adds), unless skip(v) says it need not
+// be tested.
+template <typename Skip, typename Visit>
+void forEachVoxelOfTriangle(const FoundRooms& rooms, const ImportedObject& object, size_t t, Skip&& skip,
+                            Visit&& visit) {
+  const float tolerance = 1e-3f * rooms.voxelSize;
+  const Vec3 a = object.vertex(object.indices[3 * t]), b = object.vertex(object.indices[3 * t + 1]),
+             c = object.vertex(object.indices[3 * t + 2]);
+  const Vec3 lo = min(a, min(b, c)), hi = max(a, max(b, c));
+  std::array<uint32_t, 3> first{}, last{};
+  for (int axis = 0; axis < 3; ++axis)
+    rooms.touchedVoxels(axis, lo[axis] - tolerance, hi[axis] + tolerance, first[axis], last[axis]);
+  for (uint32_t z = first[2]; z <= last[2]; ++z)
+    for (uint32_t y = first[1]; y <= last[1]; ++y)
+      for (uint32_t x = first[0]; x <= last[0]; ++x) {
+        const uint32_t v = rooms.voxelIndex(x, y, z);
+        if (!skip(v) && triangleOverlapsBox(a, b, c, rooms.voxelBounds(x, y, z), tolerance)) visit(v);
+      }
+}
+
+// Step 1: a voxel touched by a triangle (grown by a hair, so rounding only adds) is solid.
+std::vector<uint8_t> solidVoxels(const ImportedScene& scene, const FoundRooms& rooms, const Grid& grid,
+                                 const RoomFinderOptions& options) {
+  std::vector<uint8_t> solid(grid.count(), 0);
+  const uint64_t total = std::max<uint64_t>(1, scene.triangleCount());
+  uint64_t done = 0;
+  for (const ImportedObject& object : scene.objects)
+    for (size_t t = 0; t < object.triangleCount(); ++t, ++done) {
+      if (done % (1u << 20) == 0) report(options, "solid voxels", double(done) / double(total));
+      forEachVoxelOfTriangle(
+          rooms, object, t, [&](uint32_t v) { return solid[v] != 0; }, [&](uint32_t v) { solid[v] = 1; });
+    }
+  return solid;
+}
+
+// Step 2: chessboard distance (26 neighbours) of each voxel to the nearest solid one, in voxels.
+std::vector<uint16_t> distanceToSolid(const std::vector<uint8_t>& solid, const Grid& grid) {
+  std::vector<uint16_t> distance(grid.count(), kFar);
+  std::vector<uint32_t> frontier, next;
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (solid[v]) {
+      distance[v] = 0;
+      frontier.push_back(uint32_t(v));
+    }
+  for (uint16_t d = 1; !frontier.empty() && d < kFar; ++d) {
+    next.clear();
+    for (uint32_t v : frontier) {
+      const auto c = grid.coordinates(v);
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int64_t x = int64_t(c[0]) + dx, y = int64_t(c[1]) + dy, z = int64_t(c[2]) + dz;
+            if (x < 0 || y < 0 || z < 0 || x >= grid.n[0] || y >= grid.n[1] || z >= grid.n[2]) continue;
+            const uint64_t u = uint64_t(x) + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z));
+            if (distance[u] != kFar) continue;
+            distance[u] = d;
+            next.push_back(uint32_t(u));
+          }
+    }
+    std::swap(frontier, next);
+  }
+  return distance;
+}
+
+// Calls visit(u) for the face neighbours of v, in a fixed order.
+template <typename Visit>
+void forEachFaceNeighbour(const Grid& grid, uint64_t v, Visit&& visit) {
+  const auto c = grid.coordinates(v);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (c[axis] > 0) visit(v - grid.step(axis));
+    if (c[axis] + 1 < grid.n[axis]) visit(v + grid.step(axis));
+  }
+}
+
+// Breadth-first from every labelled voxel at once into unlabelled ones that `may` enter.
+template <typename May>
+void growLabels(const Grid& grid, std::vector<uint32_t>& label, May&& may) {
+  std::vector<uint32_t> frontier, next;
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (label[v] != kNone) frontier.push_back(uint32_t(v));
+  while (!frontier.empty()) {
+    next.clear();
+    for (uint32_t v : frontier)
+      forEachFaceNeighbour(grid, v, [&](uint64_t u) {
+        if (label[u] != kNone || !may(u)) return;
+        label[u] = label[v];
+        next.push_back(uint32_t(u));
+      });
+    std::swap(frontier, next);
+  }
+}
+
+// Steps 3 and 4: each voxel's region, 0 outdoors; returns the number of rooms.
+uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint16_t>& distance, const Grid& grid,
+                      uint16_t coreDistance, uint64_t minCoreVoxels, std::vector<uint32_t>& region) {
+  region.assign(grid.count(), kNone);
+  std::vector<uint32_t> component(grid.count(), kNone);
+  std::vector<uint32_t> stack;
+  uint32_t rooms = 0;
+  for (uint64_t seed = 0; seed < grid.count(); ++seed) {
+    if (distance[seed] < coreDistance || component[seed] != kNone) continue;
+    // One core component, by depth-first fill; then kept as a room, as outdoors, or dropped.
+    std::vector<uint32_t> members;
+    bool touchesBoundary = false;
+    component[seed] = 0;
+    stack.push_back(uint32_t(seed));
+    while (!stack.empty()) {
+      const uint32_t v = stack.back();
+      stack.pop_back();
+      members.push_back(v);
+      const auto c = grid.coordinates(v);
+      for (int axis = 0; axis < 3; ++axis)
+        if (c[axis] == 0 || c[axis] + 1 == grid.n[axis]) touchesBoundary = true;
+      forEachFaceNeighbour(grid, v, [&](uint64_t u) {
+        if (distance[u] >= coreDistance && component[u] == kNone) {
+          component[u] = 0;
+          stack.push_back(uint32_t(u));
+        }
+      });
+    }
+    uint32_t id = kNone;
+    if (touchesBoundary)
+      id = 0;
+    else if (members.size() >= minCoreVoxels)
+      id = ++rooms;
+    if (id == kNone) continue;
+    for (uint32_t v : members) region[v] = id;
+  }
+  growLabels(grid, region, [&](uint64_t u) { return !solid[u]; });
+  growLabels(grid, region, [](uint64_t) { return true; });
+  return rooms;
+}
+
+// Step 5: boxes greedy in x, then y, then z, each over the free voxels of one
+// region and any solid voxels (a wall goes to whichever box reaches it
+// first: solid voxels join regions arbitrarily, and following them would cut
+// rooms into many small boxes). Returns each voxel's box.
+std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& region, const std::vector<uint8_t>& solid,
+                                   const Grid& grid,
+                                   std::vector<std::array<uint32_t, 6>>& boxes, std::vector<uint32_t>& boxRegion) {
+  std::vector<uint32_t> box(grid.count(), kNone);
+  auto same = [&](uint32_t r, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1, uint32_t z0, uint32_t z1) {
+    for (uint32_t z = z0; z < z1; ++z)
+      for (uint32_t y = y0; y < y1; ++y)
+        for (uint32_t x = x0; x < x1; ++x) {
+          const uint64_t v = x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z));
+          if ((region[v] != r && !solid[v]) || box[v] != kNone) return false;
+        }
+    return true;
+  };
+  for (uint64_t v = 0; v < grid.count(); ++v) {
+    if (box[v] != kNone) continue;
+    const auto c = grid.coordinates(v);
+    uint32_t r = region[v];
+    uint32_t x1 = c[0] + 1, y1 = c[1] + 1, z1 = c[2] + 1;
+    while (x1 < grid.n[0] && same(r, x1, x1 + 1, c[1], y1, c[2], z1)) ++x1;
+    while (y1 < grid.n[1] && same(r, c[0], x1, y1, y1 + 1, c[2], z1)) ++y1;
+    while (z1 < grid.n[2] && same(r, c[0], x1, c[1], y1, z1, z1 + 1)) ++z1;
+    const auto id = uint32_t(boxes.size());
+    boxRegion.push_back(r);
+    boxes.push_back({c[0], c[1], c[2], x1, y1, z1});
+    for (uint32_t z = c[2]; z < z1; ++z)
+      for (uint32_t y = c[1]; y < y1; ++y)
+        for (uint32_t x = c[0]; x < x1; ++x) box[x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z))] = id;
+  }
+  return box;
+}
+
+}  // namespace
+
+void FoundRooms::touchedVoxels(int axis, float lo, float hi, uint32_t& first, uint32_t& last) const {
+  const float f = std::floor((lo - origin[axis]) / voxelSize), l = std::floor((hi - origin[axis]) / voxelSize);
+  const float top = float(voxels[axis] - 1);
+  first = uint32_t(std::clamp(f, 0.0f, top));
+  last = uint32_t(std::clamp(l, float(first), top));
+}
+
+Bounds3 FoundRooms::voxelBounds(uint32_t x, uint32_t y, uint32_t z) const {
+  return Bounds3(Vec3(plane(0, x), plane(1, y), plane(2, z)), Vec3(plane(0, x + 1), plane(1, y + 1), plane(2, z + 1)));
+}
+
+FoundRooms findRooms(const ImportedScene& scene, const std::string& source, const RoomFinderOptions& options) {
+  auto noRooms = [&](const std::string& why) {
+    return std::runtime_error(fmt::format("no rooms found in {}: {}; use --grid N for uniform cells instead", source, why));
+  };
+  if (scene.bounds.empty() || !isFinite(scene.bounds.lo) || !isFinite(scene.bounds.hi))
+    throw noRooms("it has no geometry");
+  FoundRooms rooms;
+  // Open air around the building, wider than a core needs, so outdoors is one region all round.
+  const float padding = options.openingWidth;
+  const Vec3 lo = scene.bounds.lo - Vec3(padding), extent = scene.bounds.diagonal() + Vec3(2 * padding);
+  rooms.voxelSize = options.voxelSize;
+  for (;;) {
+    for (int axis = 0; axis < 3; ++axis)
+      rooms.voxels[axis] = uint32_t(std::ceil(extent[axis] / rooms.voxelSize));
+    const double count = double(rooms.voxels[0]) * rooms.voxels[1] * rooms.voxels[2];
+    if (count <= double(options.maxVoxels)) break;
+    rooms.voxelSize *= float(std::cbrt(count / double(options.maxVoxels))) * 1.01f;
+  }
+  rooms.origin = lo;
+  const Grid grid{rooms.voxels};
+  const auto coreDistance = uint16_t(std::floor(0.5f * options.openingWidth / rooms.voxelSize) + 1);
+  if (coreDistance < 2)
+    throw noRooms(fmt::format("the building is too large for {} voxels of {} m", options.maxVoxels, rooms.voxelSize));
+  const auto minCoreVoxels =
+      uint64_t(std::ceil(options.minRoomVolume / (rooms.voxelSize * rooms.voxelSize * rooms.voxelSize)));
+
+  report(options, "solid voxels", 0.0);
+  const std::vector<uint8_t> solid = solidVoxels(scene, rooms, grid, options);
+  report(options, "distances", 0.0);
+  const std::vector<uint16_t> distance = distanceToSolid(solid, grid);
+  report(options, "regions", 0.0);
+  std::vector<uint32_t> region;
+  rooms.rooms = labelRegions(solid, distance, grid, coreDistance, minCoreVoxels, region);
+  if (rooms.rooms == 0)
+    throw noRooms(fmt::format("no enclosed space wider than {} m (the free space is all outdoors at {} m voxels)",
+                              options.openingWidth, rooms.voxelSize));
+
+  report(options, "boxes", 0.0);
+  std::vector<std::array<uint32_t, 6>> boxes;
+  std::vector<uint32_t> boxRegion;
+  rooms.voxelCell = cutIntoBoxes(region, solid, grid, boxes, boxRegion);
+  std::vector<uint32_t> boxesInRegion(rooms.rooms + 1, 0);
+  for (size_t k = 0; k < boxes.size(); ++k) {
+    const auto& b = boxes[k];
+    const uint32_t r = boxRegion[k];
+    ImportedCell cell;
+    cell.name = r == 0 ? fmt::format("outdoors-{}", boxesInRegion[0]) : fmt::format("room-{}-{}", r, boxesInRegion[r]);
+    ++boxesInRegion[r];
+    cell.bounds = Bounds3(Vec3(rooms.plane(0, b[0]), rooms.plane(1, b[1]), rooms.plane(2, b[2])),
+                          Vec3(rooms.plane(0, b[3]), rooms.plane(1, b[4]), rooms.plane(2, b[5])));
+    rooms.cells.push_back(cell);
+    rooms.cellRegion.push_back(r);
+  }
+
+  // Portals: per pair of boxes, the whole face they share.
+  report(options, "portals", 0.0);
+  struct Face {
+    int axis;
+    uint32_t plane;
+    std::array<uint32_t, 2> lo, hi;   // voxel range on the two other axes, inclusive
+  };
+  std::map<std::pair<uint32_t, uint32_t>, Face> faces;
+  for (uint64_t v = 0; v < grid.count(); ++v) {
+    const auto c = grid.coordinates(v);
+    for (int axis = 0; axis < 3; ++axis) {
+      if (c[axis] + 1 >= grid.n[axis]) continue;
+      const uint64_t u = v + grid.step(axis);
+      const uint32_t a = rooms.voxelCell[v], b = rooms.voxelCell[u];
+      if (a == b) continue;
+      const int s = (axis + 1) % 3, t = (axis + 2) % 3;
+      auto [it, inserted] = faces.try_emplace({std::min(a, b), std::max(a, b)},
+                                              Face{axis, c[axis] + 1, {c[s], c[t]}, {c[s], c[t]}});
+      Face& face = it->second;
+      face.lo = {std::min(face.lo[0], c[s]), std::min(face.lo[1], c[t])};
+      face.hi = {std::max(face.hi[0], c[s]), std::max(face.hi[1], c[t])};
+    }
+  }
+  for (const auto& [pair, face] : faces) {
+    const int s = (face.axis + 1) % 3, t = (face.axis + 2) % 3;
+    auto corner = [&](uint32_t i, uint32_t j) {
+      Vec3 p;
+      p[face.axis] = rooms.plane(face.axis, face.plane);
+      p[s] = rooms.plane(s, i);
+      p[t] = rooms.plane(t, j);
+      return p;
+    };
+    rooms.portals.push_back(ImportedPortal{pair.first, pair.second,
+                                           {corner(face.lo[0], face.lo[1]), corner(face.hi[0] + 1, face.lo[1]),
+                                            corner(face.hi[0] + 1, face.hi[1] + 1), corner(face.lo[0], face.hi[1] + 1)}});
+  }
+  return rooms;
+}
+
+namespace {
+
+uint32_t cellHolding(const FoundRooms& rooms, const Vec3& p) {
+  std::array<uint32_t, 3> c{};
+  for (int axis = 0; axis < 3; ++axis) rooms.touchedVoxels(axis, p[axis], p[axis], c[axis], c[axis]);
+  return rooms.voxelCell[rooms.voxelIndex(c[0], c[1], c[2])];
+}
+
+// The axis a light's edge runs along, or -1 when oblique.
+int edgeAxis(const Vec3& edge) {
+  int axis = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(edge[a]) > std::abs(edge[axis])) axis = a;
+  for (int a = 0; a < 3; ++a)
+    if (a != axis && std::abs(edge[a]) > 1e-6f * std::abs(edge[axis])) return -1;
+  return std::abs(edge[axis]) > 0.0f ? axis : -1;
+}
+
+std::vector<AreaLight> roomLights(const ImportedLight& light, const FoundRooms& rooms) {
+  AreaLight whole = light.areaLight();
+  const int axis1 = edgeAxis(light.shape.edge1), axis2 = edgeAxis(light.shape.edge2);
+  const Vec3 nudge = light.kind == LightShape::Point ? Vec3(0.0f) : whole.normal() * (1e-3f * rooms.voxelSize);
+  if (light.kind != LightShape::Parallelogram || axis1 < 0 || axis2 < 0 || axis1 == axis2) {
+    whole.cell = cellHolding(rooms, whole.center() + nudge);
+    return {whole};
+  }
+  const int normalAxis = 3 - axis1 - axis2;
+  const float planeValue = whole.corner[normalAxis] + nudge[normalAxis];
+  Bounds3 extent;
+  Vec3 corners[4];
+  for (int k = 0, n = whole.corners(corners); k < n; ++k) extent.extend(corners[k]);
+  std::vector<AreaLight> pieces;
+  for (uint32_t id = 0; id < rooms.cells.size(); ++id) {
+    const Bounds3& box = rooms.cells[id].bounds;
+    if (!(planeValue >= box.lo[normalAxis] && planeValue < box.hi[normalAxis])) continue;
+    const float lo1 = std::max(extent.lo[axis1], box.lo[axis1]), hi1 = std::min(extent.hi[axis1], box.hi[axis1]);
+    const float lo2 = std::max(extent.lo[axis2], box.lo[axis2]), hi2 = std::min(extent.hi[axis2], box.hi[axis2]);
+    if (!(lo1 < hi1 && lo2 < hi2)) continue;
+    // The piece keeps the whole light's orientation (edge signs), so it emits the same way.
+    AreaLight piece = whole;
+    piece.cell = id;
+    const bool flip1 = light.shape.edge1[axis1] < 0, flip2 = light.shape.edge2[axis2] < 0;
+    piece.corner[axis1] = flip1 ? hi1 : lo1;
+    piece.corner[axis2] = flip2 ? hi2 : lo2;
+    piece.edge1 = Vec3(0.0f);
+    piece.edge1[axis1] = flip1 ? lo1 - hi1 : hi1 - lo1;
+    piece.edge2 = Vec3(0.0f);
+    piece.edge2[axis2] = flip2 ? lo2 - hi2 : hi2 - lo2;
+    pieces.push_back(piece);
+  }
+  return pieces;
+}
+
+}  // namespace
+
+void writeRoomCells(const ImportedScene& scene, const FoundRooms& rooms, SceneStoreWriter& writer) {
+  for (const ImportedPortal& portal : rooms.portals) writer.addPortal(portal.cellA, portal.cellB, portal.polygon);
+  for (const ImportedLight& light : scene.lights)
+    for (const AreaLight& piece : roomLights(light, rooms)) writer.addLight(piece);
+  for (size_t k = 0; k < scene.cameras.size(); ++k) {
+    Camera camera = scene.cameras[k];
+    camera.cell = cellHolding(rooms, camera.origin);
+    if (k == 0)
+      writer.setCamera(camera);
+    else
+      writer.addCamera(camera);
+  }
+  std::vector<uint32_t> touched;
+  writeBinnedCells(
+      scene, uint32_t(rooms.cells.size()),
+      [&](const ImportedObject& object, size_t t, const std::function<void(uint32_t)>& visit) {
+        touched.clear();
+        auto known = [&](uint32_t v) {
+          return std::find(touched.begin(), touched.end(), rooms.voxelCell[v]) != touched.end();
+        };
+        forEachVoxelOfTriangle(rooms, object, t, known, [&](uint32_t v) { touched.push_back(rooms.voxelCell[v]); });
+        std::sort(touched.begin(), touched.end());
+        for (uint32_t cell : touched) visit(cell);
+      },
+      [&](uint32_t id) { return rooms.cells[id].name; }, [&](uint32_t id) { return rooms.cells[id].bounds; },
+      writer);
+}
+
+}  // namespace portico

@@ -1,0 +1,77 @@
+// Rooms found in a building mesh that carries no topology (`scene import
+// --cells rooms`, docs/room-finding.md): a voxel flood fill of free space
+// split at narrow openings.
+//
+//  1. Voxels of `voxelSize` (cubes; grown when the grid would pass
+//     `maxVoxels`) over the scene's bounds, padded so that open air
+//     surrounds the building; a voxel touched by a triangle is solid.
+//  2. The chessboard distance of every free voxel to the nearest solid one
+//     (a breadth-first pass over 26 neighbours).
+//  3. Cores: free voxels farther than half of `openingWidth` from any solid.
+//     A door or window is narrower than that, so it holds no core and the
+//     cores on its two sides are separate components; each component larger
+//     than `minRoomVolume` is a region. Those touching the grid's boundary
+//     are one region, outdoors.
+//  4. Every other free voxel joins the region whose core reaches it first
+//     (breadth-first over free voxels from all cores at once, ties to the
+//     lower voxel index: deterministic); then solid voxels and unreached
+//     pockets join the region next to them, so every voxel has a region.
+//  5. Each region is cut into boxes (greedy: grow along x, then y, then z),
+//     the cells. Two boxes meeting on a face are joined by one portal: the
+//     whole face they share. (Bounding only the voxel faces with free space
+//     beside them let a third of the photons out: a ray grazing a wall
+//     crosses faces between voxels its triangles only touch.)
+//
+// Cells are named "room-R-B" (region R from 1, box B) and "outdoors-B".
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/math.h"
+#include "common/scene/import/imported_scene.h"
+#include "common/scene/store/scene_store.h"
+
+namespace portico {
+
+struct RoomFinderOptions {
+  float voxelSize = 0.1f;        // metres (scene units); grown to keep the grid under maxVoxels
+  float openingWidth = 1.5f;     // free space narrower than this (doors, windows) separates regions
+  float minRoomVolume = 1.0f;    // cubic metres of core below which a component is not a room
+  uint64_t maxVoxels = 48ull << 20;
+  // Called with a stage name and its fraction done, a few times a stage.
+  std::function<void(const std::string& stage, double fraction)> onProgress;
+};
+
+struct FoundRooms {
+  std::vector<ImportedCell> cells;       // boxes: the scene's cells
+  std::vector<uint32_t> cellRegion;      // per cell: its region, 0 outdoors, 1.. rooms
+  std::vector<ImportedPortal> portals;
+  uint32_t rooms = 0;                    // regions other than outdoors
+  float voxelSize = 0;                   // as used
+  std::array<uint32_t, 3> voxels{};      // grid size
+  // The cell each of the grid's voxels belongs to: for binning triangles.
+  std::vector<uint32_t> voxelCell;
+  Vec3 origin;                           // the grid's lowest corner
+  // The voxel range [first, last] a box [lo, hi] touches along `axis`.
+  void touchedVoxels(int axis, float lo, float hi, uint32_t& first, uint32_t& last) const;
+  uint32_t voxelIndex(uint32_t x, uint32_t y, uint32_t z) const { return x + voxels[0] * (y + voxels[1] * z); }
+  Bounds3 voxelBounds(uint32_t x, uint32_t y, uint32_t z) const;
+  float plane(int axis, uint32_t k) const { return origin[axis] + voxelSize * float(k); }
+};
+
+// Finds the rooms of `scene` (its objects only). Throws std::runtime_error
+// "no rooms found in SOURCE: ...; use --grid N" when no enclosed space is
+// found (a single object, open terrain).
+FoundRooms findRooms(const ImportedScene& scene, const std::string& source, const RoomFinderOptions& options = {});
+
+// Writes `scene` into `writer` as the cells of `rooms`: portals, lights (an
+// axis-aligned quad cut at the boxes it spans, any other whole in the box
+// holding its centre, nudged to its emitting side), cameras, then the cells
+// one at a time. Materials must already be added in the scene's order.
+void writeRoomCells(const ImportedScene& scene, const FoundRooms& rooms, SceneStoreWriter& writer);
+
+}  // namespace portico
