@@ -16,6 +16,7 @@
 #include <set>
 
 #include "common/net/endpoint_scope.h"
+#include "common/job/worker_tags.h"
 #include "common/net/job_spec_wire.h"
 #include "common/scene/store/store_file_names.h"
 #include "common/transport/photon_record.h"
@@ -26,6 +27,7 @@
 #include "coordinator/analysis_sensors.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
+#include "coordinator/job_limits.h"
 #include "coordinator/job_planner.h"
 #include "coordinator/job_activity.h"
 #include "coordinator/job_report.h"
@@ -43,6 +45,15 @@ int64_t nowMs() {
 
 namespace {
 constexpr uint32_t kLeaseOwnCell = 0xffffffff;   // Failure.failedCell's default
+
+// A Submit's or PriorityRequest's priority, within the documented range.
+int checkedPriority(int64_t priority) {
+  if (priority < limits::kMinPriority || priority > limits::kMaxPriority)
+    throw std::invalid_argument(fmt::format("priority {} is out of range: expected a whole number from {} to {}",
+                                            priority, limits::kMinPriority, limits::kMaxPriority));
+  return int(priority);
+}
+
 
 // Wall-clock for records that outlive the process (job creation, phases).
 int64_t wallMs() {
@@ -392,6 +403,7 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
       case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
       case wire::Envelope::JOB_DETAIL: onJobDetail(identity, envelope.getJobDetail()); break;
       case wire::Envelope::FETCH_PREVIEW: onFetchPreview(identity, envelope.getFetchPreview()); break;
+      case wire::Envelope::PRIORITY: onPriority(identity, envelope.getPriority()); break;
       case wire::Envelope::GOODBYE: onGoodbye(identity); break;
       case wire::Envelope::SHUTDOWN: {
         spdlog::info("shutdown requested by {}", shortId(identity));
@@ -461,14 +473,26 @@ void Coordinator::onHello(const std::string& identity, wire::Hello::Reader hello
     releaseWorker(identity, "dropped: wrong protocol version");   // if it had joined before
     return;
   }
+  std::vector<std::string> tags;
+  for (const auto tag : hello.getTags()) tags.emplace_back(tag.cStr());
+  try {
+    tags = normalizedTags(std::move(tags), "Hello");
+  } catch (const std::invalid_argument& e) {
+    spdlog::warn("refused worker {}: {}", hello.getName().cStr(), e.what());
+    sendError(identity, e.what());
+    releaseWorker(identity, "dropped: bad tags");
+    return;
+  }
   WorkerInfo& worker = workers_[identity];
   worker.identity = identity;
   worker.name = hello.getName();
+  worker.tags = std::move(tags);
   worker.cores = hello.getCores();
   worker.memoryBytes = hello.getMemoryBytes();
   worker.cells.setBudget(worker.memoryBytes);
   worker.lastSeenMs = nowMs();
-  spdlog::info("worker {} joined ({} cores, {} MiB budget)", worker.name, worker.cores, worker.memoryBytes >> 20);
+  spdlog::info("worker {} joined ({} cores, {} MiB budget{}{})", worker.name, worker.cores, worker.memoryBytes >> 20,
+               worker.tags.empty() ? "" : ", tags ", joinTags(worker.tags));
   capnp::MallocMessageBuilder message;
   auto welcome = message.initRoot<wire::Envelope>().initWelcome();
   welcome.setVersion(wire::PROTOCOL_VERSION);
@@ -517,7 +541,15 @@ void Coordinator::dispatch() {
 }
 
 Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
-  auto candidates = store_.pendingCells(kLeaseCandidates);
+  // Only the jobs whose required tags the worker has (worker pools): what
+  // it cannot take may still be another worker's.
+  bool othersWork = false;
+  auto candidates = store_.pendingCells(kLeaseCandidates, [&](const std::vector<std::string>& requiredTags) {
+    const bool mine = hasAllTags(worker.tags, requiredTags);
+    othersWork = othersWork || !mine;
+    return mine;
+  });
+  const Assignment nothing = othersWork ? Assignment::NothingForThisWorker : Assignment::NothingLeft;
   // Cells whose last lease failed or was lost wait their back-off out.
   if (!retries_.empty()) {
     const int64_t now = nowMs();
@@ -526,7 +558,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
       return retry != retries_.end() && retry->second.notBeforeMs > now;
     });
   }
-  if (candidates.empty()) return Assignment::NothingLeft;
+  if (candidates.empty()) return nothing;
   // Cells one of whose Results from this worker was refused go to others.
   if (!refusedResults_.empty()) {
     std::erase_if(candidates, [&](const PendingCell& c) { return leftToOthers(worker, c.job, c.cell); });
@@ -536,7 +568,7 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   if (!storeTrouble_.empty()) {
     std::erase_if(candidates,
                   [&](const PendingCell& c) { return storeTrouble_.count(c.job) && !jobs_.count(c.job); });
-    if (candidates.empty()) return Assignment::NothingLeft;
+    if (candidates.empty()) return nothing;
   }
   JobContext* job;
   try {
@@ -981,7 +1013,8 @@ void Coordinator::checkStores() {
   }
 }
 
-std::vector<std::string> Coordinator::waitingReasons(uint64_t job) const {
+std::vector<std::string> Coordinator::waitingReasons(const JobRecord& record) const {
+  const uint64_t job = record.id;
   std::vector<std::string> reasons;
   if (diskRoundsUndone_ > 0) {
     const std::string directory =
@@ -1006,7 +1039,18 @@ std::vector<std::string> Coordinator::waitingReasons(uint64_t job) const {
     if (!it->second.empty())
       reasons.push_back(fmt::format("cell {}: the Result of worker {} was refused ({}); traced again",
                                     it->first.second, it->second.back().worker, it->second.back().reason));
-  if (workers_.empty()) reasons.push_back("no worker is connected");
+  if (workers_.empty()) {
+    reasons.push_back("no worker is connected");
+  } else if (!record.requiredTags.empty()) {
+    // Worker pools: a tag no connected worker has holds the job until one with it connects.
+    for (const std::string& tag : record.requiredTags)
+      if (std::none_of(workers_.begin(), workers_.end(), [&](const auto& w) { return hasAllTags(w.second.tags, {tag}); }))
+        reasons.push_back(fmt::format("needs tag {}, no connected worker has it", tag));
+    if (reasons.empty() && std::none_of(workers_.begin(), workers_.end(), [&](const auto& w) {
+          return hasAllTags(w.second.tags, record.requiredTags);
+        }))
+      reasons.push_back(fmt::format("needs tags {}, no connected worker has them all", joinTags(record.requiredTags)));
+  }
   return reasons;
 }
 
@@ -1162,6 +1206,10 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     } else if (submit.getSensors().size() > 0) {
       throw std::invalid_argument("sensors in a submit that is no analysis");
     }
+    const int priority = checkedPriority(submit.getPriority());
+    std::vector<std::string> requiredTags;
+    for (const auto tag : submit.getRequiredTags()) requiredTags.emplace_back(tag.cStr());
+    requiredTags = normalizedTags(std::move(requiredTags), "required tags");
     auto spec = std::make_unique<capnp::MallocMessageBuilder>();
     toWire(settings, spec->initRoot<wire::JobSpec>());
     auto builder = spec->getRoot<wire::JobSpec>();
@@ -1179,6 +1227,8 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
       job = store_.createJob(packed, wallMs());
       store_.addCounter(job, kCoordinatorCpuAtSubmitCounter, cpuAtSubmit);
       store_.setPhotonPass(job, photonKey, lender.value_or(0));
+      store_.setPriority(job, priority);
+      store_.setRequiredTags(job, requiredTags);
       if (settings.analysis) {
         store_.setJobSensors(job, encodeSensors(sensors));
         const auto outside = std::count_if(sensors.begin(), sensors.end(), [](const Sensor& s) { return s.cell < 0; });
@@ -1195,9 +1245,10 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
     // a photon pass) goes straight to rendering.
     advanceIfPhaseDone(job);
     answer.setJob(job);
-    spdlog::info("job {} submitted: {} photons{}, {} spp, {}x{}, scene {}", job, builder.getPhotons(),
+    spdlog::info("job {} submitted: {} photons{}, {} spp, {}x{}, scene {}, priority {}{}{}", job, builder.getPhotons(),
                  lender ? fmt::format(" (the photon pass of job {}, reused)", *lender) : "", builder.getSpp(),
-                 builder.getWidth(), builder.getHeight(), builder.getStore().cStr());
+                 builder.getWidth(), builder.getHeight(), builder.getStore().cStr(), priority,
+                 requiredTags.empty() ? "" : ", requires tags ", joinTags(requiredTags));
   } catch (const std::exception& e) {
     answer.setError(e.what());
     spdlog::warn("submit refused: {}", e.what());
@@ -1228,14 +1279,18 @@ void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
     }
     status = jobStatus(store_, *job, spec, now);
     if (isActive(job->state))
-      if (const auto reasons = waitingReasons(job->id); !reasons.empty()) {
+      if (const auto reasons = waitingReasons(*job); !reasons.empty()) {
         status["waiting"] = reasons;
         status.erase("eta_s");   // it would only grow
       }
   } else {
     status["jobs"] = nlohmann::json::array();
     for (const JobRecord& job : store_.jobs(false))
-      status["jobs"].push_back({{"job", job.id}, {"state", std::string(toString(job.state))}, {"error", job.error}});
+      status["jobs"].push_back({{"job", job.id},
+                                {"state", std::string(toString(job.state))},
+                                {"error", job.error},
+                                {"priority", job.priority},
+                                {"required_tags", job.requiredTags}});
   }
   status["workers"] = workersStatus(workers_, nowMs());
   for (auto& worker : status["workers"]) {
@@ -1304,6 +1359,34 @@ void Coordinator::onFetchPreview(const std::string& identity, wire::FetchPreview
     reply.setError(e.what());
   }
   send(identity, message);
+}
+
+void Coordinator::onPriority(const std::string& identity, wire::PriorityRequest::Reader request) {
+  auto job = store_.job(request.getJob());
+  if (!job) {
+    sendError(identity, fmt::format("job {} does not exist", request.getJob()));
+    return;
+  }
+  int priority;
+  try {
+    priority = checkedPriority(request.getPriority());
+  } catch (const std::invalid_argument& e) {
+    sendError(identity, e.what());
+    return;
+  }
+  if (!isActive(job->state)) {
+    sendError(identity, fmt::format("job {} is {}: its priority no longer matters", job->id, toString(job->state)));
+    return;
+  }
+  // The scheduler reads it at each lease (JobStore::pendingCells): the
+  // leases in flight finish, the next ones follow the new order.
+  {
+    sql::Transaction tx(store_.database());
+    store_.setPriority(job->id, priority);
+    tx.commit();
+  }
+  spdlog::info("job {}: priority {} (was {})", job->id, priority, job->priority);
+  replyStatus(identity, job->id);
 }
 
 void Coordinator::onGoodbye(const std::string& identity) { releaseWorker(identity, "left"); }

@@ -117,6 +117,8 @@ class Coordinator {
   // lines, and its film so far, made small.
   void onJobDetail(const std::string& identity, wire::JobDetailRequest::Reader request);
   void onFetchPreview(const std::string& identity, wire::FetchPreview::Reader request);
+  // A job's new priority, for its leases from now on (those in flight finish).
+  void onPriority(const std::string& identity, wire::PriorityRequest::Reader request);
   void onGoodbye(const std::string& identity);
 
   void dispatch();
@@ -145,7 +147,8 @@ class Coordinator {
   void forgetEndedJob(uint64_t job);
   // Why an active job makes no progress, as its status says it: the disk,
   // its store, refused Results, no workers. Empty: nothing known holds it.
-  std::vector<std::string> waitingReasons(uint64_t job) const;
+  // A job requiring a tag no connected worker has says so.
+  std::vector<std::string> waitingReasons(const JobRecord& job) const;
   // The workers tracing leases of a job that ended stop them (Cancel).
   void recallLeasesOf(uint64_t job);
   // A transaction failed for want of disk (full, failing): leasing pauses,

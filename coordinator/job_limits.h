@@ -30,6 +30,9 @@ constexpr uint32_t kMaxPasses = 4096;
 constexpr double kMaxTargetError = 1.0;
 // --time-limit, seconds of render phase: above 0, at most a year.
 constexpr double kMaxTimeLimitSeconds = 365.0 * 24 * 3600;
+// A job's priority (`submit --priority`, `portico priority`): higher runs
+// first; 0 by default.
+constexpr int32_t kMinPriority = -1000, kMaxPriority = 1000;
 // Portals of one cell: kMaxPortalsPerCell in common/scene/store/portal_geometry.h.
 
 }  // namespace portico::limits

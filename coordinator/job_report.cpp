@@ -261,6 +261,8 @@ nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::R
   for (const auto& [cell, work] : store.pendingWorkByCell(job.id, phaseOf(job.state), 8))
     pending.push_back({{"cell", cell}, {"work", work}});
   status["pending_cells"] = pending;
+  status["priority"] = job.priority;
+  status["required_tags"] = job.requiredTags;
   return status;
 }
 
@@ -276,6 +278,7 @@ nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs) {
       current.push_back({{"lease", lease}, {"job", inFlight.job}, {"cell", inFlight.cell},
                          {"phase", inFlight.phase == 0 ? "photons" : "render"}});
     list.push_back({{"name", w.name},
+                    {"tags", w.tags},
                     {"idle", w.idle()},
                     {"leases", w.leases.size()},
                     {"leases_in_flight", current},

@@ -1,5 +1,6 @@
 #include "coordinator/job_store.h"
 
+#include "common/job/worker_tags.h"
 #include "common/transport/photon_record.h"
 #include "common/util/crc32c.h"
 
@@ -334,6 +335,13 @@ constexpr const char* kSchemaVersion12 = R"sql(
         records BLOB NOT NULL
       );
     )sql";
+// Version 13: priorities and worker pools. Each job's priority (jobs of
+// older versions: 0, as they were scheduled) and the tags its workers must
+// have, space-separated ("": any worker).
+constexpr const char* kSchemaVersion13 = R"sql(
+      ALTER TABLE jobs ADD COLUMN priority INTEGER NOT NULL DEFAULT 0;
+      ALTER TABLE jobs ADD COLUMN required_tags TEXT NOT NULL DEFAULT '';
+    )sql";
 
 // LeaseLogEntry::moreCellWork as its column holds it, and back.
 std::string moreCellWorkText(const std::vector<std::pair<uint32_t, int64_t>>& cells) {
@@ -381,6 +389,7 @@ void JobStore::migrate() {
   step(10, [&] { db_.exec(kSchemaVersion10); });
   step(11, [&] { db_.exec(kSchemaVersion11); });
   step(12, [&] { db_.exec(kSchemaVersion12); });
+  step(13, [&] { db_.exec(kSchemaVersion13); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -426,6 +435,18 @@ uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
   return static_cast<uint64_t>(db_.lastInsertRowId());
 }
 
+void JobStore::setPriority(uint64_t job, int priority) {
+  auto& s = db_.prepare("UPDATE jobs SET priority = ? WHERE id = ?");
+  s.bind(1, int64_t(priority)).bind(2, int64_t(job));
+  s.run();
+}
+
+void JobStore::setRequiredTags(uint64_t job, const std::vector<std::string>& tags) {
+  auto& s = db_.prepare("UPDATE jobs SET required_tags = ? WHERE id = ?");
+  s.bind(1, joinTags(tags)).bind(2, int64_t(job));
+  s.run();
+}
+
 namespace {
 JobRecord readJob(sql::Statement& s) {
   JobRecord job;
@@ -441,11 +462,13 @@ JobRecord readJob(sql::Statement& s) {
   job.photonKey = s.columnText(8);
   job.photonSource = uint64_t(s.columnInt(9));
   job.photonsComplete = s.columnInt(10) != 0;
+  job.priority = int(s.columnInt(11));
+  job.requiredTags = splitTags(s.columnText(12));
   return job;
 }
 constexpr const char* kJobColumns =
     "id, state, error, spec, created_ms, phase_started_ms, finished_ms, photon_record_bytes, photon_key, "
-    "photon_source, photons_complete";
+    "photon_source, photons_complete, priority, required_tags";
 }  // namespace
 
 std::optional<JobRecord> JobStore::job(uint64_t id) {
@@ -577,15 +600,21 @@ int64_t JobStore::queuedRays(uint64_t job, int phase) {
   return n;
 }
 
-std::vector<PendingCell> JobStore::pendingCells(size_t limit) {
+std::vector<PendingCell> JobStore::pendingCells(
+    size_t limit, const std::function<bool(const std::vector<std::string>&)>& mayTake) {
   if (!unleasedValid_) loadUnleasedWork();
-  std::map<uint64_t, int> activePhase;
-  auto& s = db_.prepare("SELECT id, state FROM jobs WHERE state IN ('photons', 'render')");
-  while (s.step()) activePhase[uint64_t(s.columnInt(0))] = phaseOf(jobStateFromString(s.columnText(1)));
+  std::vector<std::pair<uint64_t, int>> activePhase;
+  auto& s = db_.prepare(
+      "SELECT id, state, required_tags FROM jobs WHERE state IN ('photons', 'render') ORDER BY priority DESC, id");
+  while (s.step()) {
+    if (mayTake && !mayTake(splitTags(s.columnText(2)))) continue;
+    activePhase.emplace_back(uint64_t(s.columnInt(0)), phaseOf(jobStateFromString(s.columnText(1))));
+  }
   s.reset();
-  // Oldest job first; in it, most work first (ties: lower cell): the
-  // ranked index's order, read no further than `limit` (a tower's 18 K
-  // cells with work are not sorted for each lease).
+  // The highest priority first, the oldest job of equal ones; in a job,
+  // most work first (ties: lower cell): the ranked index's order, read no
+  // further than `limit` (a tower's 18 K cells with work are not sorted
+  // for each lease).
   std::vector<PendingCell> result;
   for (const auto& [job, phase] : activePhase) {
     for (auto it = ranked_.lower_bound({job, phase, std::numeric_limits<int64_t>::min(), 0});

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <set>
 #include <optional>
@@ -47,6 +48,11 @@ struct JobRecord {
   bool photonsComplete = false;
   // The job whose photon tables its render phase reads.
   uint64_t photonJob() const { return photonSource ? photonSource : id; }
+  // Scheduling (schema 13): its leases come before those of lower
+  // priorities, and go only to workers having every required tag (sorted;
+  // common/job/worker_tags.h).
+  int priority = 0;
+  std::vector<std::string> requiredTags;
 };
 
 struct PendingCell {
@@ -97,7 +103,7 @@ struct LeaseLogEntry {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 12;
+  static constexpr int kSchemaVersion = 13;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -110,6 +116,9 @@ class JobStore {
   std::optional<JobRecord> job(uint64_t id);
   std::vector<JobRecord> jobs(bool activeOnly);
   void setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error = "");
+  // Scheduling only: what the job computes stays as it is.
+  void setPriority(uint64_t job, int priority);
+  void setRequiredTags(uint64_t job, const std::vector<std::string>& tags);
 
   // Photon-pass reuse (photon_reuse.h). At submit: what decides the job's
   // photon tables, and the earlier job whose tables it renders with (0: it
@@ -128,8 +137,12 @@ class JobStore {
   // will do), its place into jobs.db with the caller's transaction.
   void addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, int64_t work, std::string_view payload);
   int64_t queuedRays(uint64_t job, int phase);   // rays in flight between cells
-  // Cells with unleased work in their job's current phase, most work first.
-  std::vector<PendingCell> pendingCells(size_t limit);
+  // Cells with unleased work in their job's current phase: the jobs by
+  // priority, highest first (equal priorities: the oldest first), and in
+  // each, most work first. `mayTake(requiredTags)`: whether the jobs that
+  // require these tags may be leased (to the worker asking); none: all.
+  std::vector<PendingCell> pendingCells(
+      size_t limit, const std::function<bool(const std::vector<std::string>&)>& mayTake = nullptr);
   // Leases up to maxWork of the oldest unleased batches of (job, cell, phase)
   // (always at least one batch), fills `batches` and returns the lease (id
   // 0: nothing queued for the cell). Its attempt is 1 + the most times any

@@ -26,6 +26,7 @@ bool clientMay(Which type) {
     case Which::SUBMIT:
     case Which::STATUS:
     case Which::CANCEL:
+    case Which::PRIORITY:
     case Which::FETCH_IMAGE:
     case Which::JOB_DETAIL:
     case Which::FETCH_PREVIEW:
@@ -46,6 +47,7 @@ std::string_view nameOf(Which type) {
     case Which::SUBMIT: return "Submit";
     case Which::STATUS: return "Status";
     case Which::CANCEL: return "Cancel";
+    case Which::PRIORITY: return "Priority";
     case Which::FETCH_IMAGE: return "FetchImage";
     case Which::JOB_DETAIL: return "JobDetail";
     case Which::FETCH_PREVIEW: return "FetchPreview";

@@ -1,7 +1,7 @@
 // What each role may ask of the coordinator (common/net/role.h):
 //   worker    Hello, Ready, Heartbeat, Result, Failure, FetchPhotons and
 //             FetchFile (of the jobs it holds leases of), Goodbye
-//   client    Submit, Status, Cancel, FetchImage, JobDetail and FetchPreview
+//   client    Submit, Status, Cancel, Priority, FetchImage, JobDetail and FetchPreview
 //             (the dashboard's; and Heartbeat)
 //   operator  all of these, and Shutdown
 // A peer admitted with no role (none is known) may ask nothing.

@@ -20,6 +20,7 @@ struct WorkerInfo {
   std::string name;
   uint32_t cores = 1;
   uint64_t memoryBytes = 0;
+  std::vector<std::string> tags;   // its pools (Hello.tags), sorted: jobs requiring tags it lacks are not its
   int64_t lastSeenMs = 0;
   bool ready = false;         // sent Ready: it takes leases
   // Whether its leases move (Coordinator::checkLeaseProgress): the progress

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 18;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far)
+const protocolVersion :UInt32 = 19;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools)
 
 enum Phase {
   photons @0;
@@ -244,6 +244,9 @@ struct Hello {
   name @1 :Text;
   cores @2 :UInt32;
   memoryBytes @3 :UInt64;
+  # Its pools (`portico-worker --tag`): a job that requires tags is leased
+  # only to workers having all of them (common/job/worker_tags.h).
+  tags @4 :List(Text);
 }
 
 # A worker's heartbeat says how far its leases have come, so that the
@@ -350,6 +353,12 @@ struct Submit {
   freshPhotons @1 :Bool;
   # An analysis job's sensors (spec.analysis), in the sensor file's order.
   sensors @2 :List(SensorPoint);
+  # Scheduling, which never changes what the job computes: its leases come
+  # before those of lower priorities (kMinPriority..kMaxPriority,
+  # coordinator/job_limits.h; equal priorities: the older job first), and
+  # go only to workers having every tag of requiredTags.
+  priority @3 :Int32;
+  requiredTags @4 :List(Text);
 }
 
 struct SubmitReply {
@@ -367,6 +376,13 @@ struct StatusReply {
 
 struct CancelRequest {
   job @0 :UInt64;
+}
+
+# A job's new priority (as Submit.priority), from its next lease on: the
+# leases in flight finish. Answered with the job's StatusReply, as Cancel.
+struct PriorityRequest {
+  job @0 :UInt64;
+  priority @1 :Int32;
 }
 
 # A finished job's image, encoded as its output's extension says (.png,
@@ -441,5 +457,6 @@ struct Envelope {
     fetchPreview @22 :FetchPreview;
     preview @23 :PreviewReply;
     jobDetailReply @24 :JobDetailReply;
+    priority @25 :PriorityRequest;
   }
 }

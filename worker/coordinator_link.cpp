@@ -100,6 +100,8 @@ bool CoordinatorLink::connect() {
   hello.setName(options_.name);
   hello.setCores(options_.cores);
   hello.setMemoryBytes(options_.memoryBytes);
+  auto tags = hello.initTags(static_cast<unsigned>(options_.tags.size()));
+  for (size_t i = 0; i < options_.tags.size(); ++i) tags.set(static_cast<unsigned>(i), options_.tags[i]);
   send(message);
   lastHeardMs_ = steadyMs();
   return true;

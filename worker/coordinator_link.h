@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 #include <zmq.hpp>
 
 #include "common/net/curve_keys.h"
@@ -29,6 +30,7 @@ struct LinkOptions {
   std::string name;            // the worker's name in the coordinator's status
   uint32_t cores = 1;
   uint64_t memoryBytes = 0;
+  std::vector<std::string> tags;   // its pools (Hello.tags)
   int heartbeatMs = 1000;
   int livenessMs = 10000;      // coordinator silence before reconnecting
   // Fills each heartbeat with how far the worker's leases have come

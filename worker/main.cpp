@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "common/accel/embree_accelerator.h"
+#include "common/job/worker_tags.h"
 #include "common/transport/albedo_texture.h"
 #include "common/util/cli_bounds.h"
 #include "common/util/heap_reuse.h"
@@ -38,6 +39,10 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(portico::cli::wholeNumber(1, 1024));
   app.add_option("--name", options.name, "name shown in status");
+  app.add_option("--tag", options.tags,
+                 "a pool this worker belongs to (repeatable): jobs submitted with --require NAME are leased only to "
+                 "workers having every tag they require; names of letters, digits, '-', '_', '.'")
+      ->check(CLI::Validator([](std::string& tag) { return portico::tagNameProblem(tag); }, "NAME"));
   app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 600000));
   app.add_option("--liveness-ms", options.livenessMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 86400000));
   app.add_option("--crash-after-leases", options.crashAfterLeases, "fault injection: exit without reporting the Nth lease")
@@ -70,6 +75,7 @@ int main(int argc, char** argv) {
   spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [worker {}] [%l] %v", options.name));
   try {
     options.memoryBytes = portico::parseByteSize(memory);
+    options.tags = portico::normalizedTags(options.tags, "--tag");
     // Free memory kept for the next lease: an eighth of the cache budget,
     // at most 256 MiB, so resident memory still follows the budget. On the
     // octagon photon pass (1 M photons, 1 worker) this cut page faults from

@@ -67,6 +67,7 @@ WorkerSession::WorkerSession(WorkerOptions options)
   link.name = options_.name;
   link.cores = options_.threads;
   link.memoryBytes = options_.memoryBytes;
+  link.tags = options_.tags;
   link.heartbeatMs = options_.heartbeatMs;
   link.livenessMs = options_.livenessMs;
   link.describeProgress = [this](wire::Heartbeat::Builder beat) {

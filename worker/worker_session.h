@@ -31,6 +31,9 @@ struct WorkerOptions {
   std::string name;
   uint64_t memoryBytes = uint64_t(2) << 30;
   uint32_t threads = 1;
+  // Its pools (`--tag`, common/job/worker_tags.h): jobs that require tags
+  // come only to workers having all of them.
+  std::vector<std::string> tags;
   int heartbeatMs = 1000;
   int livenessMs = 10000;      // coordinator silence before reconnecting
   // Fault injection for recovery tests: exit abruptly, without reporting it,

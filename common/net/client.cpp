@@ -100,6 +100,17 @@ std::string CoordinatorClient::cancel(uint64_t job) {
   return reply->envelope().getStatusReply().getJson();
 }
 
+std::string CoordinatorClient::setPriority(uint64_t job, int32_t priority) {
+  capnp::MallocMessageBuilder message;
+  auto request = message.initRoot<wire::Envelope>().initPriority();
+  request.setJob(job);
+  request.setPriority(priority);
+  auto reply = CoordinatorClient::request(message);
+  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
+    throw std::runtime_error("coordinator sent an unexpected reply to Priority");
+  return reply->envelope().getStatusReply().getJson();
+}
+
 std::unique_ptr<Decoded> CoordinatorClient::fetchImage(uint64_t job) {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initFetchImage().setJob(job);

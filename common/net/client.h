@@ -33,6 +33,9 @@ class CoordinatorClient {
   uint64_t submit(capnp::MallocMessageBuilder& submitEnvelope);
   std::string statusJson(uint64_t job);   // job 0: all jobs
   std::string cancel(uint64_t job);
+  // A job's new priority (kMinPriority..kMaxPriority, coordinator/job_limits.h):
+  // its next leases follow it. Returns the job's status JSON, as cancel.
+  std::string setPriority(uint64_t job, int32_t priority);
   // A done job's encoded image; throws naming the job when it has none.
   std::unique_ptr<Decoded> fetchImage(uint64_t job);
   // The dashboard's: a job's cells and log lines (JobDetailReply's JSON),

@@ -101,10 +101,20 @@ struct ConnectOptions {
 };
 void addConnectOptions(CLI::App& command, ConnectOptions& options);
 
-int runSubmit(const ConnectOptions& connect, const JobSettings& render, const std::vector<Sensor>* sensors = nullptr);
+// Where a submitted job stands in the queue: its priority (higher first)
+// and the tags its workers must have (worker pools). Scheduling only: the
+// job computes the same bits whatever they are.
+struct Placement {
+  int32_t priority = 0;
+  std::vector<std::string> requiredTags;
+};
+int runSubmit(const ConnectOptions& connect, const JobSettings& render, const Placement& placement,
+              const std::vector<Sensor>* sensors = nullptr);
 int runStatus(const ConnectOptions& connect, uint64_t job, bool json);
 int runWait(const ConnectOptions& connect, uint64_t job, bool quiet);
 int runCancel(const ConnectOptions& connect, uint64_t job);
+// `priority JOB N`: the job's leases from now on come in that priority's order.
+int runPriority(const ConnectOptions& connect, uint64_t job, int32_t priority);
 // `fetch-image JOB [-o FILE]`: the client writes the image (default: the job's output path).
 int runFetchImage(const ConnectOptions& connect, uint64_t job, const std::string& output);
 int runShutdown(const ConnectOptions& connect);

@@ -1,6 +1,6 @@
 // The options and arguments of `portico render`, `portico analyze` and of the commands that
-// talk to a running coordinator: submit, status, wait, cancel, fetch-image,
-// shutdown.
+// talk to a running coordinator: submit, status, wait, cancel, priority,
+// fetch-image, shutdown.
 #include <CLI/CLI.hpp>
 
 #include "coordinator/cli/analysis_report.h"
@@ -9,7 +9,9 @@
 #include <memory>
 #include <string>
 
+#include "common/job/worker_tags.h"
 #include "common/util/cli_bounds.h"
+#include "coordinator/job_limits.h"
 #include "coordinator/cli/command_table.h"
 #include "coordinator/cli/commands.h"
 
@@ -99,6 +101,19 @@ void addRender(CLI::App& app, CommandTable& table) {
             [o] { return o->views.file.empty() ? runRender(o->render, o->local) : runViews(o->render, o->local, o->views); });
 }
 
+// `submit`'s place in the queue: --priority and --require.
+void addPlacementOptions(CLI::App& command, Placement& placement) {
+  command.add_option("--priority", placement.priority,
+                     fmt::format("the job's priority, {} to {}: its leases come before those of lower priorities "
+                                 "(equal ones: the older job first); the same bits whatever it is",
+                                 limits::kMinPriority, limits::kMaxPriority))
+      ->capture_default_str()
+      ->check(wholeNumber(limits::kMinPriority, limits::kMaxPriority));
+  command.add_option("--require", placement.requiredTags,
+                     "a worker tag the job's workers must have (repeatable; `portico-worker --tag NAME`)")
+      ->check(CLI::Validator([](std::string& tag) { return tagNameProblem(tag); }, "NAME"));
+}
+
 // The coordinator to reach and the job asked about (status: 0 for every job).
 struct JobOptions {
   ConnectOptions connect;
@@ -109,6 +124,7 @@ void addSubmit(CLI::App& app, CommandTable& table) {
   struct Options {
     ConnectOptions connect;
     JobSettings render;
+    Placement placement;
     bool analyze = false;
     AnalysisOptions analysis;
   };
@@ -116,6 +132,7 @@ void addSubmit(CLI::App& app, CommandTable& table) {
   auto* submit = app.add_subcommand("submit", "submit a job to a running coordinator; prints its id");
   addConnectOptions(*submit, o->connect);
   addRenderOptions(*submit, o->render);
+  addPlacementOptions(*submit, o->placement);
   submit->add_flag("--analyze", o->analyze,
                    "a lighting analysis (as `portico analyze`): -o names its .csv; needs --sensors or --grid");
   addAnalysisOptions(*submit, o->analysis);
@@ -123,7 +140,7 @@ void addSubmit(CLI::App& app, CommandTable& table) {
     if (!o->analyze) {
       if (!o->analysis.sensorsFile.empty() || !o->analysis.grid.empty() || o->analysis.daylightFactor)
         throw std::invalid_argument("--sensors, --grid and --daylight-factor need --analyze");
-      return runSubmit(o->connect, o->render);
+      return runSubmit(o->connect, o->render, o->placement);
     }
     // The analysis's sampling defaults where the command line gives none.
     const JobSettings defaults = [] {
@@ -136,7 +153,7 @@ void addSubmit(CLI::App& app, CommandTable& table) {
     if (submit->get_option("--light-samples")->count() == 0) o->render.lightSamples = defaults.lightSamples;
     const std::vector<Sensor> sensors = prepareAnalysis(o->render, o->analysis);
     warnOfSensorsOutsideCells(o->render.store, sensors, o->analysis.sensorsFile);
-    return runSubmit(o->connect, o->render, &sensors);
+    return runSubmit(o->connect, o->render, o->placement, &sensors);
   });
 }
 
@@ -172,6 +189,21 @@ void addCancel(CLI::App& app, CommandTable& table) {
   table.add(cancel, [o] { return runCancel(o->connect, o->job); });
 }
 
+void addPriority(CLI::App& app, CommandTable& table) {
+  struct Options : JobOptions {
+    int32_t priority = 0;
+  };
+  auto o = std::make_shared<Options>();
+  auto* priority = app.add_subcommand(
+      "priority", "change a waiting or running job's priority: its next leases follow it (those in flight finish)");
+  addConnectOptions(*priority, o->connect);
+  priority->add_option("JOB", o->job, "job id")->required()->check(wholeNumber(1, INT64_MAX));
+  priority->add_option("PRIORITY", o->priority, "the new priority (higher runs first)")
+      ->required()
+      ->check(wholeNumber(limits::kMinPriority, limits::kMaxPriority));
+  table.add(priority, [o] { return runPriority(o->connect, o->job, o->priority); });
+}
+
 void addFetchImage(CLI::App& app, CommandTable& table) {
   struct Options : JobOptions {
     std::string imagePath;
@@ -203,6 +235,7 @@ void addJobCommands(CLI::App& app, CommandTable& table) {
   addStatus(app, table);
   addWait(app, table);
   addCancel(app, table);
+  addPriority(app, table);
   addFetchImage(app, table);
   addShutdown(app, table);
   addDashboardCommand(app, table);

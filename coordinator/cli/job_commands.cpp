@@ -12,6 +12,7 @@
 
 #include "common/net/client.h"
 #include "common/job/sun_time.h"
+#include "common/job/worker_tags.h"
 #include "common/net/job_spec_wire.h"
 #include "common/transport/sky_model.h"
 #include "common/util/cli_bounds.h"
@@ -345,9 +346,15 @@ void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message, cons
   }
 }
 
-int runSubmit(const ConnectOptions& connect, const JobSettings& render, const std::vector<Sensor>* sensors) {
+int runSubmit(const ConnectOptions& connect, const JobSettings& render, const Placement& placement,
+              const std::vector<Sensor>* sensors) {
   capnp::MallocMessageBuilder message;
   fillSubmit(render, message, sensors);
+  auto submit = message.getRoot<wire::Envelope>().getSubmit();
+  submit.setPriority(placement.priority);
+  const std::vector<std::string> tags = normalizedTags(placement.requiredTags, "--require");
+  auto required = submit.initRequiredTags(static_cast<unsigned>(tags.size()));
+  for (size_t i = 0; i < tags.size(); ++i) required.set(static_cast<unsigned>(i), tags[i]);
   net::CoordinatorClient client = connectTo(connect);
   std::cout << client.submit(message) << "\n";
   return 0;
@@ -384,6 +391,13 @@ int runCancel(const ConnectOptions& connect, uint64_t job) {
   net::CoordinatorClient client = connectTo(connect);
   const auto status = nlohmann::json::parse(client.cancel(job));
   std::cout << fmt::format("job {}: {}\n", job, status.value("state", "?"));
+  return 0;
+}
+
+int runPriority(const ConnectOptions& connect, uint64_t job, int32_t priority) {
+  net::CoordinatorClient client = connectTo(connect);
+  const auto status = nlohmann::json::parse(client.setPriority(job, priority));
+  std::cout << fmt::format("job {}: {}, priority {}\n", job, status.value("state", "?"), status.value("priority", 0));
   return 0;
 }
 

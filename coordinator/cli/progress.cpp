@@ -46,6 +46,14 @@ std::string passesDescription(const nlohmann::json& s) {
   return text + "\n";
 }
 
+// " tags a b" from a status's list `key` (prefix and names); "" when it is empty or absent.
+std::string tagsText(const nlohmann::json& s, const char* key, std::string_view prefix) {
+  if (!s.contains(key) || !s[key].is_array() || s[key].empty()) return "";
+  std::string text(prefix);
+  for (size_t i = 0; i < s[key].size(); ++i) text += (i ? " " : "") + s[key][i].get<std::string>();
+  return text;
+}
+
 std::string summaryLine(const nlohmann::json& s) {
   const auto& p = s["progress"];
   std::string line = fmt::format("job {} {:8} photons {}/{}  camera rays {}/{}  {:.2f} Mrays/s",
@@ -80,11 +88,13 @@ std::string describeStatus(const nlohmann::json& s) {
   std::string text;
   if (s.contains("jobs")) {
     for (const auto& job : s["jobs"])
-      text += fmt::format("job {} {}{}\n", job.value("job", int64_t{0}), job.value("state", "?"),
+      text += fmt::format("job {} {} priority {}{}{}\n", job.value("job", int64_t{0}), job.value("state", "?"),
+                          job.value("priority", 0), tagsText(job, "required_tags", ", requires tags "),
                           job.value("error", "").empty() ? "" : " — " + job.value("error", ""));
     if (s["jobs"].empty()) text += "no jobs\n";
   } else {
     text += summaryLine(s) + "\n";
+    text += fmt::format("priority: {}{}\n", s.value("priority", 0), tagsText(s, "required_tags", "; requires tags "));
     if (s.contains("error")) text += fmt::format("error: {}\n", s.value("error", ""));
     if (s.contains("waiting"))
       for (const auto& reason : s["waiting"]) text += fmt::format("waiting: {}\n", reason.get<std::string>());
@@ -124,7 +134,7 @@ std::string describeStatus(const nlohmann::json& s) {
     text += fmt::format("workers: {}\n", s["workers"].size());
     for (const auto& w : s["workers"]) {
       const bool stalled = w.contains("stalled");
-      text += fmt::format("  {} {} ({} leases), holds {} cells, recent:", w.value("name", "?"),
+      text += fmt::format("  {}{} {} ({} leases), holds {} cells, recent:", w.value("name", "?"), tagsText(w, "tags", " tags "),
                           stalled ? "stalled" : w.value("idle", false) ? "idle" : "busy", w.value("leases", int64_t{0}),
                           w.value("cells_held", int64_t{0}));
       for (const auto& c : w["cells"]) text += fmt::format(" {}", c.value("cell", int64_t{0}));

@@ -1,5 +1,7 @@
 #include "coordinator/job_store.h"
 
+#include "common/job/worker_tags.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -54,6 +56,11 @@ int64_t lastPhotonBatchOffset(JobStore& store) {
   const int64_t offset = s.step() ? s.columnInt(0) : -1;
   s.reset();
   return offset;
+}
+
+// Back to schema 12: no priorities, no worker pools.
+void dropVersionThirteenColumns(JobStore& store) {
+  store.database().exec("ALTER TABLE jobs DROP COLUMN priority; ALTER TABLE jobs DROP COLUMN required_tags");
 }
 
 TEST_F(JobStoreTest, CreatesSchemaAtCurrentVersionInWalMode) {
@@ -293,6 +300,7 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
     dropVersionSixColumns(store);
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
     store.database().exec("DROP TABLE job_sensors");   // schema 12
+    dropVersionThirteenColumns(store);
     store.database().setUserVersion(1);
   }
   JobStore migrated(path_.string());
@@ -303,6 +311,59 @@ TEST_F(JobStoreTest, MigratesAVersionOneDatabaseKeepingItsQueue) {
   EXPECT_EQ(batches[0].payload, "queued");
   EXPECT_EQ(lease.attempt, 1u);
   EXPECT_EQ(migrated.photonBatches(1, 7), std::vector<std::string>{std::string("\x01\x02")});
+}
+
+TEST_F(JobStoreTest, PendingCellsComeByPriorityThenAgeAndOnlyOfJobsTheAskerMayTake) {
+  JobStore store(path_.string());
+  const uint64_t oldest = store.createJob("spec", 1), urgent = store.createJob("spec", 2),
+                 pooled = store.createJob("spec", 3);
+  store.addBatch(oldest, 1, 0, BatchKind::Rays, 500, "a");
+  store.addBatch(urgent, 2, 0, BatchKind::Rays, 10, "b");
+  store.addBatch(pooled, 3, 0, BatchKind::Rays, 20, "c");
+  const auto jobsOf = [](const std::vector<PendingCell>& cells) {
+    std::vector<uint64_t> jobs;
+    for (const PendingCell& c : cells) jobs.push_back(c.job);
+    return jobs;
+  };
+  // Equal priorities: the oldest job first, as ever.
+  EXPECT_EQ(jobsOf(store.pendingCells(10)), (std::vector<uint64_t>{oldest, urgent, pooled}));
+  store.setPriority(urgent, 5);
+  store.setPriority(pooled, -3);
+  store.setRequiredTags(pooled, {"bigmem", "gpu"});
+  EXPECT_EQ(jobsOf(store.pendingCells(10)), (std::vector<uint64_t>{urgent, oldest, pooled}));
+  // A worker without both tags is not offered the pooled job's cells.
+  const auto withTags = [](std::vector<std::string> tags) {
+    return [tags](const std::vector<std::string>& required) { return hasAllTags(tags, required); };
+  };
+  EXPECT_EQ(jobsOf(store.pendingCells(10, withTags({"gpu"}))), (std::vector<uint64_t>{urgent, oldest}));
+  EXPECT_EQ(jobsOf(store.pendingCells(10, withTags({"bigmem", "gpu", "x"}))),
+            (std::vector<uint64_t>{urgent, oldest, pooled}));
+  // Kept in jobs.db: a coordinator restarted on it schedules alike.
+  JobStore reopened = openSnapshot();
+  EXPECT_EQ(jobsOf(reopened.pendingCells(10)), (std::vector<uint64_t>{urgent, oldest, pooled}));
+  EXPECT_EQ(reopened.job(urgent)->priority, 5);
+  EXPECT_EQ(reopened.job(pooled)->requiredTags, (std::vector<std::string>{"bigmem", "gpu"}));
+  EXPECT_TRUE(reopened.job(oldest)->requiredTags.empty());
+}
+
+TEST_F(JobStoreTest, ADatabaseOfSchemaTwelveMigratesWithEveryJobAtPriorityZeroForAnyWorker) {
+  {
+    JobStore store(path_.string());
+    store.createJob("spec", 1);
+    store.createJob("spec", 2);
+    store.addBatch(2, 4, 0, BatchKind::Rays, 900, "second");
+    store.addBatch(1, 3, 0, BatchKind::Rays, 100, "first");
+    dropVersionThirteenColumns(store);
+    store.database().setUserVersion(12);
+  }
+  JobStore migrated(path_.string());
+  EXPECT_EQ(migrated.database().userVersion(), JobStore::kSchemaVersion);
+  EXPECT_EQ(migrated.job(1)->priority, 0);
+  EXPECT_TRUE(migrated.job(2)->requiredTags.empty());
+  const auto pending = migrated.pendingCells(10, [](const std::vector<std::string>& required) { return required.empty(); });
+  ASSERT_EQ(pending.size(), 2u);
+  EXPECT_EQ(pending[0].job, 1u);   // the oldest first, as before priorities
+  EXPECT_EQ(pending[1].job, 2u);
 }
 
 TEST_F(JobStoreTest, PendingCellsStayTrueToTheBatchesTableThroughLeasesRequeuesAndRollbacks) {
@@ -450,6 +511,7 @@ TEST_F(JobStoreTest, ALeaseLogOfSchemaEightReadsWithItsCpuUnrecorded) {
         "load_us, cells_loaded, triangles_loaded) VALUES (1, 4, 0, 2, 0, 800, 'w0', 5, 9, 4000, 0, 0, 0)");
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
     store.database().exec("DROP TABLE job_sensors");   // schema 12
+    dropVersionThirteenColumns(store);
     store.database().setUserVersion(8);
   }
   JobStore migrated(path_.string());
@@ -804,6 +866,7 @@ TEST_F(JobStoreTest, MigratingToVersionFourRechecksumsPhotonFilesAndKeepsDamageV
     dropVersionSixColumns(store);
     store.database().exec("ALTER TABLE jobs DROP COLUMN photon_region_end");   // schema 11
     store.database().exec("DROP TABLE job_sensors");   // schema 12
+    dropVersionThirteenColumns(store);
     store.database().setUserVersion(3);
   }
   overwriteByte(path_.string() + "-photons/job-1.bin", secondOffset + 7);   // the second batch

@@ -13,8 +13,10 @@ TEST(PeerRights, WorkersLeaseAndFetchButNeitherSubmitNorShutDown) {
   for (Which type : {Which::HELLO, Which::READY, Which::HEARTBEAT, Which::RESULT, Which::FAILURE, Which::FETCH_PHOTONS,
                      Which::FETCH_FILE, Which::GOODBYE})
     EXPECT_FALSE(refusalFor(Role::Worker, type)) << int(type);
-  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::FETCH_IMAGE, Which::SHUTDOWN})
+  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::PRIORITY, Which::FETCH_IMAGE, Which::SHUTDOWN})
     EXPECT_TRUE(refusalFor(Role::Worker, type)) << int(type);
+  EXPECT_EQ(refusalFor(Role::Worker, Which::PRIORITY).value_or(""),
+            "Priority refused: a worker may not send it (it needs a client or operator key)");
   EXPECT_EQ(refusalFor(Role::Worker, Which::SUBMIT).value_or(""),
             "Submit refused: a worker may not send it (it needs a client or operator key)");
   // The dashboard's requests are a client's.
@@ -27,7 +29,7 @@ TEST(PeerRights, WorkersLeaseAndFetchButNeitherSubmitNorShutDown) {
 }
 
 TEST(PeerRights, ClientsAskAboutJobsButNeitherLeaseNorFetchFilesNorShutDown) {
-  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::FETCH_IMAGE, Which::JOB_DETAIL,
+  for (Which type : {Which::SUBMIT, Which::STATUS, Which::CANCEL, Which::PRIORITY, Which::FETCH_IMAGE, Which::JOB_DETAIL,
                      Which::FETCH_PREVIEW})
     EXPECT_FALSE(refusalFor(Role::Client, type)) << int(type);
   for (Which type : {Which::HELLO, Which::READY, Which::RESULT, Which::FAILURE, Which::FETCH_PHOTONS, Which::FETCH_FILE,
@@ -38,7 +40,8 @@ TEST(PeerRights, ClientsAskAboutJobsButNeitherLeaseNorFetchFilesNorShutDown) {
 }
 
 TEST(PeerRights, OperatorsMaySendAnythingAndPeersWithoutARoleNothing) {
-  for (Which type : {Which::HELLO, Which::RESULT, Which::FETCH_FILE, Which::SUBMIT, Which::CANCEL, Which::SHUTDOWN}) {
+  for (Which type :
+       {Which::HELLO, Which::RESULT, Which::FETCH_FILE, Which::SUBMIT, Which::CANCEL, Which::PRIORITY, Which::SHUTDOWN}) {
     EXPECT_FALSE(refusalFor(Role::Operator, type)) << int(type);
     EXPECT_TRUE(refusalFor(std::nullopt, type)) << int(type);
   }
