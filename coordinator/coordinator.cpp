@@ -15,8 +15,8 @@
 #include <filesystem>
 #include <set>
 
-#include "common/net/endpoint_scope.h"
 #include "common/job/worker_tags.h"
+#include "common/net/endpoint_scope.h"
 #include "common/net/job_spec_wire.h"
 #include "common/scene/store/store_file_names.h"
 #include "common/transport/photon_record.h"
@@ -53,7 +53,6 @@ int checkedPriority(int64_t priority) {
                                             priority, limits::kMinPriority, limits::kMaxPriority));
   return int(priority);
 }
-
 
 // Wall-clock for records that outlive the process (job creation, phases).
 int64_t wallMs() {
