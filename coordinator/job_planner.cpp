@@ -200,6 +200,7 @@ void validateJobSettings(const JobSettings& settings, const SceneStore& scene) {
                                             scene.directory()));
   if (scene.lights().empty() && !settings.daylight.any())
     throw std::invalid_argument(fmt::format("scene {} has no lights (and the job no --sun or --sky)", scene.directory()));
+  if (const std::string problem = luminanceProblem(settings); !problem.empty()) throw std::invalid_argument(problem);
   if (settings.analysis) validateAnalysis(settings);
   else {
     requireAtMost("image width", settings.width, limits::kMaxImageSide);

@@ -11,11 +11,13 @@
 #include <filesystem>
 #include <fstream>
 
+#include "common/analysis/luminance_image.h"
 #include "common/image/image_writer.h"
 #include "common/transport/trace_counters.h"
 #include "common/util/atomic_file.h"
 #include "coordinator/analysis_results.h"
 #include "coordinator/analysis_sensors.h"
+#include "coordinator/luminance_output.h"
 #include "coordinator/render_passes.h"
 
 namespace portico {
@@ -146,7 +148,10 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
                        {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
-                       {"aov", spec.getAov() == wire::Aov::CELLS ? "cells" : spec.getAov() == wire::Aov::PORTALS ? "portals" : "radiance"},
+                       {"aov", spec.getAov() == wire::Aov::CELLS     ? "cells"
+                               : spec.getAov() == wire::Aov::PORTALS ? "portals"
+                               : spec.hasLuminance()                 ? "luminance"
+                                                                     : "radiance"},
                        {"daylight", daylightSettings(spec)}};
   // A job that reused an earlier job's photon pass shows that pass's photons.
   const auto photonCounters = job.photonSource ? store.counters(job.photonSource) : counters;
@@ -319,12 +324,17 @@ void writeJobOutputs(JobStore& store, const JobRecord& job, wire::JobSpec::Reade
   // The directory was checked at submit; it is never created here, on
   // behalf of whoever submitted.
   const std::string output = spec.getOutput().cStr();
+  nlohmann::json luminance;
   if (spec.hasAnalysis())
     writeAnalysisOutputs(analysisResults(store, job, spec, scene), output);
+  else if (spec.hasLuminance())
+    luminance = writeLuminanceOutputs(output, filmImage(store, job, spec), spec.getLuminance());
   else
     writeImage(output, filmImage(store, job, spec), spec.getExposure());
+  nlohmann::json statistics = jobStatistics(store, job, spec);
+  if (!luminance.is_null()) statistics["luminance"] = luminance;
   const std::string statsPath = output + ".json";
-  writeFileAtomically(statsPath, jobStatistics(store, job, spec).dump(2) + "\n");
+  writeFileAtomically(statsPath, statistics.dump(2) + "\n");
 }
 
 std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, const SceneStore& scene) {
@@ -338,7 +348,9 @@ std::string encodeJobImage(JobStore& store, const JobRecord& job, wire::JobSpec:
   const fs::path file = fs::path(pattern) / ("image" + fs::path(spec.getOutput().cStr()).extension().string());
   std::string bytes;
   try {
-    writeImage(file.string(), filmImage(store, job, spec), spec.getExposure());
+    // A luminance job's image is its cd/m^2 (its false-colour picture stays beside the job's output).
+    const LinearImage film = filmImage(store, job, spec);
+    writeImage(file.string(), spec.hasLuminance() ? luminanceImage(film) : film, spec.getExposure());
     std::ifstream in(file, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(in), {});
   } catch (...) {

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 19;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools)
+const protocolVersion :UInt32 = 20;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture)
 
 enum Phase {
   photons @0;
@@ -140,6 +140,17 @@ struct JobSpec {
   cameraName @23 :Text;    # in a Submit: the store camera of this name ("": none); "" once resolved
   daylight @24 :Daylight;  # absent: no daylight
   analysis @25 :Analysis;  # present: a lighting analysis (illuminance at sensors), not an image
+  luminance @26 :LuminanceImage;  # present: the image in cd/m^2 (--aov luminance), with its false-colour picture
+}
+
+# A render's image in photometric units (common/job/job_settings.h
+# LuminanceImage): 179 lm/W x Rec. 709 Y per pixel, a float image; with
+# falseColor, OUTPUT.falsecolor.png beside it.
+struct LuminanceImage {
+  falseColor @0 :Bool;
+  falseColorMaximum @1 :Float64;  # cd/m^2; 0: automatic
+  falseColorDecades @2 :UInt32;   # 0: linear; N: logarithmic over N decades
+  falseColorSteps @3 :UInt32;     # legend intervals
 }
 
 # A lighting analysis (docs/lighting-analysis.md): the job measures the

@@ -73,6 +73,24 @@ struct AnalysisSettings {
   bool operator==(const AnalysisSettings&) const = default;
 };
 
+// A render's image in photometric units (`--aov luminance`,
+// docs/lighting-reports.md): each pixel's luminance in cd/m^2, 179 lm/W x
+// the Rec. 709 Y of its radiance, written as a float image; with
+// `--falsecolor`, also OUTPUT.falsecolor.png, the luminance on a false-colour
+// scale with its legend, as Radiance's `falsecolor` draws it. The light
+// traced is the radiance render's, bit for bit: only the image written differs.
+struct LuminanceImage {
+  bool falseColor = false;
+  double falseColorMaximum = 0;   // cd/m^2 at the scale's top (red); 0: the 95th percentile, rounded up
+  uint32_t falseColorDecades = 0; // 0: a linear scale from 0; N: logarithmic over N decades below the top
+  uint32_t falseColorSteps = 8;   // legend intervals
+  bool operator==(const LuminanceImage&) const = default;
+};
+// The bounds of its scale: beyond any sky, sun or lamp seen.
+constexpr double kMaxFalseColorMaximum = 1e12;
+constexpr uint32_t kMaxFalseColorDecades = 12;
+constexpr uint32_t kMaxFalseColorSteps = 32;
+
 // An analysis job's sampling by default (`portico analyze`): a sensor is
 // one point, so it can take far more rays than a pixel. 64 samples of 4
 // shadow rays and 16 gather rays: 256 shadow and 1 024 gather rays a sensor.
@@ -138,6 +156,8 @@ struct JobSettings {
   DaylightSettings daylight;
   // Set: a lighting analysis, whose output is a CSV of its sensors' readings.
   std::optional<AnalysisSettings> analysis;
+  // Set: the image is luminance in cd/m^2 (`--aov luminance`, `--falsecolor`).
+  std::optional<LuminanceImage> luminance;
 
   // The renderer's own constants, the same for every job (not on the wire).
   uint32_t maxPhotonBounces = 64;
@@ -163,6 +183,12 @@ inline bool lampsLit(const JobSettings& settings) { return !(settings.analysis &
 // Why the settings' camera choice cannot be taken ("" when it can): a store
 // camera by name and a camera of the job's own both given.
 std::string cameraChoiceProblem(const JobSettings& settings);
+
+// Why the settings' luminance image cannot be made ("" when it can, or
+// when the job makes none): an analysis, another aov, an output that cannot
+// hold floats, a scale out of its bounds. The client asks before anything
+// starts, the coordinator again at submit.
+std::string luminanceProblem(const JobSettings& settings);
 
 const char* toString(JobSettings::Irradiance irradiance);
 const char* toString(JobSettings::Aov aov);

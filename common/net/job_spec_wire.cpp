@@ -41,6 +41,13 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
     analysis.setSensors(settings.analysis->sensors);
     analysis.setDaylightFactor(settings.analysis->daylightFactor);
   }
+  if (settings.luminance) {
+    auto luminance = spec.initLuminance();
+    luminance.setFalseColor(settings.luminance->falseColor);
+    luminance.setFalseColorMaximum(settings.luminance->falseColorMaximum);
+    luminance.setFalseColorDecades(settings.luminance->falseColorDecades);
+    luminance.setFalseColorSteps(settings.luminance->falseColorSteps);
+  }
   if (const DaylightSettings& d = settings.daylight; d.any()) {
     auto daylight = spec.initDaylight();
     daylight.setSky(static_cast<wire::SkyKind>(d.sky));
@@ -95,6 +102,11 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   settings.maxPasses = spec.getMaxPasses();
   if (spec.hasAnalysis())
     settings.analysis = AnalysisSettings{spec.getAnalysis().getSensors(), spec.getAnalysis().getDaylightFactor()};
+  if (spec.hasLuminance()) {
+    const auto luminance = spec.getLuminance();
+    settings.luminance = LuminanceImage{luminance.getFalseColor(), luminance.getFalseColorMaximum(),
+                                        luminance.getFalseColorDecades(), luminance.getFalseColorSteps()};
+  }
   if (spec.hasDaylight()) {
     const auto daylight = spec.getDaylight();
     DaylightSettings& d = settings.daylight;

@@ -12,6 +12,7 @@
 #include "common/analysis/sensor.h"
 #include "common/analysis/work_plane_grid.h"
 #include "common/job/job_settings.h"
+#include "common/scene/generator/panel_lighting.h"
 #include "common/scene/import/building_importer.h"
 #include "coordinator/cli/ifc_conversion.h"
 
@@ -20,6 +21,8 @@ namespace portico::cli {
 // Options shared by `render` and `submit`: what the job computes, with the
 // job's own defaults (common/job/job_settings.h).
 void addRenderOptions(CLI::App& command, JobSettings& options);
+// --falsecolor, --falsecolor-max, --falsecolor-log, --falsecolor-steps (each implies --aov luminance).
+void addFalseColorOptions(CLI::App& command, JobSettings& options);
 // Their daylight: --sun, --sun-time (and its place), --sky, --sun-irradiance,
 // --turbidity (docs/daylight.md); also `scene export FILE.rad`'s sky.
 void addDaylightOptions(CLI::App& command, DaylightSettings& daylight);
@@ -32,7 +35,8 @@ void addLightingOptions(CLI::App& command, JobSettings& options, const std::stri
 void fillSubmit(const JobSettings& settings, capnp::MallocMessageBuilder& message,
                 const std::vector<Sensor>* sensors = nullptr);
 
-int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store);
+int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store,
+                     const PanelLighting& panels = {});
 // `scene import`: a building.json or mesh files -> store; prints the summary of `scene info`.
 // An .ifc input goes through the IFC converter first, read as `ifc` says.
 int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& options, const std::string& store,

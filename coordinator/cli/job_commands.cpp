@@ -239,11 +239,44 @@ void addRenderOptions(CLI::App& command, JobSettings& o) {
             o.aov = name == "cells"     ? JobSettings::Aov::Cells
                     : name == "portals" ? JobSettings::Aov::Portals
                                         : JobSettings::Aov::Radiance;
+            // Luminance is the radiance render written in cd/m^2.
+            if (name == "luminance" && !o.luminance) o.luminance.emplace();
           },
-          "what the image shows: radiance; cells (false colour of each pixel's cell); "
-          "portals (portals each camera ray crossed: blue 0 ... red 7, white 8+)")
-      ->check(CLI::IsMember({"radiance", "cells", "portals"}))
+          "what the image shows: radiance; luminance (cd/m^2, 179 x Rec. 709 Y per pixel, to .exr, .hdr or "
+          ".tif); cells (false colour of each pixel's cell); portals (portals each camera ray crossed: blue 0 ... "
+          "red 7, white 8+)")
+      ->check(CLI::IsMember({"radiance", "luminance", "cells", "portals"}))
       ->default_str(toString(o.aov));
+  addFalseColorOptions(command, o);
+}
+
+// `--falsecolor` and its scale, as Radiance's `falsecolor` takes them (-s
+// maximum, -log decades, -n steps); each implies `--aov luminance`.
+void addFalseColorOptions(CLI::App& command, JobSettings& o) {
+  const auto falseColor = [&o]() -> LuminanceImage& {
+    if (!o.luminance) o.luminance.emplace();
+    o.luminance->falseColor = true;
+    return *o.luminance;
+  };
+  command.add_flag_callback(
+      "--falsecolor", [falseColor] { falseColor(); },
+      "also write OUTPUT.falsecolor.png: the luminance on a false-colour scale with a legend in cd/m^2 (implies "
+      "--aov luminance)");
+  command
+      .add_option_function<double>(
+          "--falsecolor-max", [falseColor](double maximum) { falseColor().falseColorMaximum = maximum; },
+          "cd/m^2 at the top of the false-colour scale (default: the image's 95th percentile, rounded up)")
+      ->check(positiveNumber(kMaxFalseColorMaximum));
+  command
+      .add_option_function<uint32_t>(
+          "--falsecolor-log", [falseColor](uint32_t decades) { falseColor().falseColorDecades = decades; },
+          "a logarithmic false-colour scale over this many decades below its top (default: linear from 0)")
+      ->check(wholeNumber(1, kMaxFalseColorDecades));
+  command
+      .add_option_function<uint32_t>(
+          "--falsecolor-steps", [falseColor](uint32_t steps) { falseColor().falseColorSteps = steps; },
+          "intervals of the false-colour legend (default 8)")
+      ->check(wholeNumber(1, kMaxFalseColorSteps));
 }
 
 void addLightingOptions(CLI::App& command, JobSettings& o, const std::string& samplesHelp) {
@@ -323,6 +356,7 @@ void writeWhole(const std::string& path, const void* data, size_t size) {
 
 void fillSubmit(const JobSettings& o, capnp::MallocMessageBuilder& message, const std::vector<Sensor>* sensors) {
   if (const std::string problem = cameraChoiceProblem(o); !problem.empty()) throw std::invalid_argument(problem);
+  if (const std::string problem = luminanceProblem(o); !problem.empty()) throw std::invalid_argument(problem);
   if (const std::string problem = daylightProblem(o.daylight); !problem.empty()) throw std::invalid_argument(problem);
   JobSettings settings = o;
   settings.store = std::filesystem::absolute(o.store).lexically_normal().string();

@@ -20,14 +20,21 @@ void addGenerate(CLI::App& scene, CommandTable& table) {
     std::string preset, store;
     uint64_t seed = 1;
     uint32_t floors = 0;
+    PanelLighting panels;
   };
   auto o = std::make_shared<Options>();
   auto* generate = scene.add_subcommand("generate", "generate a building into a scene store");
   generate->add_option("--preset", o->preset, "building preset: demo, l-shape, z-building, octagon, soda-hall, tower")->required();
   generate->add_option("--seed", o->seed, "random seed of the furnishing")->capture_default_str();
   generate->add_option("--floors", o->floors, "floors of the tower preset (default 1); the other presets have their own");
+  generate->add_option_function<double>(
+      "--panel-lumens", [o](double lumens) { o->panels.lumens = lumens; },
+      "luminous flux of every ceiling panel, lm (default: 6244 lm per m^2 of panel, 2248 lm for a 0.6 m square)");
+  generate->add_option_function<double>(
+      "--panel-colour-temperature", [o](double kelvin) { o->panels.colourTemperature = kelvin; },
+      "colour temperature of the ceiling panels, K, 1667-25000 (default: about 5700 K)");
   generate->add_option("STORE", o->store, "scene store directory to write")->required();
-  table.add(generate, [o] { return runSceneGenerate(o->preset, o->seed, o->floors, o->store); });
+  table.add(generate, [o] { return runSceneGenerate(o->preset, o->seed, o->floors, o->store, o->panels); });
 }
 
 void addImport(CLI::App& scene, CommandTable& table) {

@@ -23,14 +23,17 @@
 
 namespace portico::cli {
 
-int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store) {
+int runSceneGenerate(const std::string& preset, uint64_t seed, uint32_t floors, const std::string& store,
+                     const PanelLighting& panels) {
+  // Refused before a store is begun.
+  if (const std::string problem = panelLightingProblem(panels); !problem.empty()) throw std::invalid_argument(problem);
   if (preset == "demo") {
     if (floors > 1) std::cerr << "portico: the demo preset has one floor; --floors ignored\n";
-    generateDemoBuilding(store, seed);
+    generateDemoBuilding(store, seed, panels);
   } else if (const std::optional<BuildingPreset> building = findBuildingPreset(preset, floors)) {
     if (floors != 0 && preset != "tower")
       std::cerr << fmt::format("portico: preset {} has {} floors; --floors is for the tower\n", preset, building->floors);
-    const GeneratedBuildingStats stats = generateBuilding(*building, seed, store);
+    const GeneratedBuildingStats stats = generateBuilding(*building, seed, store, panels);
     std::cerr << fmt::format("portico: generated {} ({} triangles, {} cells) in {:.1f} s: {:.2f} M triangles/s\n",
                              preset, stats.triangles, stats.cells, stats.seconds,
                              double(stats.triangles) / std::max(1e-9, stats.seconds) / 1e6);

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "common/analysis/false_color_scale.h"
 #include "common/image/image_reader.h"
 #include "common/photometry/lamp_colour.h"
 #include "common/scene/store/scene_store.h"
@@ -131,6 +132,81 @@ TEST_F(PhotometricLights, AnIesLuminaireLightsAPlaneByTheInverseSquareAndCosineL
   EXPECT_LT(worst, 0.01);
   // The check would see a 5 % error in the light at every point.
   EXPECT_GT(worstWrong, 0.01);
+}
+
+// `--aov luminance --falsecolor`: the same floor and luminaire, and a lamp
+// of radiance (2, 1, 0.5) facing the camera. Every pixel of the EXR is 179 x
+// the Rec. 709 Y of the radiance render's pixel (the same light, written in
+// cd/m^2); a floor pixel is then rho I cos / (pi d^2) cd/m^2, the lamp 179 x
+// Y(L); the false-colour PNG beside it colours each pixel by the scale and
+// draws the legend to the right. A PNG output is refused in one line.
+TEST_F(PhotometricLights, ALuminanceRenderIsInCdPerSquareMetreWithItsFalseColourPictureBeside) {
+  writeIes(dir_ / "downlight.ies");
+  writeFloor(dir_ / "floor.obj", 50);
+  constexpr int kSize = 48;
+  const nlohmann::json lamp = {{"corner", {1.0, 0.01, 1.0}}, {"edge1", {0, 0, 0.6}}, {"edge2", {0.6, 0, 0}}};
+  const nlohmann::json building = {
+      {"objects", {{{"obj", "floor.obj"}, {"albedo", {kAlbedo, kAlbedo, kAlbedo}}}}},
+      {"lights",
+       {{{"name", "downlight"}, {"ies", "downlight.ies"}, {"position", {0, kHeight, 0}}, {"colour", {1, 1, 1}}},
+        {{"name", "panel"}, {"quad", lamp}, {"radiance", {2, 1, 0.5}}}}},
+      {"camera", camera(kSize)}};
+  const fs::path store = import("luminance", building);
+  const LinearImage radiance = render(store, "radiance", {"--spp", "64"});
+  const LinearImage luminance =
+      render(store, "luminance", {"--spp", "64", "--aov", "luminance", "--falsecolor", "--falsecolor-max", "100"});
+  ASSERT_EQ(luminance.rgb.size(), radiance.rgb.size());
+  for (size_t p = 0; p < radiance.rgb.size(); p += 3) {
+    const double y = 179.0 * (0.2126 * radiance.rgb[p] + 0.7152 * radiance.rgb[p + 1] + 0.0722 * radiance.rgb[p + 2]);
+    ASSERT_NEAR(luminance.rgb[p], y, 1e-5 * (1 + y)) << "pixel " << p / 3;
+    ASSERT_EQ(luminance.rgb[p + 1], luminance.rgb[p]);
+  }
+  // The floor, away from the lamp, against rho I cos / (pi d^2); the lamp's inside, 179 Y(L).
+  const auto pixelAt = [&](double x, double z) {
+    const int column = int((x / kCameraHeight + 1) / 2 * kSize), row = int((z / kCameraHeight + 1) / 2 * kSize);
+    return size_t(row) * kSize + column;
+  };
+  double worst = 0;
+  for (int row = 2; row < kSize; row += 5)
+    for (int column = 1; column < kSize / 2; column += 5) {
+      const double x = kCameraHeight * (2.0 * (column + 0.5) / kSize - 1.0);
+      const double z = kCameraHeight * (2.0 * (row + 0.5) / kSize - 1.0);
+      const double d2 = x * x + z * z + kHeight * kHeight, d = std::sqrt(d2);
+      const double expected = kAlbedo * candela(std::acos(kHeight / d) / kDeg, std::atan2(-z, x) / kDeg) *
+                              (kHeight / d) / (M_PI * d2);
+      worst = std::max(worst, std::abs(luminance.rgb[3 * (size_t(row) * kSize + column)] / expected - 1));
+    }
+  EXPECT_LT(worst, 0.01);
+  const double lampLuminance = 179.0 * (0.2126 * 2 + 0.7152 * 1 + 0.0722 * 0.5);   // 210.6 cd/m^2
+  EXPECT_NEAR(luminance.rgb[3 * pixelAt(1.3, 1.3)], lampLuminance, 1e-4 * lampLuminance);
+
+  const LinearImage picture = readImage((dir_ / "luminance.falsecolor.png").string());
+  EXPECT_EQ(picture.width, uint32_t(kSize + 16 + 150));   // the image, a margin, the legend
+  const FalseColorScale scale{.maximum = 100, .steps = 8, .unit = "cd/m2"};
+  const auto byte = [&](size_t pixel, int channel) { return int(std::lround(picture.rgb[3 * pixel + channel] * 255)); };
+  for (const size_t p : {pixelAt(0, 0), pixelAt(-1, 1), pixelAt(1.3, 1.3), pixelAt(-1.8, -1.8)}) {
+    const size_t at = (p / kSize) * picture.width + p % kSize;
+    const Rgb8 expected = scale.colorOf(luminance.rgb[3 * p]);
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(byte(at, c), expected[c]) << "pixel " << p << " channel " << c;
+  }
+  // The legend's bar: red at its top (100+ cd/m^2), dark violet at its foot.
+  const size_t barX = kSize + 16 + 5, barTop = 16 + 7 * 2 + 12, barFoot = barTop + 8 * 40;
+  EXPECT_EQ(byte(barTop * picture.width + barX, 0), 230);
+  EXPECT_EQ(byte(barTop * picture.width + barX, 1), 0);
+  EXPECT_EQ(byte(barFoot * picture.width + barX, 0), 40);
+  EXPECT_EQ(byte(barFoot * picture.width + barX, 2), 90);
+  const auto statistics = nlohmann::json::parse(readFile(dir_ / "luminance.exr.json"));
+  EXPECT_EQ(statistics["settings"]["aov"], "luminance");
+  EXPECT_EQ(statistics["luminance"]["falsecolor"]["maximum"], 100.0);
+
+  // A PNG cannot hold cd/m^2: refused before anything runs, in one line.
+  const fs::path png = dir_ / "luminance.png";
+  EXPECT_NE(runCommand({kBin + "portico", "render", store.string(), "-o", png.string(), "--aov", "luminance"},
+                       dir_ / "png.log"),
+            0);
+  EXPECT_NE(readFile(dir_ / "png.log").find("--aov luminance writes cd/m^2 as floats"), std::string::npos)
+      << readFile(dir_ / "png.log");
+  EXPECT_FALSE(fs::exists(png));
 }
 
 // A lamp given by its flux renders exactly as the lamp given by the

@@ -301,6 +301,7 @@ struct PlannedCell {
   uint32_t floor = 0;
   std::vector<uint32_t> portals;          // ids of portals touching it
   std::vector<AreaLight> lights;
+  std::vector<uint32_t> lightMaterials;   // one per light
   bool stairUp = false, stairDown = false;
 };
 
@@ -348,8 +349,7 @@ std::vector<AreaLight> lightGrid(const FloorRect& r, float ceilingY, uint32_t n,
     light.corner = Vec3(cx - 0.5f * size, ceilingY - 0.001f, cz - 0.5f * size);
     light.edge1 = Vec3(size, 0, 0);   // cross(x, z) = -y: facing down
     light.edge2 = Vec3(0, 0, size);
-    light.radiance = palette::kLightRadiance;
-    lights.push_back(light);
+    lights.push_back(light);   // its radiance: PanelMaterials
   }
   return lights;
 }
@@ -521,7 +521,7 @@ void addPortals(const BuildingPreset& preset, const FloorTemplate& floor, Buildi
 // Lights by floor area over the rooms, corridors and junctions (some rooms
 // get none when there are fewer lights than rooms: lit through doors).
 // Returns how many.
-uint32_t addLights(const BuildingPreset& preset, BuildingPlan& plan, SceneStoreWriter& writer) {
+uint32_t addLights(const BuildingPreset& preset, BuildingPlan& plan, SceneStoreWriter& writer, PanelMaterials& panels) {
   std::vector<PlannedCell>& cells = plan.cells;
   std::vector<double> lightWeights(cells.size(), 0.0);
   std::vector<uint64_t> lightCaps(cells.size(), 0);
@@ -537,7 +537,10 @@ uint32_t addLights(const BuildingPreset& preset, BuildingPlan& plan, SceneStoreW
     const FloorRect shrunk{cells[i].source->lightArea.x0 + 0.3f, cells[i].source->lightArea.x1 - 0.3f,
                            cells[i].source->lightArea.z0 + 0.3f, cells[i].source->lightArea.z1 - 0.3f};
     cells[i].lights = lightGrid(shrunk, cells[i].box.lo.y + kCeiling, uint32_t(lightCounts[i]), uint32_t(i));
-    for (AreaLight& light : cells[i].lights) light.id = writer.addLight(light), ++lightTotal;
+    for (AreaLight& light : cells[i].lights) {
+      cells[i].lightMaterials.push_back(panels.light(light));
+      light.id = writer.addLight(light), ++lightTotal;
+    }
   }
   return lightTotal;
 }
@@ -560,7 +563,10 @@ void addShell(const PlannedCell& cell, const BuildingPlan& plan, const Furniture
   const PlaneRect xWall{box.lo.y, box.hi.y, box.lo.z, box.hi.z};
   mesh.addAxisRectangle(0, box.lo.x, true, xWall, materials.wall, holes[0][0]);
   mesh.addAxisRectangle(0, box.hi.x, false, xWall, materials.wall, holes[0][1]);
-  for (const AreaLight& light : cell.lights) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
+  for (size_t k = 0; k < cell.lights.size(); ++k) {
+    const AreaLight& light = cell.lights[k];
+    mesh.addParallelogram(light.corner, light.edge1, light.edge2, cell.lightMaterials[k]);
+  }
   if (cell.stairUp)
     for (const Bounds3& step : cell.source->stair.steps)
       mesh.addBox(Bounds3(step.lo + Vec3(0, box.lo.y, 0), step.hi + Vec3(0, box.lo.y, 0)), materials.stair, false);
@@ -628,7 +634,9 @@ uint64_t writeCells(const BuildingPreset& preset, uint64_t seed, const BuildingP
 
 }  // namespace
 
-GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory) {
+GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory,
+                                        const PanelLighting& lighting) {
+  if (const std::string problem = panelLightingProblem(lighting); !problem.empty()) throw std::invalid_argument(problem);
   const auto start = std::chrono::steady_clock::now();
   if (preset.floors == 0 || preset.cells == 0) throw std::runtime_error("preset " + preset.name + ": no floors or cells");
   DemoRandom random(seed);
@@ -647,7 +655,8 @@ GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t s
   writer.setCamera(overview);
   addPortals(preset, floor, plan, writer);
   GeneratedBuildingStats stats;
-  stats.lights = addLights(preset, plan, writer);
+  PanelMaterials panels(writer, lighting, materials.light);
+  stats.lights = addLights(preset, plan, writer, panels);
   addInteriorCameras(plan, overview, writer);
   stats.triangles = writeCells(preset, seed, plan, materials, writer);
   writer.commit();

@@ -28,6 +28,7 @@
 #include <string>
 
 #include "common/scene/generator/building_presets.h"
+#include "common/scene/generator/panel_lighting.h"
 
 namespace portico {
 
@@ -37,6 +38,9 @@ struct GeneratedBuildingStats {
   double seconds = 0;
 };
 
-GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory);
+// lighting: the ceiling panels' flux and colour (panel_lighting.h); a
+// problem with it is a std::invalid_argument naming the option.
+GeneratedBuildingStats generateBuilding(const BuildingPreset& preset, uint64_t seed, const std::string& storeDirectory,
+                                        const PanelLighting& lighting = {});
 
 }  // namespace portico

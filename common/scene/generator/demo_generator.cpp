@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -125,8 +126,7 @@ AreaLight ceilingLight(uint32_t cell, float x, float z, float size) {
   light.corner = Vec3(x - 0.5f * size, kLightY, z - 0.5f * size);
   light.edge1 = Vec3(size, 0.0f, 0.0f);
   light.edge2 = Vec3(0.0f, 0.0f, size);
-  light.radiance = palette::kLightRadiance;
-  return light;
+  return light;   // its radiance: PanelMaterials
 }
 
 // The rectangle a cell shows to the sky: the top face of its box, above the ceiling.
@@ -162,8 +162,15 @@ void addShell(MeshBuilder& mesh, const Bounds3& box, uint32_t floorMaterial, uin
   mesh.addAxisRectangle(0, box.hi.x, false, xWall, wallMaterial);
 }
 
+// The lamps of `cell` among `lights` (lightMaterials: one per light) as geometry.
+void addLamps(MeshBuilder& mesh, uint32_t cell, const std::vector<AreaLight>& lights,
+              const std::vector<uint32_t>& lightMaterials) {
+  for (size_t k = 0; k < lights.size(); ++k)
+    if (lights[k].cell == cell) mesh.addParallelogram(lights[k].corner, lights[k].edge1, lights[k].edge2, lightMaterials[k]);
+}
+
 CellContent corridorCell(const Bounds3& box, const std::vector<Room>& rooms, const std::vector<AreaLight>& lights,
-                         const Materials& materials) {
+                         const std::vector<uint32_t>& lightMaterials, const Materials& materials) {
   CellContent cell;
   cell.id = kDemoCorridorCell;
   cell.name = "corridor";
@@ -173,14 +180,13 @@ CellContent corridorCell(const Bounds3& box, const std::vector<Room>& rooms, con
   MeshBuilder mesh;
   addShell(mesh, cell.bounds, materials.corridorFloor, materials.wall, materials.ceiling, southDoors, northDoors,
            materials.wall, materials.wall);
-  for (const AreaLight& light : lights)
-    if (light.cell == cell.id) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
+  addLamps(mesh, cell.id, lights, lightMaterials);
   mesh.moveInto(cell);
   return cell;
 }
 
-CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, const Materials& materials,
-                     DemoRandom& random) {
+CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, const std::vector<uint32_t>& lightMaterials,
+                     const Materials& materials, DemoRandom& random) {
   CellContent cell;
   cell.id = room.cell;
   cell.name = room.plan.name;
@@ -194,8 +200,7 @@ CellContent roomCell(const Room& room, const std::vector<AreaLight>& lights, con
   else
     addShell(mesh, cell.bounds, materials.roomFloor, materials.wall, materials.ceiling, {}, door,
              room.backWallMaterial, materials.wall);
-  for (const AreaLight& light : lights)
-    if (light.cell == cell.id) mesh.addParallelogram(light.corner, light.edge1, light.edge2, materials.light);
+  addLamps(mesh, cell.id, lights, lightMaterials);
 
   RoomFrame frame;
   frame.x0 = room.plan.x0;
@@ -254,7 +259,8 @@ Bounds3 skyBounds(const Camera& camera) {
 
 }  // namespace
 
-void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed) {
+void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed, const PanelLighting& lighting) {
+  if (const std::string problem = panelLightingProblem(lighting); !problem.empty()) throw std::invalid_argument(problem);
   DemoRandom random(seed);
   SceneStoreWriter writer(storeDirectory);
   writer.setMeta("generator", "demo");
@@ -274,11 +280,16 @@ void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed) {
       lights.push_back(ceilingLight(room.cell, 0.5f * (room.plan.x0 + room.plan.x1),
                                     0.5f * (room.corridorWallZ + room.farWallZ), room.lightSize));
   for (float x : kCorridorLightX) lights.push_back(ceilingLight(kDemoCorridorCell, x, 0.0f, kCorridorLightSize));
-  for (AreaLight& light : lights) light.id = writer.addLight(light);
+  PanelMaterials panels(writer, lighting, materials.light);
+  std::vector<uint32_t> lightMaterials;
+  for (AreaLight& light : lights) {
+    lightMaterials.push_back(panels.light(light));
+    light.id = writer.addLight(light);
+  }
 
   // One cell in memory at a time, as a large building would be written.
-  writer.writeCell(corridorCell(corridor, rooms, lights, materials));
-  for (const Room& room : rooms) writer.writeCell(roomCell(room, lights, materials, random));
+  writer.writeCell(corridorCell(corridor, rooms, lights, lightMaterials, materials));
+  for (const Room& room : rooms) writer.writeCell(roomCell(room, lights, lightMaterials, materials, random));
   const Camera camera = overviewCamera();
   CellContent sky;
   sky.id = kDemoSkyCell;

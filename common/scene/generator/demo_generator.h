@@ -25,6 +25,8 @@
 #include <cstdint>
 #include <string>
 
+#include "common/scene/generator/panel_lighting.h"
+
 namespace portico {
 
 constexpr uint32_t kDemoCorridorCell = 0;
@@ -34,6 +36,7 @@ constexpr uint32_t kDemoCellCount = 8;
 
 // Writes the demo building as a scene store at storeDirectory (replacing an
 // earlier store there). Throws std::runtime_error on failure.
-void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed);
+// lighting: the ceiling panels' flux and colour (panel_lighting.h).
+void generateDemoBuilding(const std::string& storeDirectory, uint64_t seed, const PanelLighting& lighting = {});
 
 }  // namespace portico

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "coordinator/cli/false_color_image.h"
 
 namespace portico {
@@ -53,6 +55,26 @@ TEST(FalseColorImage, PixelsTakeTheScalesColoursAndTheLegendSitsBeside) {
   cli::drawFalseColorImage(luminance, FalseColorScale{.maximum = 0}, &resolved);
   EXPECT_EQ(resolved.maximum, 200);
   EXPECT_EQ(cli::falseColorImagePath("out/view.exr"), "out/view.falsecolor.png");
+}
+
+TEST(FalseColorScale, ALogarithmicScaleSpansItsDecadesBelowTheTop) {
+  const FalseColorScale log{.maximum = 1000, .steps = 3, .unit = "cd/m2", .decades = 3};
+  EXPECT_DOUBLE_EQ(log.positionOf(1000), 1.0);
+  EXPECT_DOUBLE_EQ(log.positionOf(1), 0.0);
+  EXPECT_NEAR(log.positionOf(std::sqrt(1000.0)), 0.5, 1e-12);   // half way in decades, not in cd/m^2
+  EXPECT_DOUBLE_EQ(log.positionOf(0.01), 0.0);                  // below the bottom: its colour
+  EXPECT_DOUBLE_EQ(log.positionOf(5000), 1.0);
+  EXPECT_DOUBLE_EQ(log.positionOf(NAN), 0.0);
+  const std::vector<double> legend = log.legendValues();
+  ASSERT_EQ(legend.size(), 4u);
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(legend[k], std::pow(10.0, k), 1e-9 * legend[k]) << k;
+  EXPECT_EQ(log.colorOf(1000), spectrumColor(1.0));
+  EXPECT_EQ(log.colorOf(10), spectrumColor(1.0 / 3));
+  // The linear scale as before: value / maximum.
+  const FalseColorScale linear{.maximum = 200, .steps = 4};
+  EXPECT_DOUBLE_EQ(linear.positionOf(50), 0.25);
+  EXPECT_DOUBLE_EQ(linear.valueAt(0.75), 150);
+  EXPECT_EQ(linear.legendValues(), (std::vector<double>{0, 50, 100, 150, 200}));
 }
 
 }  // namespace

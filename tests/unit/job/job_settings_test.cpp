@@ -150,6 +150,7 @@ TEST(JobSettings, TheWireFormKeepsEveryField) {
   settings.daylight.turbidity = 4.5f;
   // A sun by time: a place of its own, the site's north.
   settings.daylight.sunTime = SunTime{1782045000, 49.1003, -8.4366, std::nullopt};
+  settings.luminance = LuminanceImage{true, 250.0, 3, 6};
   capnp::MallocMessageBuilder message;
   toWire(settings, message.initRoot<wire::JobSpec>());
   EXPECT_EQ(jobSettingsFromWire(message.getRoot<wire::JobSpec>().asReader()), settings);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/photometry/lamp_colour.h"
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/generator/furniture_library.h"
 #include "common/scene/generator/room_furnisher.h"
@@ -166,6 +167,40 @@ TEST(BuildingGenerator, SameSeedSameBytesOtherSeedOtherFurniture) {
     anyDifferent |= readBytes(temp / ("a" + file)) != readBytes(temp / ("c" + file));
   }
   EXPECT_TRUE(anyDifferent);
+}
+
+// Ceiling panels given in lumens: each panel emits exactly that flux (179 x
+// Y of its power), in the colour asked for, and the camera sees the radiance
+// it emits (its triangles' material). By default the palette's radiance:
+// 6 244 lm per m^2 of panel.
+TEST(BuildingGenerator, PanelLumensGiveEveryCeilingPanelItsFlux) {
+  TempDirectory temp;
+  const BuildingPreset preset = *findBuildingPreset("l-shape", 0);
+  generateBuilding(preset, 2, temp / "default");
+  generateBuilding(preset, 2, temp / "lumens", PanelLighting{3000.0, 3000.0});
+  const SceneStore byDefault = SceneStore::open(temp / "default"), byLumens = SceneStore::open(temp / "lumens");
+  ASSERT_EQ(byDefault.lights().size(), byLumens.lights().size());
+  ASSERT_GT(byLumens.lights().size(), 10u);
+  double total = 0;
+  const Vec3 warm = colourOfTemperature(3000);
+  for (size_t i = 0; i < byLumens.lights().size(); ++i) {
+    const AreaLight& light = byLumens.lights()[i];
+    const AreaLight& standard = byDefault.lights()[i];
+    EXPECT_EQ(standard.radiance, Vec3(12.0f, 11.0f, 9.5f));
+    EXPECT_NEAR(lumensOfPower(standard.power()), 179.0 * kPi * (0.2126 * 12 + 0.7152 * 11 + 0.0722 * 9.5) * standard.area(),
+                1e-3 * lumensOfPower(standard.power()));
+    EXPECT_EQ(light.area(), standard.area());
+    EXPECT_NEAR(lumensOfPower(light.power()), 3000.0, 3000.0 * 1e-5) << "panel " << i;
+    EXPECT_NEAR(light.radiance.x / light.radiance.y, warm.x / warm.y, 1e-5);
+    EXPECT_NEAR(light.radiance.z / light.radiance.y, warm.z / warm.y, 1e-5);
+    total += lumensOfPower(light.power());
+    // What the camera sees of it: a material emitting its radiance.
+    bool shown = false;
+    for (const Material& material : byLumens.materials()) shown |= material.emission == light.radiance;
+    EXPECT_TRUE(shown) << "panel " << i;
+  }
+  EXPECT_NEAR(total, 3000.0 * double(byLumens.lights().size()), 1e-3 * total);
+  EXPECT_THROW(generateBuilding(preset, 2, temp / "bad", PanelLighting{-5.0, {}}), std::invalid_argument);
 }
 
 TEST(BuildingGenerator, TowerFloorsScaleTheBuilding) {
