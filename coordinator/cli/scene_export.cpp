@@ -86,9 +86,10 @@ ExportSummary exportStoreObj(const std::string& directory, const std::string& ob
 int runSceneExport(const std::string& store, const std::string& output, const DaylightSettings& daylight) {
   if (isRadiancePath(output)) {
     const ExportSummary s = exportStoreRadiance(store, output, daylight);
-    std::cout << fmt::format("{}: {} triangles as {} polygons, {} materials, bounds ({}, {}, {}) - ({}, {}, {}){}\n",
+    std::cout << fmt::format("{}: {} triangles as {} polygons, {} materials, bounds ({}, {}, {}) - ({}, {}, {}){}{}\n",
                              output, s.triangles, s.polygons, s.materials, s.bounds.lo.x, s.bounds.lo.y, s.bounds.lo.z,
                              s.bounds.hi.x, s.bounds.hi.y, s.bounds.hi.z,
+                             s.luminaires ? fmt::format("; {} IES luminaires as light spheres", s.luminaires) : "",
                              s.skyFile.empty() ? "" : "; daylight in " + s.skyFile);
     return 0;
   }

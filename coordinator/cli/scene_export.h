@@ -21,6 +21,7 @@ struct ExportSummary {
   uint64_t polygons = 0;     // Radiance: polygons written (a lamp quad is one)
   uint32_t materials = 0;    // Radiance: material definitions written
   std::string skyFile;       // Radiance: the daylight file written, if any
+  uint32_t luminaires = 0;   // Radiance: IES point luminaires written as sources (a data file each)
 };
 
 // Throws std::runtime_error naming the file when it cannot be written or

@@ -199,6 +199,75 @@ void writeSky(const DaylightSettings& daylight, const std::string& storeDirector
   }
 }
 
+// A point luminaire as Radiance sources are made from IES files (as
+// ies2rad makes them): a `light` sphere whose radiance a `brightdata`
+// pattern scales by the luminaire's candela towards each direction, read
+// from a data file beside the scene in source.cal's coordinates: theta
+// from the nadir (its -z), phi from C0 (its +x) towards C90 (its +y). A
+// sphere of radius r shows a projected area of pi r^2 every way, so a
+// radiance of intensity / (pi r^2) gives the intensity.
+constexpr double kLuminaireRadius = 0.005;   // metres: well inside the 1 cm a point keeps from a ceiling
+constexpr int kThetaSteps = 180;             // 1 degree
+constexpr int kPhiSteps = 180;               // 2 degrees
+
+// Euler angles (degrees) of xform's `-rx a -ry b -rz c`, which turn the
+// pattern's frame (x C0, y C90, z up: against the nadir) into the scene's.
+Vec3 luminaireRotation(const AreaLight& light) {
+  const Vec3 x = light.edge2, y = light.luminaireC90(), z = -light.edge1;   // the columns of M
+  const double m00 = x.x, m10 = x.y, m20 = x.z, m21 = y.z, m22 = z.z, m11 = y.y, m12 = z.y;
+  const double cosB = std::hypot(m00, m10);
+  double a, b = std::atan2(-m20, cosB), c;
+  if (cosB > 1e-6) {
+    a = std::atan2(m21, m22);
+    c = std::atan2(m10, m00);
+  } else {   // looking straight along x: M = Ry(b) Rx(a)
+    a = std::atan2(-m12, m11);
+    c = 0;
+  }
+  return Vec3(float(a * 180 / kPi), float(b * 180 / kPi), float(c * 180 / kPi));
+}
+
+// The data file: phi (slowest) by theta, candela.
+void writeLuminaireData(const AreaLight& light, const std::string& path) {
+  AtomicTextFile data(path);
+  fmt::ostream& out = data.out();
+  out.print("2\n0 360 {}\n0 180 {}\n", kPhiSteps + 1, kThetaSteps + 1);
+  for (int p = 0; p <= kPhiSteps; ++p) {
+    const double phi = 2 * kPi * p / kPhiSteps;
+    for (int t = 0; t <= kThetaSteps; ++t) {
+      const double theta = kPi * t / kThetaSteps;
+      const Vec3 local(float(std::sin(theta) * std::cos(phi)), float(std::sin(theta) * std::sin(phi)),
+                       float(std::cos(theta)));
+      out.print("{:.6g}{}", light.intensity->candela(local), t == kThetaSteps ? "\n" : " ");
+    }
+  }
+  data.commit();
+}
+
+// Writes each point luminaire's source into `out` and its data file beside
+// `radPath`; returns how many.
+uint32_t writeLuminaires(const SceneStore& store, const std::string& radPath, fmt::ostream& out) {
+  uint32_t written = 0;
+  for (const AreaLight& light : store.lights()) {
+    if (!light.isPoint()) continue;
+    const fs::path data = fs::path(radPath).replace_extension(fmt::format(".luminaire{}.dat", light.id));
+    writeLuminaireData(light, data.string());
+    const Vec3 r = luminaireRotation(light);
+    const Vec3 radiance = light.radiance * float(1.0 / (kPi * kLuminaireRadius * kLuminaireRadius));
+    const std::string name = fmt::format("luminaire{}", light.id);
+    out.print("# point luminaire {} ({}, {:.1f} lm): nadir {} {} {}, C0 {} {} {}; candela in {}\n", light.id,
+              light.intensity->name(), lumensOfPower(light.power()), light.edge1.x, light.edge1.y, light.edge1.z,
+              light.edge2.x, light.edge2.y, light.edge2.z, data.filename().string());
+    out.print("void brightdata {0}_dist\n11 noop {1} source.cal src_phi src_theta -rx {2} -ry {3} -rz {4}\n0\n0\n"
+              "{0}_dist light {0}_light\n0\n0\n3 {5} {6} {7}\n"
+              "{0}_light sphere {0}\n0\n0\n4 {8} {9} {10} {11}\n",
+              name, data.filename().string(), r.x, r.y, r.z, radiance.x, radiance.y, radiance.z, light.corner.x,
+              light.corner.y, light.corner.z, kLuminaireRadius);
+    ++written;
+  }
+  return written;
+}
+
 }  // namespace
 
 bool isRadiancePath(const std::string& path) { return fs::path(path).extension() == ".rad"; }
@@ -254,15 +323,7 @@ ExportSummary exportStoreRadiance(const std::string& directory, const std::strin
   }
   summary.materials = writeMaterials(store, out);
   writeGeometry(store, out, summary);
-  // A point luminaire has no triangles to export; say where it is, so that
-  // ies2rad can make it from the same file.
-  for (const AreaLight& light : store.lights())
-    if (light.isPoint())
-      out.print("# point luminaire {} ({}, {:.1f} lm): position {} {} {}, nadir {} {} {}, C0 {} {} {}: not exported "
-                "(ies2rad makes it from its IES file)\n",
-                light.id, light.intensity->name(), lumensOfPower(light.power()), light.corner.x, light.corner.y,
-                light.corner.z, light.edge1.x, light.edge1.y, light.edge1.z, light.edge2.x, light.edge2.y,
-                light.edge2.z);
+  summary.luminaires = writeLuminaires(store, radPath, out);
   if (daylight.any()) {
     AtomicTextFile sky(skyPath);
     writeSky(daylight, store.directory(), sky.out());
