@@ -4,8 +4,8 @@
 Starts a coordinator, two workers and the dashboard on a generated demo
 building, opens the printed URL in Debian's Chromium driven by Selenium, and
 checks what a user sees: a job's progress advancing and its preview image
-changing as render passes land, a second job cancelled from the page (and
-by `portico status`), and requests without the token refused (401), with a
+changing as render passes land, its priority changed from the page and a
+second job cancelled from it (both confirmed by `portico status`), and requests without the token refused (401), with a
 wrong one or a forged action refused (403).
 
     dashboard_test.py BIN_DIR [--screenshot FILE.png]
@@ -157,6 +157,8 @@ def main():
         assert http_status(f"{base}/api/jobs/{job_b}/cancel", {"X-Portico-Token": token, "Origin": "http://evil.test"},
                            "POST") == 403, "another site's page does not act"
         assert http_status(f"{base}/api/state", {"X-Portico-Token": token, "Host": "evil.test:80"}) == 403
+        assert http_status(f"{base}/api/jobs/{job_b}/priority?priority=5", cookie, "POST") == 403
+        assert http_status(f"{base}/api/jobs/{job_b}/priority?priority=5000", {"X-Portico-Token": token}, "POST") == 400
 
         options = webdriver.ChromeOptions()
         options.binary_location = browser
@@ -216,6 +218,18 @@ def main():
             with open(args.screenshot, "wb") as out:
                 out.write(base64.b64decode(shot["data"]))
             print(f"wrote {args.screenshot}")
+
+        # A's priority changed from the page, as `portico priority` would.
+        field = driver.find_element(By.ID, "priority")
+        field.clear()
+        field.send_keys("7")
+        driver.find_element(By.ID, "priority-set").click()
+        wait_for("job A's priority on the page", lambda: driver.execute_script(
+            f"const c = document.querySelector('#jobs tr[data-job=\"{job_a}\"] td.priority'); return c && c.textContent;")
+            == "7", 20)
+        status = json.loads(farm.portico("status", "--coordinator", farm.endpoint, str(job_a), "--json"))
+        assert status["priority"] == 7, status.get("priority")
+        print(f"job {job_a}: priority 7 set from the page; portico status says {status['priority']}")
 
         # Cancel B from the page (its confirmation dialog accepted).
         def click_cancel():

@@ -13,6 +13,7 @@
 
 #include "common/image/png_file.h"
 #include "common/net/client.h"
+#include "coordinator/job_limits.h"
 #include "coordinator/cli/dashboard/dashboard_page.h"
 #include "coordinator/cli/dashboard/dashboard_token.h"
 #include "coordinator/cli/dashboard/plan_geometry.h"
@@ -96,6 +97,12 @@ struct DashboardServer::Impl {
   std::map<std::string, nlohmann::json> plans;   // by store directory: read once
 
   Impl(const ConnectOptions& c, FarmPoller& p, std::string t) : connect(c), poller(p), token(std::move(t)) {}
+
+  // Actions get a connection of their own: the poller's is its thread's.
+  net::CoordinatorClient client() const {
+    return net::CoordinatorClient(connect.endpoint, connect.keys,
+                                  std::chrono::milliseconds(int64_t(connect.timeoutSeconds * 1000)), net::Role::Client);
+  }
 
   // The names this server answers to: a page reached under another name
   // (DNS rebinding) is refused, whatever it carries.
@@ -229,13 +236,30 @@ struct DashboardServer::Impl {
     sendJson(response, it->second);
   }
 
+  void priority(const httplib::Request& request, httplib::Response& response) {
+    const auto job = jobNumber(request.matches[1]);
+    if (!job) return refuse(response, 404, "no such job");
+    const std::string text = request.get_param_value("priority");
+    int32_t value = 0;
+    const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (text.empty() || error != std::errc() || end != text.data() + text.size() || value < limits::kMinPriority ||
+        value > limits::kMaxPriority)
+      return refuse(response, 400, fmt::format("priority: a whole number from {} to {}", limits::kMinPriority,
+                                               limits::kMaxPriority));
+    try {
+      const auto status = nlohmann::json::parse(client().setPriority(*job, value));
+      spdlog::info("job {}: priority {} from the page", *job, value);
+      sendJson(response, {{"job", *job}, {"priority", status.value("priority", value)}, {"state", status.value("state", "?")}});
+    } catch (const std::exception& e) {
+      refuse(response, 502, e.what());
+    }
+  }
+
   void cancel(const httplib::Request& request, httplib::Response& response) {
     const auto job = jobNumber(request.matches[1]);
     if (!job) return refuse(response, 404, "no such job");
     try {
-      net::CoordinatorClient client(connect.endpoint, connect.keys,
-                                    std::chrono::milliseconds(int64_t(connect.timeoutSeconds * 1000)), net::Role::Client);
-      const auto status = nlohmann::json::parse(client.cancel(*job));
+      const auto status = nlohmann::json::parse(client().cancel(*job));
       spdlog::info("job {} cancelled from the page: {}", *job, status.value("state", "?"));
       sendJson(response, {{"job", *job}, {"state", status.value("state", "?")}});
     } catch (const std::exception& e) {
@@ -260,6 +284,7 @@ DashboardServer::DashboardServer(const ConnectOptions& connect, FarmPoller& poll
   s.Get(R"(/api/jobs/(\d+)/preview\.png)", [impl](const auto& request, auto& response) { impl->preview(request, response); });
   s.Get(R"(/api/jobs/(\d+)/plan)", [impl](const auto& request, auto& response) { impl->plan(request, response); });
   s.Post(R"(/api/jobs/(\d+)/cancel)", [impl](const auto& request, auto& response) { impl->cancel(request, response); });
+  s.Post(R"(/api/jobs/(\d+)/priority)", [impl](const auto& request, auto& response) { impl->priority(request, response); });
 }
 
 DashboardServer::~DashboardServer() = default;

@@ -13,7 +13,7 @@
 //  * a Host header other than this server's names is refused (DNS rebinding);
 //  * the page shows what the coordinator's Status tells the dashboard's
 //    client key, and acts with that key: nothing `portico status` and
-//    `portico cancel` would not.
+//    `portico cancel` and `portico priority` would not.
 #pragma once
 
 #include <cstdint>
