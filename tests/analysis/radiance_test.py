@@ -84,9 +84,14 @@ with tempfile.TemporaryDirectory() as work:
     live = rt.rtrace_irradiance(radiance, octree, options,
                                 [tuple(p[k] for k in ("x", "y", "z", "dx", "dy", "dz")) for p in picks for _ in range(4)])
     for n, p in enumerate(picks):
-        value = sum(rt.lux(v) for v in live[4 * n:4 * n + 4]) / 4
+        samples = [rt.lux(v) for v in live[4 * n:4 * n + 4]]
+        value = sum(samples) / 4
         off = value / p["lux"] - 1
-        check(abs(off) <= 0.03, f"{scene}: live rtrace -I at sensor {p['index']}: {value:.2f} lx, stored "
-                                f"{p['lux']:.2f} lx ({100 * off:+.2f} %)")
+        # rtrace -u+ is not seeded: the four samples' own spread bounds what
+        # a dim, indirectly lit sensor can be asked (3 % or 4 standard errors).
+        spread = (sum((x - value) ** 2 for x in samples) / 3) ** 0.5 / 2 / value
+        limit = max(0.03, 4 * spread)
+        check(abs(off) <= limit, f"{scene}: live rtrace -I at sensor {p['index']}: {value:.2f} lx, stored "
+                                 f"{p['lux']:.2f} lx ({100 * off:+.2f} %, limit {100 * limit:.2f} %)")
 
 check.finish()
