@@ -82,22 +82,23 @@ uint64_t CoordinatorClient::submit(capnp::MallocMessageBuilder& submitEnvelope) 
   return answer.getJob();
 }
 
+std::string CoordinatorClient::statusReplyJson(capnp::MallocMessageBuilder& message, const char* what, bool resend) {
+  auto reply = request(message, resend);
+  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
+    throw std::runtime_error(fmt::format("coordinator sent an unexpected reply to {}", what));
+  return reply->envelope().getStatusReply().getJson();
+}
+
 std::string CoordinatorClient::statusJson(uint64_t job) {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initStatus().setJob(job);
-  auto reply = request(message, true);
-  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
-    throw std::runtime_error("coordinator sent an unexpected reply to Status");
-  return reply->envelope().getStatusReply().getJson();
+  return statusReplyJson(message, "Status", true);
 }
 
 std::string CoordinatorClient::cancel(uint64_t job) {
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initCancel().setJob(job);
-  auto reply = request(message);
-  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
-    throw std::runtime_error("coordinator sent an unexpected reply to Cancel");
-  return reply->envelope().getStatusReply().getJson();
+  return statusReplyJson(message, "Cancel", false);
 }
 
 std::string CoordinatorClient::setPriority(uint64_t job, int32_t priority) {
@@ -105,10 +106,7 @@ std::string CoordinatorClient::setPriority(uint64_t job, int32_t priority) {
   auto request = message.initRoot<wire::Envelope>().initPriority();
   request.setJob(job);
   request.setPriority(priority);
-  auto reply = CoordinatorClient::request(message);
-  if (reply->envelope().which() != wire::Envelope::STATUS_REPLY)
-    throw std::runtime_error("coordinator sent an unexpected reply to Priority");
-  return reply->envelope().getStatusReply().getJson();
+  return statusReplyJson(message, "Priority", false);
 }
 
 std::unique_ptr<Decoded> CoordinatorClient::fetchImage(uint64_t job) {

@@ -29,6 +29,9 @@ class CoordinatorClient {
   // timeout (naming the endpoint) or when the coordinator answers with an
   // error. `resend`: a request that may be answered twice (it changes nothing).
   std::unique_ptr<Decoded> request(capnp::MallocMessageBuilder& message, bool resend = false);
+  // Sends `message` (named `what` in errors) and returns the job status JSON
+  // the coordinator answers it with (Status, Cancel, Priority).
+  std::string statusReplyJson(capnp::MallocMessageBuilder& message, const char* what, bool resend);
 
   uint64_t submit(capnp::MallocMessageBuilder& submitEnvelope);
   std::string statusJson(uint64_t job);   // job 0: all jobs
