@@ -9,9 +9,11 @@
 #include "coordinator/cli/bench/bench_analyze.h"
 #include "coordinator/cli/bench/bench_calibrate.h"
 #include "coordinator/cli/bench/bench_cluster.h"
+#include "coordinator/cli/bench/bench_coordinator.h"
 #include "coordinator/cli/bench/bench_paper.h"
 #include "coordinator/cli/bench/bench_pipeline.h"
 #include "coordinator/cli/bench/bench_quality.h"
+#include "coordinator/cli/bench/simulated_workers.h"
 #include "coordinator/cli/command_table.h"
 
 namespace portico::cli {
@@ -215,6 +217,75 @@ void addAnalyze(CLI::App& bench, CommandTable& table) {
   table.add(command, [o] { return runBenchAnalyze(*o); });
 }
 
+
+// The shape of the simulated workers' Results (simulated_result.h), for the
+// bench and for each of its worker processes.
+void addResultShape(CLI::App& command, ResultShape& shape) {
+  command.add_option("--deposits-per-photon", shape.depositsPerPhoton,
+                     "photon records (deposits and portal copies) per photon a lease starts")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
+  command.add_option("--photon-crossings", shape.photonCrossings, "photons handed on to a neighbouring cell per photon")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.95));
+  command.add_option("--camera-crossings", shape.cameraCrossings, "render rays handed on per camera ray")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.95));
+  command.add_option("--max-depth", shape.maxDepth, "portals a handed-on ray crosses at most")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1000u));
+  command.add_option("--rays-per-second", shape.raysPerSecond,
+                     "the speed each simulated worker reports (the coordinator sizes leases to ~1 s of it)")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1e12));
+  command.add_flag("--miscount", shape.miscount, "fault injection: photon Results that do not add up")->group("");
+}
+
+void addCoordinator(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchCoordinatorOptions>();
+  auto* command = bench.add_subcommand(
+      "coordinator", "the real coordinator driven by N simulated workers: leases/s, CPU per lease, latency "
+                     "(docs/coordinator-benchmark.md)");
+  auto* workers = command->add_option("--workers", o->workers, "simulated worker counts, one run each")
+                      ->capture_default_str();
+  command->add_option("--preset", o->preset, "building preset of the job")->capture_default_str();
+  auto* floors = command->add_option("--floors", o->floors, "floors of the tower preset")->capture_default_str();
+  command->add_option("--scene-seed", o->sceneSeed, "furnishing seed of the building")->capture_default_str();
+  command->add_option("--store", o->store, "scene store to reuse, or to generate the building into and keep");
+  auto* photons = command->add_option("--photons-per-light", o->photonsPerLight, "the job's photons per light")
+                      ->capture_default_str()
+                      ->check(CLI::Range(uint64_t(1), uint64_t(1000000)));
+  command->add_option("--lease-rays", o->leaseRays, "the coordinator's --lease-rays")
+      ->capture_default_str()
+      ->check(CLI::Range(int64_t(1), int64_t(1000000)));
+  command->add_option("--width", o->width, "image width of the job's render phase")->capture_default_str();
+  command->add_option("--height", o->height, "image height")->capture_default_str();
+  command->add_option("--workers-per-process", o->workersPerProcess, "simulated workers per process")
+      ->capture_default_str();
+  command->add_flag("!--no-deposit-regions", o->depositRegions,
+                    "the simulated workers send deposits in their Results (workers on other machines) instead of "
+                    "writing them into their regions");
+  addResultShape(*command, o->shape);
+  command->add_option("--timeout", o->timeoutSeconds, "seconds one run may take")->capture_default_str();
+  command->add_flag("--quick", o->quick, "2 floors, 200 photons per light, --workers 4,16 (unless given)");
+  command->add_flag("--keep", o->keep, "keep each run's folder (jobs.db, logs, the workers' reports)");
+  command->add_option("--csv", o->csv, "write one row per worker count");
+  command->add_option("--plot", o->plot, "write a PNG: leases/s, latency and CPU per lease against workers");
+  table.add(command, [o, workers, floors, photons] {
+    return runBenchCoordinator(*o, workers->count() > 0, floors->count() > 0, photons->count() > 0);
+  });
+
+  auto s = std::make_shared<SimulatedWorkersOptions>();
+  auto* simulated = bench.add_subcommand("simulated-workers", "one process of `bench coordinator`'s simulated workers");
+  simulated->group("");   // hidden: the bench starts it
+  simulated->add_option("--connect", s->endpoint, "the coordinator's endpoint")->required();
+  simulated->add_option("--count", s->count, "workers in this process")->capture_default_str();
+  simulated->add_option("--first", s->first, "the first worker's number")->capture_default_str();
+  simulated->add_option("--report", s->report, "where the totals and samples go")->required();
+  simulated->add_flag("!--no-deposit-regions", s->depositRegions, "send deposits in the Results");
+  addResultShape(*simulated, s->shape);
+  table.add(simulated, [s] { return runSimulatedWorkers(*s); });
+}
 }  // namespace
 
 void addBenchCommands(CLI::App& app, CommandTable& table) {
@@ -227,6 +298,7 @@ void addBenchCommands(CLI::App& app, CommandTable& table) {
   addPaper(*bench, table);
   addCalibrate(*bench, table);
   addCluster(*bench, table);
+  addCoordinator(*bench, table);
 }
 
 }  // namespace portico::cli
