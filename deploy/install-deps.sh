@@ -25,6 +25,8 @@ packages=(
   liberfa-dev
   libcpp-httplib-dev
   python3 python3-yaml python3-venv
+  # The namespace test (tests/deploy/netns_test.sh): ip netns, veth pairs, tc; unshare.
+  iproute2 util-linux
   # `portico dashboard`'s test drives the page in a headless browser (tests/dashboard/).
   chromium chromium-driver python3-selenium
 )
