@@ -63,8 +63,11 @@ if [ ! -x "$repo/.venv/bin/python3" ]; then python3 -m venv "$repo/.venv"; fi
 # in pyradiance/bin, their library in pyradiance/lib for RAYPATH) checks
 # portico's illuminance: `scene export FILE.rad`, the comparison tests and
 # `bench analyze` (docs/radiance.md).
+# NVIDIA's FLIP (flip-evaluator) scores images per pixel beside the block
+# metric: portico-compare, `bench quality` and the reference tests
+# (docs/image-quality.md).
 "$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "ifcopenshell==0.9.0.post1" "numpy>=1.24" \
-  "pyradiance==1.3.1"
+  "pyradiance==1.3.1" "flip-evaluator==1.7"
 
 if [ "$mitsuba" = 1 ]; then
   venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"

@@ -17,6 +17,17 @@ double meanOf(const LinearImage& image, int x0, int y0, int w, int h) {
 }
 }  // namespace
 
+double relativeMse(const LinearImage& image, const LinearImage& reference) {
+  if (image.rgb.size() != reference.rgb.size() || reference.rgb.empty())
+    throw std::invalid_argument("relative MSE of images of different sizes");
+  double sum = 0;
+  for (size_t i = 0; i < reference.rgb.size(); ++i) {
+    const double difference = double(image.rgb[i]) - reference.rgb[i];
+    sum += difference * difference / (double(reference.rgb[i]) * reference.rgb[i] + kRelativeMseEpsilon);
+  }
+  return sum / double(reference.rgb.size());
+}
+
 ImageComparison compareImages(const LinearImage& image, const LinearImage& reference, int blockSize, double threshold,
                               double blockLimit) {
   if (image.width != reference.width || image.height != reference.height)
@@ -46,6 +57,7 @@ ImageComparison compareImages(const LinearImage& image, const LinearImage& refer
       result.blocks.push_back(block);
     }
   if (result.blocksChecked > 0) result.blockRmse = std::sqrt(result.blockRmse / result.blocksChecked);
+  result.relativeMse = relativeMse(image, reference);
   return result;
 }
 
@@ -54,8 +66,10 @@ std::string describe(const ImageComparison& c) {
   for (const auto& b : c.blocks)
     if (b.checked && (!worst || b.relativeError > worst->relativeError)) worst = &b;
   std::string text = fmt::format(
-      "image mean {:.5f} vs reference {:.5f}: {:.2f} % off; {} blocks checked, {} over the limit, block RMSE {:.2f} %",
-      c.imageMean, c.referenceMean, 100 * c.meanRelativeError, c.blocksChecked, c.blocksOverLimit, 100 * c.blockRmse);
+      "image mean {:.5f} vs reference {:.5f}: {:.2f} % off; {} blocks checked, {} over the limit, block RMSE {:.2f} %; "
+      "relMSE {:.3g}",
+      c.imageMean, c.referenceMean, 100 * c.meanRelativeError, c.blocksChecked, c.blocksOverLimit, 100 * c.blockRmse,
+      c.relativeMse);
   if (worst)
     text += fmt::format("; worst block at ({}, {}): {:.5f} vs {:.5f} ({:.1f} %)", worst->x, worst->y, worst->image,
                         worst->reference, 100 * worst->relativeError);

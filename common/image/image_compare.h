@@ -1,6 +1,8 @@
 // Compares a rendered image with a reference the way the reference scenes
 // ask (docs/validation.md): the image mean, and the means of square
-// blocks, where dim blocks are judged against the image mean.
+// blocks, where dim blocks are judged against the image mean; beside them
+// the per-pixel relative MSE, which sees the grain that block means average
+// away (docs/image-quality.md).
 #pragma once
 
 #include <string>
@@ -28,7 +30,16 @@ struct ImageComparison {
   // Root mean square of the checked blocks' relative errors (the "block
   // RMSE" of `portico bench quality`, for portico's images and Mitsuba's).
   double blockRmse = 0;
+  // Mean over pixels and channels of (x - ref)^2 / (ref^2 + kRelativeMseEpsilon).
+  double relativeMse = 0;
 };
+
+// The usual small epsilon of relative MSE (as Rousselle et al. and the
+// denoising literature use it): keeps black reference pixels from dividing
+// by zero, and weighs errors in pixels darker than ~0.1 less.
+constexpr double kRelativeMseEpsilon = 1e-2;
+
+double relativeMse(const LinearImage& image, const LinearImage& reference);
 
 // Blocks of blockSize x blockSize pixels; a block is checked when its
 // reference mean exceeds `threshold` times the reference image mean, and is

@@ -9,8 +9,9 @@ trap 'rm -rf "$work"' EXIT
 "$bin/portico" bench quality "$scenes/cornell_closed" --settings "--spp 1 --gather 1 --photons 20000;--spp 4 --gather 2 --photons 50000" \
   --csv "$work/quality.csv" --plot "$work/quality.png" | tee "$work/out.txt"
 [ "$(wc -l < "$work/quality.csv")" -eq 3 ] || { echo "expected a header and 2 rows"; exit 1; }
-head -1 "$work/quality.csv" | grep -qx "settings,seconds,mean_err,worst_block,rel_rmse_blocks"
-# Every row: seconds > 0, errors in [0, 1); the longer render's block RMSE is lower.
+head -1 "$work/quality.csv" | grep -qx "settings,seconds,mean_err,worst_block,rel_rmse_blocks,rel_mse,flip"
+# Every row: seconds > 0, errors in [0, 1); the longer render's block RMSE and relative MSE are lower;
+# FLIP in (0, 1) where flip-evaluator is installed (the sources' .venv), else empty.
 python3 - "$work/quality.csv" <<'PY'
 import csv, sys
 rows = list(csv.DictReader(open(sys.argv[1])))
@@ -18,7 +19,12 @@ for r in rows:
     assert float(r["seconds"]) > 0, r
     for k in ("mean_err", "worst_block", "rel_rmse_blocks"):
         assert 0 <= float(r[k]) < 1, r
+    assert 0 < float(r["rel_mse"]) < 1, r
+    assert r["flip"] == "" or 0 < float(r["flip"]) < 1, r
 assert float(rows[1]["rel_rmse_blocks"]) < float(rows[0]["rel_rmse_blocks"]), rows
+assert float(rows[1]["rel_mse"]) < float(rows[0]["rel_mse"]), rows
+if rows[0]["flip"]:
+    assert float(rows[1]["flip"]) < float(rows[0]["flip"]), rows
 PY
 [ -s "$work/quality.png" ] || { echo "no plot"; exit 1; }
 # A folder without reference.exr is refused, naming it.

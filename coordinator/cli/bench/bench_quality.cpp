@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <regex>
 #include <sstream>
 #include <stdexcept>
@@ -43,18 +44,26 @@ void runChild(const std::vector<std::string>& argv, const fs::path& log, const s
 
 struct Rung {
   std::string settings;
-  double seconds = 0, meanError = 0, worstBlock = 0, blockRmse = 0;
+  double seconds = 0, meanError = 0, worstBlock = 0, blockRmse = 0, relativeMse = 0;
+  std::optional<double> flip;   // unset where flip-evaluator is not installed
 };
 
-// portico-compare's line: "... X % off; ... block RMSE Y %; worst block at (..): a vs b (Z %)".
+constexpr const char* kCsvHeader = "settings,seconds,mean_err,worst_block,rel_rmse_blocks,rel_mse,flip\n";
+
+// portico-compare's line: "... X % off; ... block RMSE Y %; relMSE R; worst
+// block at (..): a vs b (Z %); FLIP F" (or "FLIP skipped: why").
 void parseComparison(const std::string& text, Rung& rung) {
-  static const std::regex pattern(R"(([0-9.]+) % off.*block RMSE ([0-9.]+) %.*\(([0-9.]+) %\))");
+  static const std::regex pattern(
+      R"(([0-9.]+) % off.*block RMSE ([0-9.]+) %; relMSE ([0-9.e+-]+).*\(([0-9.]+) %\))");
   std::smatch match;
   if (!std::regex_search(text, match, pattern))
     throw std::runtime_error("portico-compare printed no comparison: " + text);
   rung.meanError = std::stod(match[1]) / 100;
   rung.blockRmse = std::stod(match[2]) / 100;
-  rung.worstBlock = std::stod(match[3]) / 100;
+  rung.relativeMse = std::stod(match[3]);
+  rung.worstBlock = std::stod(match[4]) / 100;
+  static const std::regex flip(R"(; FLIP ([0-9.]+))");
+  if (std::regex_search(text, match, flip)) rung.flip = std::stod(match[1]);
 }
 
 // Scores `image` against the reference with portico-compare, which exits 1
@@ -68,8 +77,8 @@ void score(const std::string& compare, const fs::path& image, const fs::path& re
 }
 
 std::string csvRow(const Rung& r) {
-  return fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f}\n", csvField(r.settings), r.seconds, r.meanError, r.worstBlock,
-                     r.blockRmse);
+  return fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f},{:.5g},{}\n", csvField(r.settings), r.seconds, r.meanError,
+                     r.worstBlock, r.blockRmse, r.relativeMse, r.flip ? fmt::format("{:.4f}", *r.flip) : "");
 }
 
 }  // namespace
@@ -91,7 +100,7 @@ int runBenchQuality(const BenchQualityOptions& options) {
            "importing " + scene.string());
 
   std::vector<Rung> rungs;
-  std::cout << "settings,seconds,mean_err,worst_block,rel_rmse_blocks\n";
+  std::cout << kCsvHeader;
   for (size_t i = 0; i < ladder.size(); ++i) {
     const fs::path image = work / fmt::format("rung-{}.exr", i);
     std::vector<std::string> argv{portico, "render", (work / "store").string(), "-o", image.string(),
@@ -121,7 +130,7 @@ int runBenchQuality(const BenchQualityOptions& options) {
 
   if (!options.csv.empty()) {
     std::ofstream out(options.csv);
-    out << "settings,seconds,mean_err,worst_block,rel_rmse_blocks\n";
+    out << kCsvHeader;
     for (const Rung& r : rungs) out << csvRow(r);
     for (const Rung& r : mitsubaRungs) out << csvRow(r);
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write", options.csv));

@@ -1,0 +1,1 @@
+"""Per-pixel image quality measures that portico's C++ does not compute itself."""
