@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Across hosts, for real: the coordinator in one network namespace and three
 # workers in three others, each joined to the coordinator's by its own veth
-# pair shaped like a network link (2 ms delay and 100 Mbit/s each way with
-# tc netem; where the kernel has no netem, the rate alone with tbf, said so),
-# over tcp:// with CURVE keys as beyond loopback. The workers share no file
+# pair shaped like a network link, 2 ms delay and 100 Mbit/s each way (tc
+# netem; on a kernel without netem, tbf for the rate and a relay in the
+# worker's namespace, delay_relay.py, for the delay), over tcp:// with CURVE
+# keys as beyond loopback. The workers share no file
 # system with the coordinator: each runs in a mount namespace where the
 # coordinator's folder (store, jobs.db, photon files) is an empty tmpfs, with
 # its own --cache-dir, so cells come over the wire and deposits go in
@@ -44,12 +45,13 @@ ip netns add "$coord_ns" 2> "$work/netns.err" || skip "cannot make a network nam
 for ns in "${worker_ns[@]}"; do ip netns add "$ns"; done
 ip -n "$coord_ns" link set lo up
 
-# The link's shape on one end of a veth: delay and rate with netem, else the rate alone.
-shaping="netem delay 2ms rate 100mbit"
+# The link's shape on one end of a veth: delay and rate with netem, else the
+# rate alone (and the delay from a relay, below).
+netem=yes
 shape() {   # NS DEVICE
   if ! tc -n "$1" qdisc add dev "$2" root netem delay 2ms rate 100mbit 2> /dev/null; then
     tc -n "$1" qdisc add dev "$2" root tbf rate 100mbit burst 64kb latency 50ms
-    shaping="tbf rate 100mbit (this kernel has no netem: no added delay)"
+    netem=""
   fi
 }
 for i in 0 1 2; do
@@ -64,6 +66,8 @@ for i in 0 1 2; do
   done
   ip -n "$ns" link set lo up
 done
+if [ -n "$netem" ]; then shaping="tc netem delay 2ms rate 100mbit"
+else shaping="tc tbf rate 100mbit; this kernel has no netem: the 2 ms delay each way from delay_relay.py"; fi
 log "namespaces: coordinator $coord_ns, workers ${worker_ns[*]}; links: $shaping"
 # The coordinator's folder, which no worker sees.
 shared="$work/coordinator"
@@ -93,11 +97,41 @@ connects "${worker_ns[0]}" 10.77.0.1 || fail "${worker_ns[0]} cannot reach the c
   fail "${worker_ns[1]} reaches the coordinator through worker 0's link: the namespaces are not separate"
 client() { ip netns exec "$coord_ns" "$bin/portico" "$@" --coordinator "$endpoint" --keys "$work/keys"; }
 
+# Where each worker connects: the coordinator across its link, or (no
+# netem) the relay in its namespace that delays what crosses the link.
+worker_endpoint=()
+for i in 0 1 2; do
+  if [ -n "$netem" ]; then
+    worker_endpoint+=("tcp://10.77.$i.1:$port")
+  else
+    ip netns exec "${worker_ns[$i]}" python3 "$(dirname "$0")/delay_relay.py" 127.0.0.1 "$port" "10.77.$i.1" "$port" 2 \
+      > "$work/relay-$i.log" 2>&1 &
+    pids+=($!)
+    worker_endpoint+=("tcp://127.0.0.1:$port")
+  fi
+done
+# The time to the coordinator's first bytes (its ZMTP greeting, sent as a
+# connection opens) from worker 0's namespace, by the path its worker
+# takes: at least the link's one-way 2 ms.
+greeting_ms() {
+  ip netns exec "${worker_ns[0]}" python3 -c 'import socket, sys, time
+host, port = sys.argv[1].removeprefix("tcp://").rsplit(":", 1)
+started = time.monotonic()
+with socket.create_connection((host, int(port)), timeout=5) as s:
+    s.recv(1)
+print(f"{(time.monotonic() - started) * 1000:.2f}")' "$1"
+}
+for _ in $(seq 100); do greeting_ms "${worker_endpoint[0]}" > /dev/null 2>&1 && break; sleep 0.1; done
+delay=$(greeting_ms "${worker_endpoint[0]}") || fail "no greeting from the coordinator through ${worker_endpoint[0]}"
+python3 -c 'import sys; sys.exit(0 if float(sys.argv[1]) >= 2.0 else 1)' "$delay" ||
+  fail "the coordinator's greeting came after $delay ms: the link has no 2 ms delay"
+log "the coordinator's greeting reaches worker 0's namespace after $delay ms"
+
 for i in 0 1 2; do
   # Its own mount namespace, the coordinator's folder covered by an empty tmpfs.
   ip netns exec "${worker_ns[$i]}" unshare --mount --propagation private sh -c \
     'mount -t tmpfs tmpfs "$1" && shift && exec "$@"' sh "$shared" \
-    "$bin/portico-worker" --connect "tcp://10.77.$i.1:$port" --keys "$work/keys" --cache-dir "$work/cache-$i" \
+    "$bin/portico-worker" --connect "${worker_endpoint[$i]}" --keys "$work/keys" --cache-dir "$work/cache-$i" \
     --memory 1GiB --name "ns-worker-$i" > "$work/worker-$i.log" 2>&1 &
   pids+=($!)
 done
