@@ -58,6 +58,7 @@ std::string convertIfc(const std::string& ifc, const std::string& outDirectory, 
                                      outDirectory, "--lights", options.lights, "--outdoors",
                                      options.outdoors};
   if (!options.glazing) arguments.push_back("--no-glazing");
+  if (options.findRooms) arguments.insert(arguments.end(), {"--cells", "rooms"});
   const int status = runProcess(arguments);
   if (status != 0)
     throw std::runtime_error(fmt::format("{}: the IFC converter failed (exit status {}; its message is above)", ifc, status));

@@ -14,6 +14,8 @@ struct IfcOptions {
   std::string lights = "auto";   // auto, fixtures, panels or none
   bool glazing = true;           // windows' glass as thin panes; false: windows left out, holes open
   std::string outdoors = "open"; // open: outdoor cells for daylight; closed: black sky and grey ground boxes
+  bool findRooms = false;        // find rooms in the geometry even where the model has usable IfcSpace
+  std::string keepConversion;    // non-empty: keep the converter's files (and the rooms found) in this directory
 };
 
 // Runs the converter on `ifc`, writing building.json, meshes/ and

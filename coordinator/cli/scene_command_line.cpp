@@ -54,7 +54,8 @@ void addImport(CLI::App& scene, CommandTable& table) {
       ->check(CLI::Range(0u, portico::kMaxImportGridResolution));
   import->add_option("--cells", o->cells,
                      "the cells: the input's own (given: a building.json's, else one cell), or rooms and portals "
-                     "found in the geometry (rooms: for meshes with no topology, docs/room-finding.md)")
+                     "found in the geometry (rooms: for meshes with no topology, docs/room-finding.md; an IFC model without "
+                     "usable IfcSpace gets rooms anyway)")
       ->capture_default_str()
       ->check(CLI::IsMember({"given", "rooms"}));
   import->add_option("--voxel-size", o->import.rooms.voxelSize,
@@ -81,6 +82,9 @@ void addImport(CLI::App& scene, CommandTable& table) {
                      "sky and a grey ground (closed)")
       ->capture_default_str()
       ->check(CLI::IsMember({"open", "closed"}));
+  import->add_option("--keep-conversion", o->ifc.keepConversion,
+                     "IFC input: keep the converter's building.json, meshes and conversion.json (with the rooms "
+                     "found, for python -m portico_ifc.watertight) in this directory");
   import->add_option("INPUT", o->inputs, "building.json, an IFC model (.ifc), or mesh files (OBJ, PLY, glTF/GLB, ...)")
       ->required();
   import->add_option("STORE", o->store, "scene store directory to write")->required();

@@ -20,6 +20,7 @@
 #include "coordinator/cli/compressed_size.h"
 #include "coordinator/cli/commands.h"
 #include "coordinator/cli/ifc_conversion.h"
+#include "coordinator/cli/scene_import_ifc.h"
 
 namespace portico::cli {
 
@@ -111,18 +112,9 @@ int runSceneImport(const std::vector<std::string>& inputs, const ImportOptions& 
   };
   ImportSummary summary;
   if (inputs.size() == 1 && isIfcFile(inputs[0])) {
-    // The converter's files live beside the store while it is written, then go.
-    const std::string converted = store + ".ifc-conversion";
-    std::filesystem::remove_all(converted);
-    try {
-      summary = importBuilding({convertIfc(inputs[0], converted, ifc)}, store, withProgress);
-      std::filesystem::copy_file(converted + "/conversion.json", store + "/conversion.json",
-                                 std::filesystem::copy_options::overwrite_existing);
-    } catch (...) {
-      std::filesystem::remove_all(converted);
-      throw;
-    }
-    std::filesystem::remove_all(converted);
+    IfcOptions withRooms = ifc;
+    withRooms.findRooms = ifc.findRooms || options.findRooms;
+    summary = importIfcModel(inputs[0], store, withProgress, withRooms);
   } else {
     summary = importBuilding(inputs, store, withProgress);
   }

@@ -1,17 +1,17 @@
 """IFC model -> building.json + one OBJ per (cell, material) (docs/importing-buildings.md).
 
     python -m portico_ifc model.ifc OUTDIR [--lights auto|fixtures|panels|none] [--no-glazing] [--outdoors open|closed]
+        [--cells spaces|rooms]
 
 Writes OUTDIR/building.json and OUTDIR/meshes/*.obj, and prints a summary
 (JSON) of what was found: spaces, cells, portals, doors and windows with a
-portal, glazed windows, lamps, cameras.
+portal, glazed windows, lamps, cameras. A model whose IfcSpaces give no
+cells is written as geometry only, for the room finder (geometry_only.py).
 """
 
 import argparse
 import json
-import math
 import os
-import re
 import sys
 import time
 
@@ -20,19 +20,17 @@ import ifcopenshell
 
 from . import cell_partition as cp
 from .clip import distribute
+from .geometry_only import convert_geometry_only
 from .closing import CLOSING_ALBEDO, CLOSING_MATERIAL, close_spaces
 from .glazing import outdoor_cells, window_panes
 from .ifc_model import read_ifc
 from .lights_cameras import fixture_lamps, space_cameras, space_panels
+from .output_files import rounded as _rounded, site_json as _site_json, slug as _slug, write_obj as _write_obj
 
 MARGIN = 2.0        # metres of outside air around the building
 SKY_INSET = 0.05    # metres: the black enclosure lies this far inside the outer cell faces
 SKY_ALBEDO = (0.0, 0.0, 0.0)
 GROUND_ALBEDO = (0.25, 0.25, 0.25)
-
-
-def _slug(text):
-    return re.sub(r"[^A-Za-z0-9]+", "-", text).strip("-").lower()[:40] or "x"
 
 
 def _enclosure(lo, hi):
@@ -55,15 +53,6 @@ def _enclosure(lo, hi):
     ground = np.array(triangles(quads["ground"]))
     sky = np.array([t for quad in quads["sky"] for t in triangles(quad)])
     return ground, sky
-
-
-def _write_obj(path, triangles):
-    with open(path, "w") as f:
-        for t in triangles:
-            for p in t:
-                f.write(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}\n")
-        for i in range(len(triangles)):
-            f.write(f"f {3 * i + 1} {3 * i + 2} {3 * i + 3}\n")
 
 
 def _cell_names(cells, spaces, outdoor=()):
@@ -128,18 +117,6 @@ def _match_openings(openings, portals, cells, lines, cell_of_point):
     return found
 
 
-def _rounded(point):
-    return [round(float(x), 4) for x in point]
-
-
-def _site_json(site):
-    """IFC's true north (x, y) in the plan is portico's (x, 0, -y); its
-    azimuth is measured from +Z towards +X, as --sun's."""
-    x, y = site.true_north
-    azimuth = math.degrees(math.atan2(x, -y)) % 360.0
-    return {"latitude": site.latitude, "longitude": site.longitude, "north_azimuth": round(azimuth, 4) % 360.0}
-
-
 def _pane_objects(panes, lines, owner, cells, names, out_dir):
     """Panes as glass objects: one OBJ per (cell, transmittance)."""
     if not panes:
@@ -174,12 +151,20 @@ def _glazing_summary(glazing, model, panes, paneless, objects, openings):
             "glass_objects": sum(1 for o in objects if "glass" in o)}
 
 
-def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", closing=True):
+def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", closing=True, cells="spaces"):
     started = time.time()
     model = read_ifc(ifc_path, glazing)
     read_seconds = time.time() - started
+
+    def geometry_only(reason):
+        if not model.elements:
+            raise SystemExit(f"{ifc_path}: {reason}, and no element with geometry either: nothing to import")
+        return convert_geometry_only(model, ifc_path, out_dir, lights, glazing, reason, started, read_seconds)
+
+    if cells == "rooms":
+        return geometry_only("rooms asked for (--cells rooms)")
     if not model.spaces:
-        raise SystemExit(f"{ifc_path}: no IfcSpace with geometry; cells follow spaces, so there is nothing to cut")
+        return geometry_only("no IfcSpace with geometry")
     every = np.concatenate([e.mesh.vertices for e in model.elements] + [s.mesh.vertices for s in model.spaces])
     building_lo, building_hi = every.min(axis=0), every.max(axis=0)
     outer_lo = building_lo - np.array([MARGIN, SKY_INSET * 2, MARGIN])
@@ -193,8 +178,8 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", clo
     labels = cp.label_boxes(lines, model.spaces)
     cells, owner = cp.merge_boxes(labels, lines)
     if all(c.label == cp.AIR for c in cells):
-        raise SystemExit(f"{ifc_path}: none of its {len(model.spaces)} IfcSpaces holds the centre of a grid box "
-                         "(all thinner than the grid between them): no room to cut")
+        return geometry_only(f"none of its {len(model.spaces)} IfcSpaces holds the centre of a grid box "
+                             "(all thinner than the grid between them)")
     sealers = [(e.mesh, e.mesh.bounds()) for e in model.elements if e.sealing]
     portals = cp.find_portals(cells, owner, lines, sealers)
 
@@ -335,12 +320,15 @@ def main(argv=None):
     parser.add_argument("--no-closing", dest="closing", action="store_false",
                         help="leave the faces of spaces that no wall, slab, roof or covering bounds open "
                              "(default: close them with the space's own faces)")
+    parser.add_argument("--cells", choices=("spaces", "rooms"), default="spaces",
+                        help="spaces: cells follow the IfcSpaces (a model without usable ones is written as "
+                             "geometry only, for the room finder); rooms: geometry only whatever the model has")
     args = parser.parse_args(argv)
     if not os.path.isfile(args.ifc):
         print(f"{args.ifc}: does not exist", file=sys.stderr)
         return 2
     try:
-        summary = convert(args.ifc, args.out_dir, args.lights, args.glazing, args.outdoors, args.closing)
+        summary = convert(args.ifc, args.out_dir, args.lights, args.glazing, args.outdoors, args.closing, args.cells)
     except (RuntimeError, ifcopenshell.Error) as error:       # IfcOpenShell's parse errors
         print(f"{args.ifc}: not a readable IFC model: {error}", file=sys.stderr)
         return 1

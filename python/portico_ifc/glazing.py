@@ -87,16 +87,40 @@ def _opening_face(hole, glass_middle, outdoor, portals, lines, cell_of_point):
     return min(found, key=lambda f: f[0])[1:] if found else None
 
 
+def _glass_and_hole(g, holes):
+    """The glass's box and the hole it fills: a window filling no opening element has its glass as the hole."""
+    corners = g.glass.corners().reshape(-1, 3)
+    glass_lo, glass_hi = corners.min(axis=0), corners.max(axis=0)
+    hole = holes.get(g.guid) or Opening("window", g.name, glass_lo, glass_hi, across=int(np.argmin(glass_hi - glass_lo)))
+    return glass_lo, glass_hi, hole
+
+
+def panes_on_glass(glazings, openings):
+    """(panes, windows without a pane) for a building without cells (rooms
+    found later, room_cells.h): each glass as one pane on its glass's middle
+    plane, within its hole. The pane closes the hole for the room finder, as
+    a window does."""
+    holes = {o.filler: o for o in openings if o.kind == "window"}
+    panes, missed = [], []
+    for g in glazings:
+        glass_lo, glass_hi, hole = _glass_and_hole(g, holes)
+        axis = hole.across
+        lo, hi = np.maximum(glass_lo, hole.lo), np.minimum(glass_hi, hole.hi)
+        u, v = [a for a in range(3) if a != axis]
+        if lo[u] >= hi[u] or lo[v] >= hi[v]:
+            missed.append(g.name)
+            continue
+        middle = (glass_lo[axis] + glass_hi[axis]) / 2
+        panes.append(Pane(g.name, _rectangle(axis, middle, lo, hi), g.transmittance, False, g.curtain))
+    return panes, missed
+
+
 def window_panes(glazings, openings, cells, outdoor, portals, lines, cell_of_point):
     """(panes, windows without a pane): one pane per glazed window."""
     holes = {o.filler: o for o in openings if o.kind == "window"}
     panes, missed = [], []
     for g in glazings:
-        corners = g.glass.corners().reshape(-1, 3)
-        glass_lo, glass_hi = corners.min(axis=0), corners.max(axis=0)
-        # A window filling no opening element: its glass is the hole.
-        hole = holes.get(g.guid) or Opening("window", g.name, glass_lo, glass_hi,
-                                            across=int(np.argmin(glass_hi - glass_lo)))
+        glass_lo, glass_hi, hole = _glass_and_hole(g, holes)
         axis = hole.across
         middle = (glass_lo[axis] + glass_hi[axis]) / 2
         face = _opening_face(hole, middle, outdoor, portals, lines, cell_of_point)

@@ -78,20 +78,28 @@ def space_panels(spaces, cells):
     return lamps
 
 
-def fixture_lamps(fixtures, cells, cell_of_point):
+def fixture_lamps(fixtures, cells=None, cell_of_point=None):
+    """A lamp under each fixture, within the cell holding it; without cells
+    (rooms found later) as wide as the fixture."""
     lamps = []
     for fixture in fixtures:
         cx, cz = (fixture.lo[0] + fixture.hi[0]) / 2, (fixture.lo[2] + fixture.hi[2]) / 2
         y = fixture.lo[1] - 0.01
-        c = cell_of_point(np.array([cx, y, cz]))
-        if c is None:
-            continue
-        cell = cells[c]
-        half_x = max(0.05, min((fixture.hi[0] - fixture.lo[0]) / 2, cx - cell.lo[0], cell.hi[0] - cx) * 0.95)
-        half_z = max(0.05, min((fixture.hi[2] - fixture.lo[2]) / 2, cz - cell.lo[2], cell.hi[2] - cz) * 0.95)
+        half_x, half_z = (fixture.hi[0] - fixture.lo[0]) / 2, (fixture.hi[2] - fixture.lo[2]) / 2
+        c = None
+        if cells is not None:
+            c = cell_of_point(np.array([cx, y, cz]))
+            if c is None:
+                continue
+            cell = cells[c]
+            half_x = min(half_x, cx - cell.lo[0], cell.hi[0] - cx) * 0.95
+            half_z = min(half_z, cz - cell.lo[2], cell.hi[2] - cz) * 0.95
         lumens = fixture.lumens or (fixture.watts * FIXTURE_EFFICACY if fixture.watts else FIXTURE_LUMENS)
-        lamps.append({"name": f"fixture {fixture.name}", "cell": c, "quad": _quad_down(cx, y, cz, half_x, half_z),
-                      "lumens": lumens, "colour_temperature": fixture.kelvin or FIXTURE_KELVIN})
+        lamp = {"name": f"fixture {fixture.name}", "quad": _quad_down(cx, y, cz, max(0.05, half_x), max(0.05, half_z)),
+                "lumens": lumens, "colour_temperature": fixture.kelvin or FIXTURE_KELVIN}
+        if c is not None:
+            lamp["cell"] = c
+        lamps.append(lamp)
     return lamps
 
 

@@ -3,8 +3,10 @@
     python -m portico_ifc.watertight OUT_DIR [--rays-per-space 64] [--seed 1]
 
 OUT_DIR is what `python -m portico_ifc model.ifc OUT_DIR` wrote (building.json,
-meshes/, conversion.json), converted with the outdoors open. From random
-points inside every space's cells, rays in random directions (a fixed seed:
+meshes/, conversion.json), converted with the outdoors open; for a model
+whose rooms were found in its geometry, what `portico scene import
+--keep-conversion OUT_DIR model.ifc STORE` kept (conversion.json then lists
+the rooms' air). From random points inside every space (or found room), rays in random directions (a fixed seed:
 same model, same figures) must hit a surface of the building, or leave it
 through an opening: the box of a door's or window's hole, or of a void that
 nothing fills. A ray that meets neither leaves the building through a hole in
@@ -74,6 +76,27 @@ def space_rays(space_meshes, rays_per_space, seed):
     return np.concatenate(origins), directions, names
 
 
+def room_rays(found_rooms, rays_per_space, seed):
+    """As space_rays, for rooms found in the geometry (a model without
+    usable IfcSpace): points drawn uniformly in voxels drawn from each room's
+    air samples (voxels its core reached: free of any surface, not inside a
+    wall), directions uniform on the sphere."""
+    rng = np.random.Generator(np.random.PCG64(seed))
+    origins, names = [], []
+    for room in found_rooms:
+        corners = np.asarray(room["samples"], dtype=np.float64).reshape(-1, 3)
+        if not len(corners):
+            continue
+        picked = corners[rng.integers(0, len(corners), rays_per_space)]
+        origins.append(picked + rng.random((rays_per_space, 3)) * room["voxel"])
+        names += [room["name"]] * rays_per_space
+    if not names:
+        return np.zeros((0, 3)), np.zeros((0, 3)), []
+    directions = rng.normal(size=(len(names), 3))
+    directions /= np.linalg.norm(directions, axis=1)[:, None]
+    return np.concatenate(origins), directions, names
+
+
 def _mesh_of(path):
     corners = read_obj_triangles(path)
     return Mesh(corners.reshape(-1, 3), np.arange(len(corners) * 3).reshape(-1, 3))
@@ -85,8 +108,11 @@ def check(out_dir, rays_per_space=64, seed=1):
     corners = [read_obj_triangles(os.path.join(out_dir, o["obj"])) for o in building["objects"]]
     corners = np.concatenate(corners) if corners else np.zeros((0, 3, 3))
     holes = conversion.get("openings", []) + conversion.get("openings_without_filling", [])
-    space_meshes = [(s["name"], _mesh_of(os.path.join(out_dir, s["obj"]))) for s in conversion.get("spaces", [])]
-    origins, directions, spaces = space_rays(space_meshes, rays_per_space, seed)
+    if "found_rooms" in conversion:
+        origins, directions, spaces = room_rays(conversion["found_rooms"], rays_per_space, seed)
+    else:
+        space_meshes = [(s["name"], _mesh_of(os.path.join(out_dir, s["obj"]))) for s in conversion.get("spaces", [])]
+        origins, directions, spaces = space_rays(space_meshes, rays_per_space, seed)
     hit = nearest_hits(origins, directions, corners) if len(corners) else np.full(len(origins), np.inf)
     if holes:
         lo = np.array([h["lo"] for h in holes]) - 0.01
@@ -98,7 +124,7 @@ def check(out_dir, rays_per_space=64, seed=1):
     leak = escaped & ~through
     leaky_spaces = sorted({s for s, l in zip(spaces, leak) if l})
     rays = len(origins)
-    return {"rays": rays, "hit": int((~escaped).sum()), "through_openings": int((escaped & through).sum()),
+    return {"rays": rays, "from": "rooms found" if "found_rooms" in conversion else "spaces", "hit": int((~escaped).sum()), "through_openings": int((escaped & through).sum()),
             "leaks": int(leak.sum()), "leak_share": round(float(leak.sum()) / rays, 5) if rays else None,
             "spaces": len(set(spaces)), "leaky_spaces": len(leaky_spaces),
             "leakiest": sorted(leaky_spaces, key=lambda s: -sum(1 for t, l in zip(spaces, leak) if l and t == s))[:5],
@@ -113,7 +139,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
     for name in ("building.json", "conversion.json"):
         if not os.path.isfile(os.path.join(args.out_dir, name)):
-            print(f"{args.out_dir}: no {name} (convert the model first: python -m portico_ifc model.ifc OUT_DIR)",
+            print(f"{args.out_dir}: no {name} (convert the model first: python -m portico_ifc model.ifc OUT_DIR, "
+                  "or portico scene import --keep-conversion OUT_DIR model.ifc STORE)",
                   file=sys.stderr)
             return 2
     print(json.dumps(check(args.out_dir, args.rays_per_space, args.seed)))

@@ -20,6 +20,7 @@
 #include "common/scene/import/imported_scene.h"
 #include "common/scene/import/mesh_loader.h"
 #include "common/scene/import/quad_light.h"
+#include "common/scene/import/room_lighting.h"
 #include "common/scene/store/scene_store.h"
 #include "common/scene/import/voxel_cells.h"
 #include "common/util/temporary_directory.h"
@@ -399,7 +400,7 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   // Images embedded in mesh files wait here until the store copies them.
   const TemporaryDirectory embeddedImages("portico-import-images");
   const std::string imageDirectory = embeddedImages.path().string();
-  const ImportedScene scene = store      ? sceneFromStore(inputs.front())
+  ImportedScene scene = store      ? sceneFromStore(inputs.front())
                               : building ? sceneFromBuildingJson(inputs.front(), options, imageDirectory)
                                          : sceneFromMeshFiles(inputs, imageDirectory);
 
@@ -410,6 +411,8 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
     for (size_t k = 1; k < inputs.size(); ++k) source += ", " + inputs[k];
     rooms = findRooms(scene, source, options.rooms);
     if (options.onRoomsFound) options.onRoomsFound(rooms->rooms, rooms->cells.size(), rooms->portals.size());
+    if (options.lampPerFoundRoom) addRoomLamps(*rooms, scene);
+    if (options.cameraPerFoundRoom) addRoomCameras(*rooms, !options.camera.empty(), scene);
   }
 
   nlohmann::json sources = nlohmann::json::array();
@@ -436,7 +439,16 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   else
     writeGivenCells(scene, writer);
   writer.commit();
-  ImportSummary summary{scene.triangleCount(), scene.degenerateTrianglesDropped, scene.lights.size(), {}};
+  ImportSummary summary;
+  summary.triangles = scene.triangleCount();
+  summary.degenerateTrianglesDropped = scene.degenerateTrianglesDropped;
+  summary.lights = scene.lights.size();
+  if (rooms) {
+    summary.rooms = rooms->roomAir;
+    summary.roomCells = rooms->cells.size();
+    summary.roomPortals = rooms->portals.size();
+    summary.roomVoxelSize = rooms->voxelSize;
+  }
   if (scene.lights.empty()) summary.warnings.push_back(kNoLightsWarning);
   return summary;
 }

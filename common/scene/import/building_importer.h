@@ -45,6 +45,11 @@ struct ImportOptions {
   RoomFinderOptions rooms;
   // After a room search: rooms found, cells (boxes) and portals.
   std::function<void(uint32_t rooms, size_t cells, size_t portals)> onRoomsFound;
+  // With findRooms, for a building that brings no lamps or cameras of its
+  // own (an IFC model without IfcSpace): a ceiling panel and a camera per
+  // found room (room_lighting.h).
+  bool lampPerFoundRoom = false;
+  bool cameraPerFoundRoom = false;
 };
 
 // The largest gridResolution accepted (16.7 million cells).
@@ -59,6 +64,10 @@ struct ImportSummary {
   // One line each, for the user: the scene has no lights (it would render
   // black, so `portico render` refuses it), saying how to add one.
   std::vector<std::string> warnings;
+  // With findRooms: each room's air (room_cells.h), the cells and portals.
+  std::vector<FoundRoom> rooms;
+  size_t roomCells = 0, roomPortals = 0;
+  float roomVoxelSize = 0;                   // as used (grown on very large buildings)
 };
 
 ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::string& storeDirectory,

@@ -128,7 +128,8 @@ void growLabels(const Grid& grid, std::vector<uint32_t>& label, May&& may) {
   }
 }
 
-// Steps 3 and 4: each voxel's region, 0 outdoors; returns the number of rooms.
+// Steps 3 and 4: each free voxel's region, 0 outdoors, kNone where no core
+// reaches (solid voxels, the inside of thick walls); returns the number of rooms.
 uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint16_t>& distance, const Grid& grid,
                       uint16_t coreDistance, uint64_t minCoreVoxels, std::vector<uint32_t>& region) {
   region.assign(grid.count(), kNone);
@@ -165,8 +166,75 @@ uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint1
     for (uint32_t v : members) region[v] = id;
   }
   growLabels(grid, region, [&](uint64_t u) { return !solid[u]; });
-  growLabels(grid, region, [](uint64_t) { return true; });
   return rooms;
+}
+
+// A room's air, while `region` holds only free voxels reached from a core
+// (rooms.rooms regions): counts, box, floor area, its deepest voxel's column,
+// the clear square under its ceiling there, and evenly spread samples.
+void describeRooms(const std::vector<uint32_t>& region, const std::vector<uint8_t>& solid,
+                   const std::vector<uint16_t>& distance, const Grid& grid, FoundRooms& rooms) {
+  struct Tally {
+    uint64_t air = 0, floor = 0, deepest = 0;
+    std::array<uint32_t, 3> lo{kNone, kNone, kNone}, hi{};
+  };
+  std::vector<Tally> tally(rooms.rooms + 1);
+  for (uint64_t v = 0; v < grid.count(); ++v) {
+    const uint32_t r = region[v];
+    if (r == kNone || r == 0 || solid[v]) continue;
+    Tally& t = tally[r];
+    const auto c = grid.coordinates(v);
+    if (t.air == 0 || distance[v] > distance[t.deepest]) t.deepest = v;
+    ++t.air;
+    if (c[1] > 0 && solid[v - grid.step(1)]) ++t.floor;
+    for (int axis = 0; axis < 3; ++axis) {
+      t.lo[axis] = std::min(t.lo[axis], c[axis]);
+      t.hi[axis] = std::max(t.hi[axis], c[axis]);
+    }
+  }
+  auto isAir = [&](uint64_t v, uint32_t r) { return region[v] == r && !solid[v]; };
+  const float face = rooms.voxelSize * rooms.voxelSize;
+  for (uint32_t r = 1; r <= rooms.rooms; ++r) {
+    const Tally& t = tally[r];
+    FoundRoom room;
+    room.name = fmt::format("room {}", r);
+    room.airVoxels = t.air;
+    room.floorArea = double(t.floor) * face;
+    room.air = Bounds3(Vec3(rooms.plane(0, t.lo[0]), rooms.plane(1, t.lo[1]), rooms.plane(2, t.lo[2])),
+                       Vec3(rooms.plane(0, t.hi[0] + 1), rooms.plane(1, t.hi[1] + 1), rooms.plane(2, t.hi[2] + 1)));
+    const auto c = grid.coordinates(t.deepest);
+    uint32_t bottom = c[1], top = c[1];
+    while (bottom > 0 && isAir(t.deepest - (c[1] - bottom + 1) * grid.step(1), r)) --bottom;
+    while (top + 1 < grid.n[1] && isAir(t.deepest + (top + 1 - c[1]) * grid.step(1), r)) ++top;
+    room.centre = Vec3(rooms.plane(0, c[0]) + 0.5f * rooms.voxelSize, rooms.plane(1, c[1]) + 0.5f * rooms.voxelSize,
+                       rooms.plane(2, c[2]) + 0.5f * rooms.voxelSize);
+    room.floor = rooms.plane(1, bottom);
+    room.ceiling = rooms.plane(1, top + 1);
+    // Grow a square ring by ring in the top layer while all of it is this room's air.
+    uint32_t half = 0;
+    for (;; ++half) {
+      const int64_t h = half + 1;
+      if (int64_t(c[0]) - h < 0 || int64_t(c[2]) - h < 0 || c[0] + h >= grid.n[0] || c[2] + h >= grid.n[2]) break;
+      bool clear = true;
+      for (int64_t dz = -h; dz <= h && clear; ++dz)
+        for (int64_t dx = -h; dx <= h && clear; ++dx)
+          if (std::max(std::abs(dx), std::abs(dz)) == h)
+            clear = isAir(rooms.voxelIndex(uint32_t(c[0] + dx), top, uint32_t(c[2] + dz)), r);
+      if (!clear) break;
+    }
+    room.clearHalfWidth = (float(half) + 0.5f) * rooms.voxelSize;
+    rooms.roomAir.push_back(std::move(room));
+  }
+  // Every k-th air voxel of each room in index order: spread over the whole room.
+  std::vector<uint64_t> seen(rooms.rooms + 1, 0);
+  for (uint64_t v = 0; v < grid.count(); ++v) {
+    const uint32_t r = region[v];
+    if (r == kNone || r == 0 || solid[v]) continue;
+    const uint64_t stride = (tally[r].air + kRoomSamples - 1) / kRoomSamples;
+    if (seen[r]++ % stride != 0) continue;
+    const auto c = grid.coordinates(v);
+    rooms.roomAir[r - 1].samples.push_back(Vec3(rooms.plane(0, c[0]), rooms.plane(1, c[1]), rooms.plane(2, c[2])));
+  }
 }
 
 // Step 5: boxes greedy in x, then y, then z, each over the free voxels of one
@@ -253,6 +321,9 @@ FoundRooms findRooms(const ImportedScene& scene, const std::string& source, cons
   if (rooms.rooms == 0)
     throw noRooms(fmt::format("no enclosed space wider than {} m (the free space is all outdoors at {} m voxels)",
                               options.openingWidth, rooms.voxelSize));
+  describeRooms(region, solid, distance, grid, rooms);
+  // Solid voxels and pockets no core reached (inside thick walls) join the region beside them.
+  growLabels(grid, region, [](uint64_t) { return true; });
 
   report(options, "boxes", 0.0);
   std::vector<std::array<uint32_t, 6>> boxes;

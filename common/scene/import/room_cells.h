@@ -23,6 +23,9 @@
 //     crosses faces between voxels its triangles only touch.)
 //
 // Cells are named "room-R-B" (region R from 1, box B) and "outdoors-B".
+// Each room's air (the free voxels its core reached: not the inside of a
+// thick wall) is also described (FoundRoom): for lamps and cameras placed
+// per room (room_lighting.h) and for checks that need points in a room.
 #pragma once
 
 #include <array>
@@ -46,11 +49,31 @@ struct RoomFinderOptions {
   std::function<void(const std::string& stage, double fraction)> onProgress;
 };
 
+// What a room's air is like: region R (from 1) is "room R".
+struct FoundRoom {
+  std::string name;              // "room R"
+  uint64_t airVoxels = 0;
+  double floorArea = 0;          // m^2: air voxels standing on a solid voxel, times a voxel's face
+  Bounds3 air;                   // the box of its air voxels
+  // Its deepest air voxel (farthest from any solid, the lowest index of
+  // those): the middle of its widest part, and the column of air through it.
+  Vec3 centre;
+  float floor = 0, ceiling = 0;  // bottom and top of that column's air (y)
+  // Half the side of the largest square of air, centred on the column, in
+  // its top layer of air voxels: how wide a ceiling panel may be.
+  float clearHalfWidth = 0;
+  // Lowest corners of air voxels spread evenly over the room (every k-th in
+  // index order, at most kRoomSamples): points in its air, a voxel apart.
+  std::vector<Vec3> samples;
+};
+constexpr size_t kRoomSamples = 512;
+
 struct FoundRooms {
   std::vector<ImportedCell> cells;       // boxes: the scene's cells
   std::vector<uint32_t> cellRegion;      // per cell: its region, 0 outdoors, 1.. rooms
   std::vector<ImportedPortal> portals;
   uint32_t rooms = 0;                    // regions other than outdoors
+  std::vector<FoundRoom> roomAir;        // per room, region 1 first
   float voxelSize = 0;                   // as used
   std::array<uint32_t, 3> voxels{};      // grid size
   // The cell each of the grid's voxels belongs to: for binning triangles.
