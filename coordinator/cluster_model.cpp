@@ -370,7 +370,15 @@ class PhaseSimulation {
   double endAt() const { return now_; }
 
  private:
-  double perLease() const { return record_.coordinatorSecondsPerLease; }
+  double perLease() const {
+    return options_.coordinatorSecondsPerLease >= 0 ? options_.coordinatorSecondsPerLease
+                                                    : record_.coordinatorSecondsPerLease;
+  }
+  // A lease's bytes on the coordinator's link.
+  double linkSeconds(int64_t work) const {
+    if (options_.bytesPerWork <= 0 || options_.linkBytesPerSecond <= 0) return 0;
+    return double(work) * options_.bytesPerWork / options_.linkBytesPerSecond;
+  }
 
   void schedule(TimedEvent::Kind kind, double at, const ModelLease& lease) {
     events_.push({kind, at, nextOrder_++, lease});
@@ -475,7 +483,7 @@ class PhaseSimulation {
           cells.emplace_back(c.cell, taken);
           return taken.work;
         });
-    const double cost = perLease() / 2 + chooseSeconds;
+    const double cost = perLease() / 2 + chooseSeconds + linkSeconds(work);
     prediction_.coordinatorBusySeconds += cost;
     const uint64_t lease = (*nextLease_)++;
     info.leases.emplace(lease, WorkerInfo::LeaseInFlight{toMs(now_), work, {}, {}});

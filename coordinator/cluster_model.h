@@ -56,6 +56,17 @@ struct ClusterModelOptions {
   // Each lease's work times this (WorkerInfo::kLeaseSeconds and the
   // coordinator's --lease-rays with it): fewer, longer leases.
   double leaseScale = 1;
+  // The coordinator's CPU per lease: < 0, the record's own (its CPU from
+  // submit to last Result over its leases); else this, e.g. what
+  // `portico bench coordinator` measures for the coordinator alone.
+  double coordinatorSecondsPerLease = -1;
+  // The bytes a lease moves through the coordinator per unit of its work
+  // (its Assign and Result: rays handed on, deposits sent, photon tables),
+  // and the coordinator's network link: each lease holds the coordinator
+  // for its bytes' time on the link too (0: not charged). One link serves
+  // every worker, as one thread serves their messages.
+  double bytesPerWork = 0;
+  double linkBytesPerSecond = 0;
 };
 
 struct PhasePrediction {

@@ -42,6 +42,8 @@ cleanup() {
 trap cleanup EXIT
 
 ip netns add "$coord_ns" 2> "$work/netns.err" || skip "cannot make a network namespace: $(cat "$work/netns.err")"
+unshare --mount --propagation private sh -c 'mount -t tmpfs tmpfs "$1"' sh "$work" 2> "$work/mount.err" ||
+  skip "cannot make a mount namespace with a tmpfs (the workers' file system): $(cat "$work/mount.err")"
 for ns in "${worker_ns[@]}"; do ip netns add "$ns"; done
 ip -n "$coord_ns" link set lo up
 

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iostream>
 #include <numeric>
+#include <optional>
 #include <set>
 #include <stdexcept>
 
@@ -16,6 +17,7 @@
 #include "common/scene/store/scene_store.h"
 #include "common/util/size_parse.h"
 #include "common/util/temporary_directory.h"
+#include "coordinator/cli/bench/coordinator_cost_table.h"
 #include "coordinator/cluster_model.h"
 #include "coordinator/job_report.h"
 #include "coordinator/job_store.h"
@@ -204,9 +206,10 @@ double hostCoresOf(const std::string& value) {
   return cores;
 }
 
-// `environment`: the run whose cores --host-cores measured takes.
+// `environment`: the run whose cores --host-cores measured takes; `costs`:
+// `bench coordinator`'s figures (or null).
 ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options,
-                            const MeasuredJob& environment) {
+                            const MeasuredJob& environment, const CoordinatorCostTable* costs) {
   ClusterModelOptions model;
   model.workers = workers;
   model.workerMemoryBytes = job.workerMemoryBytes ? job.workerMemoryBytes : parseByteSize(options.memory);
@@ -218,14 +221,22 @@ ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchC
   model.hostCores = cores < 0 ? environment.coresHad : cores;
   model.workScale = options.workScale;
   model.leaseScale = options.leaseScale;
+  if (costs) {
+    const CoordinatorCost cost = costs->at(workers);
+    model.coordinatorSecondsPerLease = cost.cpuSecondsPerLease;
+    model.bytesPerWork = cost.bytesPerWork;
+  }
+  if (options.coordinatorMsPerLease >= 0) model.coordinatorSecondsPerLease = options.coordinatorMsPerLease * 1e-3;
+  if (options.bytesPerRay > 0) model.bytesPerWork = options.bytesPerRay;
+  model.linkBytesPerSecond = options.linkGbit * 1e9 / 8;
   model.cachedBytesPerFileByte[0] = job.cachedBytesPerFileByte[0];
   model.cachedBytesPerFileByte[1] = job.cachedBytesPerFileByte[1];
   return model;
 }
 
 ClusterPrediction predict(const MeasuredJob& job, size_t workers, const BenchClusterOptions& options,
-                          const MeasuredJob& environment) {
-  return simulateCluster(job.record, modelOf(job, workers, options, environment));
+                          const MeasuredJob& environment, const CoordinatorCostTable* costs) {
+  return simulateCluster(job.record, modelOf(job, workers, options, environment, costs));
 }
 
 double percent(double predicted, double measured) { return measured > 0 ? 100.0 * (predicted - measured) / measured : 0; }
@@ -239,6 +250,9 @@ int runBenchCluster(const BenchClusterOptions& options) {
   const double cores = hostCoresOf(options.hostCores);
   std::vector<MeasuredJob> jobs;
   for (const std::string& argument : options.records) jobs.push_back(readJob(argument));
+  std::optional<CoordinatorCostTable> costTable;
+  if (!options.coordinatorBench.empty()) costTable.emplace(options.coordinatorBench);
+  const CoordinatorCostTable* costs = costTable ? &*costTable : nullptr;
   std::ofstream csv;
   if (!options.csv.empty()) {
     csv.open(options.csv);
@@ -289,11 +303,20 @@ int runBenchCluster(const BenchClusterOptions& options) {
                              named ? "each worker's cache simulated"
                                    : "its loads replayed as recorded (its leases' more cells are not named)")
               << header;
-    row(job, job.workers, &job, predict(job, job.workers, options, job));
+    row(job, job.workers, &job, predict(job, job.workers, options, job, costs));
     // The other measured runs, predicted from this one's record.
     for (const MeasuredJob& other : jobs)
       if (&other != &job && other.workers != job.workers)
-        row(job, other.workers, &other, predict(job, other.workers, options, other));
+        row(job, other.workers, &other, predict(job, other.workers, options, other, costs));
+  }
+  if (costs || options.coordinatorMsPerLease >= 0 || options.bytesPerRay > 0) {
+    std::cout << "the coordinator charged, per lease:";
+    for (size_t workers : counts) {
+      const ClusterModelOptions m = modelOf(jobs.front(), workers, options, jobs.front(), costs);
+      std::cout << fmt::format(" {} workers {:.3f} ms CPU{};", workers, m.coordinatorSecondsPerLease * 1e3,
+                               m.bytesPerWork > 0 ? fmt::format(" + {:.1f} bytes per ray", m.bytesPerWork) : "");
+    }
+    std::cout << fmt::format(" bytes on a {} Gbit/s link\n", options.linkGbit);
   }
   std::cout << fmt::format("predicted from {}{}{}:\n", jobs.front().name,
                            cores != 0 ? fmt::format(", all on {:.2f} cores", cores < 0 ? jobs.front().coresHad : cores)
@@ -301,7 +324,7 @@ int runBenchCluster(const BenchClusterOptions& options) {
                            scaled ? fmt::format(", its photon pass's tracing work x{}", options.workScale) : std::string())
             << header;
   for (size_t workers : counts)
-    row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front()));
+    row(jobs.front(), workers, nullptr, predict(jobs.front(), workers, options, jobs.front(), costs));
   return 0;
 }
 

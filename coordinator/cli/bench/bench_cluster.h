@@ -20,6 +20,14 @@ struct BenchClusterOptions {
   std::string hostCores = "0";
   double workScale = 1;            // the records' tracing work times this
   double leaseScale = 1;           // each lease's work times this (ClusterModelOptions::leaseScale)
+  // The coordinator's CPU per lease and the bytes per unit of a lease's
+  // work through it, at each worker count, from `portico bench
+  // coordinator`'s CSV ("": each record's CPU, no bytes charged); the
+  // scalars override it (< 0 / 0: not given). Bytes go on a link of linkGbit.
+  std::string coordinatorBench;
+  double coordinatorMsPerLease = -1;
+  double bytesPerRay = 0;
+  double linkGbit = 10;
   std::string csv;
 };
 

@@ -182,6 +182,22 @@ void addCluster(CLI::App& bench, CommandTable& table) {
                    "leases")
       ->capture_default_str()
       ->check(CLI::Range(1e-2, 1e4));
+  command->add_option("--coordinator-bench", o->coordinatorBench,
+                      "`portico bench coordinator --csv` output: charge the coordinator its measured CPU per lease and "
+                      "bytes per ray at each worker count (interpolated) instead of each record's CPU");
+  command
+      ->add_option("--coordinator-ms-per-lease", o->coordinatorMsPerLease,
+                   "the coordinator's CPU per lease instead of each record's (e.g. `portico bench coordinator`'s)")
+      ->check(CLI::Range(0.0, 1e4));
+  command
+      ->add_option("--bytes-per-ray", o->bytesPerRay,
+                   "bytes a lease moves through the coordinator per ray of its work (`bench coordinator`'s "
+                   "bytes_per_work), charged on its link")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1e6));
+  command->add_option("--link-gbit", o->linkGbit, "the coordinator's network link, Gbit/s")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-3, 1e4));
   command->add_option("--csv", o->csv, "write one row per prediction");
   table.add(command, [o] { return runBenchCluster(*o); });
 }

@@ -135,6 +135,11 @@ struct RunFigures {
   double simulatedCpuSeconds = 0;     // the simulated workers' processes, all of the run
   double latencyMedianMs = 0, latencyP99Ms = 0;
   double bytesInPerLease = 0, bytesOutPerLease = 0, diskWritesPerLease = 0;
+  // The leases' work (photons emitted, rays handed on and received again,
+  // camera rays) and the bytes through the coordinator per unit of it: what
+  // the cluster model charges on the coordinator's link (bench cluster --bytes-per-ray).
+  int64_t work = 0;
+  double bytesPerWork = 0;
   double jobSeconds = 0, coordinatorCpuSeconds = 0;
   int64_t photons = 0, emitted = 0, depositRecords = 0, regionRecords = 0, photonsHandedOn = 0, cameraRays = 0;
   int64_t refused = 0, errors = 0;
@@ -319,6 +324,8 @@ RunFigures runOnce(uint32_t workers, const std::string& store, const BenchCoordi
     r.bytesOutPerLease = double(sims.bytesReceived) / double(r.leases);
     r.diskWritesPerLease = double(io.diskWrites) / double(r.leases);
   }
+  r.work = sims.tally.emitted + sims.tally.photonsHandedOn + sims.tally.cameraRays + sims.tally.raysHandedOn;
+  if (r.work > 0) r.bytesPerWork = double(sims.bytesSent + sims.bytesReceived) / double(r.work);
   return r;
 }
 
@@ -344,18 +351,18 @@ std::vector<uint32_t> parseCounts(const std::string& text) {
 std::string csvOf(const std::vector<RunFigures>& runs) {
   std::string csv =
       "workers,processes,leases,window_leases,window_s,leases_per_s,coordinator_cpu_ms_per_lease,coordinator_busy,"
-      "coordinator_waiting,simulated_workers_cpu_s,latency_median_ms,latency_p99_ms,bytes_in_per_lease,bytes_out_per_lease,disk_write_bytes_per_lease,job_s,"
+      "coordinator_waiting,simulated_workers_cpu_s,latency_median_ms,latency_p99_ms,bytes_in_per_lease,bytes_out_per_lease,disk_write_bytes_per_lease,work,bytes_per_work,job_s,"
       "coordinator_cpu_s,photons,emitted,deposit_records,region_records,photons_handed_on,camera_rays,results_refused,"
       "errors,balanced\n";
   for (const RunFigures& r : runs)
-    csv += fmt::format("{},{},{},{},{:.3f},{:.1f},{:.4f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.0f},{:.0f},{:.3f},{:.3f},{},{},{},{},"
-                       "{},{},{},{},{}\n",
-                       r.workers, r.processes, r.leases, r.windowLeases, r.windowSeconds, r.leasesPerSecond,
-                       r.cpuMsPerLease, r.coordinatorBusy, r.coordinatorWaiting, r.simulatedCpuSeconds,
-                       r.latencyMedianMs, r.latencyP99Ms, r.bytesInPerLease,
-                       r.bytesOutPerLease, r.diskWritesPerLease, r.jobSeconds, r.coordinatorCpuSeconds, r.photons,
-                       r.emitted, r.depositRecords, r.regionRecords, r.photonsHandedOn, r.cameraRays, r.refused,
-                       r.errors, r.balanced() ? 1 : 0);
+    csv += fmt::format(
+        "{},{},{},{},{:.6f},{:.1f},{:.4f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.0f},{:.0f},{},{:.2f},{:.3f},{:.3f},"
+        "{},{},{},{},{},{},{},{},{}\n",
+        r.workers, r.processes, r.leases, r.windowLeases, r.windowSeconds, r.leasesPerSecond, r.cpuMsPerLease,
+        r.coordinatorBusy, r.coordinatorWaiting, r.simulatedCpuSeconds, r.latencyMedianMs, r.latencyP99Ms,
+        r.bytesInPerLease, r.bytesOutPerLease, r.diskWritesPerLease, r.work, r.bytesPerWork, r.jobSeconds,
+        r.coordinatorCpuSeconds, r.photons, r.emitted, r.depositRecords, r.regionRecords, r.photonsHandedOn,
+        r.cameraRays, r.refused, r.errors, r.balanced() ? 1 : 0);
   return csv;
 }
 
@@ -431,8 +438,8 @@ int runBenchCoordinator(BenchCoordinatorOptions o, bool workersGiven, bool floor
   if (std::filesystem::exists(std::filesystem::path(store) / "scene.db")) {
     std::cout << fmt::format("portico bench coordinator: reusing the scene store {}\n", store);
   } else {
-    std::cout << fmt::format("portico bench coordinator: generating {} ({} floors) into {} ...\n", o.preset, o.floors,
-                             store);
+    std::cout << fmt::format("portico bench coordinator: generating {} ({} floors) into {} ...\n", o.preset,
+                             preset->floors, store);
     std::cout.flush();
     const GeneratedBuildingStats g = generateBuilding(*preset, o.sceneSeed, store);
     std::cout << fmt::format("  {} cells, {} portals, {} lights in {:.1f} s\n", g.cells, g.portals, g.lights,
@@ -470,7 +477,8 @@ int runBenchCoordinator(BenchCoordinatorOptions o, bool workersGiven, bool floor
   }
   if (!o.plot.empty()) {
     writePlot(o.plot,
-              fmt::format("{} {} floors, {} photons", o.preset, o.floors, o.photonsPerLight * scene.lights().size()),
+              fmt::format("{}, {} photons", std::filesystem::path(store).filename().string(),
+                          o.photonsPerLight * scene.lights().size()),
               runs);
     std::cout << "wrote " << o.plot << "\n";
   }

@@ -13,8 +13,8 @@
 
 namespace portico::cli {
 
-CellNeighbours::CellNeighbours(const SceneStore& scene) : neighbours_(scene.cells().size()) {
-  for (const Portal& portal : scene.portals()) {
+CellNeighbours::CellNeighbours(size_t cellCount, const std::vector<Portal>& portals) : neighbours_(cellCount) {
+  for (const Portal& portal : portals) {
     if (portal.cellA >= neighbours_.size() || portal.cellB >= neighbours_.size()) continue;
     neighbours_[portal.cellA].push_back(portal.cellB);
     neighbours_[portal.cellB].push_back(portal.cellA);

@@ -38,7 +38,8 @@ struct ResultShape {
 // a simulated crossing goes. A cell without portals hands on to itself.
 class CellNeighbours {
  public:
-  explicit CellNeighbours(const SceneStore& scene);
+  explicit CellNeighbours(const SceneStore& scene) : CellNeighbours(scene.cells().size(), scene.portals()) {}
+  CellNeighbours(size_t cellCount, const std::vector<Portal>& portals);
   uint32_t neighbour(uint32_t cell, uint64_t path) const;
 
  private:

@@ -198,5 +198,32 @@ TEST(ClusterModel, ACoordinatorSlowerThanItsWorkersBecomesTheBottleneck) {
   EXPECT_GT(sixteen.seconds(), two.seconds() / 4);   // far from the 8x of 8x the workers
 }
 
+TEST(ClusterModel, AMeasuredCoordinatorCostReplacesTheRecordsAndItsBytesHoldTheLink) {
+  // The record's coordinator is cheap (0.1 ms a lease); charged 40 ms of
+  // CPU per lease instead, or 400 bytes per unit of work on a 100 MB/s
+  // link (4 ms per 1 000 work, as much as the workers take: 16 workers at
+  // 10 000 work per 50 ms trace 16 times faster than the link moves it),
+  // 16 workers wait for it.
+  const ClusterRecord record = uniformRecord(64, 4, 1e-4);
+  ClusterModelOptions options;
+  options.workers = 16;
+  const ClusterPrediction recorded = simulateCluster(record, options);
+  EXPECT_LT(recorded.coordinatorUtilization(), 0.2);
+  options.coordinatorSecondsPerLease = 0.04;
+  const ClusterPrediction slowCpu = simulateCluster(record, options);
+  EXPECT_GT(slowCpu.coordinatorUtilization(), 0.9);
+  EXPECT_GT(slowCpu.seconds(), 3 * recorded.seconds());
+  options.coordinatorSecondsPerLease = -1;   // the record's again
+  options.bytesPerWork = 400;
+  options.linkBytesPerSecond = 100e6;
+  const ClusterPrediction slowLink = simulateCluster(record, options);
+  EXPECT_GT(slowLink.coordinatorUtilization(), 0.9);
+  EXPECT_GT(slowLink.seconds(), 3 * recorded.seconds());
+  // Every byte crosses the link once: 64 cells x 5 leases x 10 000 work x 400 bytes / 100 MB/s.
+  const double linkSeconds = 64 * 5 * 10000 * 400 / 100e6;
+  EXPECT_GT(slowLink.seconds(), 0.95 * linkSeconds);
+  EXPECT_LT(slowLink.seconds(), 1.3 * linkSeconds);
+}
+
 }  // namespace
 }  // namespace portico
