@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -26,11 +27,29 @@ json readJson(const std::string& path) {
 json xyz(const Vec3& v) { return json::array({v.x, v.y, v.z}); }
 
 // The rooms found, for conversion.json: their air and where their lamp and camera went.
+json samplesJson(const FoundRoom& room) {
+  json samples = json::array();
+  for (const Vec3& p : room.samples) samples.push_back(xyz(p));
+  return samples;
+}
+
+// Outdoor air the building shelters, for the watertightness check: where a room lost a wall.
+json shelteredAirJson(const ImportSummary& summary, float voxelSize) {
+  json pockets = json::array();
+  for (const FoundRoom& pocket : summary.shelteredAir)
+    pockets.push_back({{"name", pocket.name},
+                       {"air_m3", double(pocket.airVoxels) * voxelSize * voxelSize * voxelSize},
+                       {"air_lo", xyz(pocket.air.lo)},
+                       {"air_hi", xyz(pocket.air.hi)},
+                       {"voxel", voxelSize},
+                       {"samples", samplesJson(pocket)}});
+  return pockets;
+}
+
 json foundRoomsJson(const ImportSummary& summary, float voxelSize) {
   json rooms = json::array();
   for (const FoundRoom& room : summary.rooms) {
-    json samples = json::array();
-    for (const Vec3& p : room.samples) samples.push_back(xyz(p));
+    const json samples = samplesJson(room);
     rooms.push_back({{"name", room.name},
                      {"air_m3", double(room.airVoxels) * voxelSize * voxelSize * voxelSize},
                      {"floor_m2", room.floorArea},
@@ -95,6 +114,10 @@ ImportSummary importIfcModel(const std::string& ifc, const std::string& store, c
     s["cameras"] = s.value("cameras", 0) + summary.rooms.size();
     s["voxel_size"] = summary.roomVoxelSize;
     conversion["found_rooms"] = foundRoomsJson(summary, summary.roomVoxelSize);
+    conversion["sheltered_outdoors"] = shelteredAirJson(summary, summary.roomVoxelSize);
+    double shelteredVoxels = 0;
+    for (const FoundRoom& pocket : summary.shelteredAir) shelteredVoxels += double(pocket.airVoxels);
+    s["sheltered_outdoors_m3"] = shelteredVoxels * std::pow(double(summary.roomVoxelSize), 3);
   }
   writeJson(conversion, store + "/conversion.json");
   if (!ifcOptions.keepConversion.empty()) writeJson(conversion, converted + "/conversion.json");

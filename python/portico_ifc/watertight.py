@@ -11,7 +11,11 @@ same model, same figures) must hit a surface of the building, or leave it
 through an opening: the box of a door's or window's hole, or of a void that
 nothing fills. A ray that meets neither leaves the building through a hole in
 its shell (a missing floor, a ceiling that stops short): a leak. Prints one
-line of JSON: rays, hits, through openings, leaks and the leak share.
+line of JSON: rays, hits, through openings, leaks and the leak share, the
+leakiest spaces (or rooms) and the worst one's own share; for rooms found,
+also the rays from the outdoor air the building shelters (over a floor and
+under a ceiling, as wide as a room: where a room that lost a whole wall
+went, and verandas and loggias), which leak there.
 """
 
 import argparse
@@ -102,6 +106,32 @@ def _mesh_of(path):
     return Mesh(corners.reshape(-1, 3), np.arange(len(corners) * 3).reshape(-1, 3))
 
 
+def _escapes(origins, directions, corners, holes):
+    """(escaped, through an opening) per ray."""
+    hit = nearest_hits(origins, directions, corners) if len(corners) else np.full(len(origins), np.inf)
+    if holes:
+        lo = np.array([h["lo"] for h in holes]) - 0.01
+        hi = np.array([h["hi"] for h in holes]) + 0.01
+        through = (_box_entries(origins, directions, lo, hi) < hit[:, None]).any(axis=1)
+    else:
+        through = np.zeros(len(origins), dtype=bool)
+    return ~np.isfinite(hit), through
+
+
+def _sheltered(conversion, corners, holes, rays_per_space, seed):
+    """Rays from the outdoor air the building shelters (rooms found only):
+    reported beside the rooms' figures, not in them. A room that lost a wall
+    wider than an opening is there, but so are a veranda and a loggia, which
+    geometry alone cannot tell from it."""
+    pockets = conversion.get("sheltered_outdoors")
+    if pockets is None:
+        return {}
+    origins, directions, names = room_rays(pockets, rays_per_space, seed)
+    escaped, through = _escapes(origins, directions, corners, holes)
+    return {"sheltered_outdoors": len(pockets), "sheltered_m3": round(sum(p["air_m3"] for p in pockets), 1),
+            "sheltered_rays": len(names), "sheltered_leaks": int((escaped & ~through).sum())}
+
+
 def check(out_dir, rays_per_space=64, seed=1):
     building = json.load(open(os.path.join(out_dir, "building.json")))
     conversion = json.load(open(os.path.join(out_dir, "conversion.json")))
@@ -113,21 +143,22 @@ def check(out_dir, rays_per_space=64, seed=1):
     else:
         space_meshes = [(s["name"], _mesh_of(os.path.join(out_dir, s["obj"]))) for s in conversion.get("spaces", [])]
         origins, directions, spaces = space_rays(space_meshes, rays_per_space, seed)
-    hit = nearest_hits(origins, directions, corners) if len(corners) else np.full(len(origins), np.inf)
-    if holes:
-        lo = np.array([h["lo"] for h in holes]) - 0.01
-        hi = np.array([h["hi"] for h in holes]) + 0.01
-        through = (_box_entries(origins, directions, lo, hi) < hit[:, None]).any(axis=1)
-    else:
-        through = np.zeros(len(origins), dtype=bool)
-    escaped = ~np.isfinite(hit)
+    escaped, through = _escapes(origins, directions, corners, holes)
     leak = escaped & ~through
     leaky_spaces = sorted({s for s, l in zip(spaces, leak) if l})
     rays = len(origins)
-    return {"rays": rays, "from": "rooms found" if "found_rooms" in conversion else "spaces", "hit": int((~escaped).sum()), "through_openings": int((escaped & through).sum()),
+    # Per space (or room): one room with a wall missing among many barely moves the whole share.
+    drawn, leaked = {}, {}
+    for s, l in zip(spaces, leak):
+        drawn[s] = drawn.get(s, 0) + 1
+        leaked[s] = leaked.get(s, 0) + int(l)
+    leakiest = sorted(leaky_spaces, key=lambda s: (-leaked[s] / drawn[s], s))
+    return {"rays": rays, "from": "rooms found" if "found_rooms" in conversion else "spaces",
+            "hit": int((~escaped).sum()), "through_openings": int((escaped & through).sum()),
             "leaks": int(leak.sum()), "leak_share": round(float(leak.sum()) / rays, 5) if rays else None,
-            "spaces": len(set(spaces)), "leaky_spaces": len(leaky_spaces),
-            "leakiest": sorted(leaky_spaces, key=lambda s: -sum(1 for t, l in zip(spaces, leak) if l and t == s))[:5],
+            "spaces": len(set(spaces)), "leaky_spaces": len(leaky_spaces), "leakiest": leakiest[:5],
+            **_sheltered(conversion, corners, holes, rays_per_space, seed),
+            "worst_space_share": round(leaked[leakiest[0]] / drawn[leakiest[0]], 5) if leakiest else 0.0,
             "triangles": len(corners), "seed": seed, "rays_per_space": rays_per_space}
 
 

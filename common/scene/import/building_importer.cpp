@@ -445,6 +445,7 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
   summary.lights = scene.lights.size();
   if (rooms) {
     summary.rooms = rooms->roomAir;
+    summary.shelteredAir = rooms->shelteredAir;
     summary.roomCells = rooms->cells.size();
     summary.roomPortals = rooms->portals.size();
     summary.roomVoxelSize = rooms->voxelSize;

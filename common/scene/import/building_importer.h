@@ -66,6 +66,7 @@ struct ImportSummary {
   std::vector<std::string> warnings;
   // With findRooms: each room's air (room_cells.h), the cells and portals.
   std::vector<FoundRoom> rooms;
+  std::vector<FoundRoom> shelteredAir;       // FoundRooms::shelteredAir
   size_t roomCells = 0, roomPortals = 0;
   float roomVoxelSize = 0;                   // as used (grown on very large buildings)
 };

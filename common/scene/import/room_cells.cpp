@@ -128,34 +128,42 @@ void growLabels(const Grid& grid, std::vector<uint32_t>& label, May&& may) {
   }
 }
 
+// The face-connected component of `seed` among the voxels `member` accepts,
+// by depth-first fill, marking each in `marked`.
+template <typename Member>
+std::vector<uint32_t> fillComponent(const Grid& grid, uint64_t seed, Member&& member, std::vector<uint8_t>& marked) {
+  std::vector<uint32_t> members, stack{uint32_t(seed)};
+  marked[seed] = 1;
+  while (!stack.empty()) {
+    const uint32_t v = stack.back();
+    stack.pop_back();
+    members.push_back(v);
+    forEachFaceNeighbour(grid, v, [&](uint64_t u) {
+      if (marked[u] || !member(u)) return;
+      marked[u] = 1;
+      stack.push_back(uint32_t(u));
+    });
+  }
+  return members;
+}
+
 // Steps 3 and 4: each free voxel's region, 0 outdoors, kNone where no core
 // reaches (solid voxels, the inside of thick walls); returns the number of rooms.
 uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint16_t>& distance, const Grid& grid,
                       uint16_t coreDistance, uint64_t minCoreVoxels, std::vector<uint32_t>& region) {
   region.assign(grid.count(), kNone);
-  std::vector<uint32_t> component(grid.count(), kNone);
-  std::vector<uint32_t> stack;
+  std::vector<uint8_t> marked(grid.count(), 0);
+  auto core = [&](uint64_t v) { return distance[v] >= coreDistance; };
   uint32_t rooms = 0;
   for (uint64_t seed = 0; seed < grid.count(); ++seed) {
-    if (distance[seed] < coreDistance || component[seed] != kNone) continue;
-    // One core component, by depth-first fill; then kept as a room, as outdoors, or dropped.
-    std::vector<uint32_t> members;
+    if (!core(seed) || marked[seed]) continue;
+    // One core component; then kept as a room, as outdoors, or dropped.
+    const std::vector<uint32_t> members = fillComponent(grid, seed, core, marked);
     bool touchesBoundary = false;
-    component[seed] = 0;
-    stack.push_back(uint32_t(seed));
-    while (!stack.empty()) {
-      const uint32_t v = stack.back();
-      stack.pop_back();
-      members.push_back(v);
+    for (uint32_t v : members) {
       const auto c = grid.coordinates(v);
       for (int axis = 0; axis < 3; ++axis)
         if (c[axis] == 0 || c[axis] + 1 == grid.n[axis]) touchesBoundary = true;
-      forEachFaceNeighbour(grid, v, [&](uint64_t u) {
-        if (distance[u] >= coreDistance && component[u] == kNone) {
-          component[u] = 0;
-          stack.push_back(uint32_t(u));
-        }
-      });
     }
     uint32_t id = kNone;
     if (touchesBoundary)
@@ -272,6 +280,51 @@ std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& region, const st
   return box;
 }
 
+// Outdoor air the building shelters: core voxels of the outdoors (region 0)
+// with a solid voxel somewhere above and below them in their column, in
+// components of at least minCoreVoxels (face neighbours). A room that lost
+// a wall wider than an opening joins the outdoors, and is found here, over
+// its floor and under its ceiling; so are a loggia and a covered balcony.
+void describeShelteredAir(const std::vector<uint32_t>& region, const std::vector<uint8_t>& solid,
+                          const std::vector<uint16_t>& distance, const Grid& grid, uint16_t coreDistance,
+                          uint64_t minCoreVoxels, FoundRooms& rooms) {
+  const uint64_t columns = uint64_t(grid.n[0]) * grid.n[2];
+  std::vector<uint32_t> lowest(columns, kNone), highest(columns, 0);
+  auto columnOf = [&](const std::array<uint32_t, 3>& c) { return c[0] + uint64_t(grid.n[0]) * c[2]; };
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (solid[v]) {
+      const auto c = grid.coordinates(v);
+      const uint64_t column = columnOf(c);
+      lowest[column] = std::min(lowest[column], c[1]);
+      highest[column] = std::max(highest[column], c[1]);
+    }
+  auto sheltered = [&](uint64_t v) {
+    if (region[v] != 0 || solid[v] || distance[v] < coreDistance) return false;
+    const auto c = grid.coordinates(v);
+    const uint64_t column = columnOf(c);
+    return lowest[column] != kNone && lowest[column] < c[1] && c[1] < highest[column];
+  };
+  std::vector<uint8_t> marked(grid.count(), 0);
+  for (uint64_t seed = 0; seed < grid.count(); ++seed) {
+    if (marked[seed] || !sheltered(seed)) continue;
+    std::vector<uint32_t> members = fillComponent(grid, seed, sheltered, marked);
+    if (members.size() < minCoreVoxels) continue;
+    std::sort(members.begin(), members.end());
+    FoundRoom pocket;
+    pocket.name = fmt::format("sheltered {}", rooms.shelteredAir.size() + 1);
+    pocket.airVoxels = members.size();
+    const uint64_t stride = (members.size() + kRoomSamples - 1) / kRoomSamples;
+    for (size_t k = 0; k < members.size(); ++k) {
+      const auto c = grid.coordinates(members[k]);
+      const Vec3 corner(rooms.plane(0, c[0]), rooms.plane(1, c[1]), rooms.plane(2, c[2]));
+      pocket.air.extend(corner);
+      pocket.air.extend(corner + Vec3(rooms.voxelSize));
+      if (k % stride == 0) pocket.samples.push_back(corner);
+    }
+    rooms.shelteredAir.push_back(std::move(pocket));
+  }
+}
+
 }  // namespace
 
 void FoundRooms::touchedVoxels(int axis, float lo, float hi, uint32_t& first, uint32_t& last) const {
@@ -322,6 +375,7 @@ FoundRooms findRooms(const ImportedScene& scene, const std::string& source, cons
     throw noRooms(fmt::format("no enclosed space wider than {} m (the free space is all outdoors at {} m voxels)",
                               options.openingWidth, rooms.voxelSize));
   describeRooms(region, solid, distance, grid, rooms);
+  describeShelteredAir(region, solid, distance, grid, coreDistance, minCoreVoxels, rooms);
   // Solid voxels and pockets no core reached (inside thick walls) join the region beside them.
   growLabels(grid, region, [](uint64_t) { return true; });
 

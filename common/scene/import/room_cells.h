@@ -74,6 +74,11 @@ struct FoundRooms {
   std::vector<ImportedPortal> portals;
   uint32_t rooms = 0;                    // regions other than outdoors
   std::vector<FoundRoom> roomAir;        // per room, region 1 first
+  // Outdoor air the building shelters (a solid above and below it), wide
+  // as a room's core: a room open to the outdoors through a gap wider than
+  // an opening (a missing wall), a loggia, a covered balcony. Named
+  // "sheltered N"; air box and samples only (of its core voxels).
+  std::vector<FoundRoom> shelteredAir;
   float voxelSize = 0;                   // as used
   std::array<uint32_t, 3> voxels{};      // grid size
   // The cell each of the grid's voxels belongs to: for binning triangles.
