@@ -376,8 +376,8 @@ class PhaseSimulation {
   }
   // A lease's bytes on the coordinator's link.
   double linkSeconds(int64_t work) const {
-    if (options_.bytesPerWork <= 0 || options_.linkBytesPerSecond <= 0) return 0;
-    return double(work) * options_.bytesPerWork / options_.linkBytesPerSecond;
+    if (options_.bytesPerWork[phase_] <= 0 || options_.linkBytesPerSecond <= 0) return 0;
+    return double(work) * options_.bytesPerWork[phase_] / options_.linkBytesPerSecond;
   }
 
   void schedule(TimedEvent::Kind kind, double at, const ModelLease& lease) {

@@ -60,12 +60,13 @@ struct ClusterModelOptions {
   // submit to last Result over its leases); else this, e.g. what
   // `portico bench coordinator` measures for the coordinator alone.
   double coordinatorSecondsPerLease = -1;
-  // The bytes a lease moves through the coordinator per unit of its work
-  // (its Assign and Result: rays handed on, deposits sent, photon tables),
-  // and the coordinator's network link: each lease holds the coordinator
-  // for its bytes' time on the link too (0: not charged). One link serves
-  // every worker, as one thread serves their messages.
-  double bytesPerWork = 0;
+  // The bytes a lease moves through the coordinator per unit of its work,
+  // in the photon pass and in the render (its Assign and Result: rays
+  // handed on, deposits sent; a render's photon tables), and the
+  // coordinator's network link: each lease holds the coordinator for its
+  // bytes' time on the link too (0: not charged). One link serves every
+  // worker, as one thread serves their messages.
+  double bytesPerWork[2] = {0, 0};
   double linkBytesPerSecond = 0;
 };
 

@@ -224,10 +224,11 @@ ClusterModelOptions modelOf(const MeasuredJob& job, size_t workers, const BenchC
   if (costs) {
     const CoordinatorCost cost = costs->at(workers);
     model.coordinatorSecondsPerLease = cost.cpuSecondsPerLease;
-    model.bytesPerWork = cost.bytesPerWork;
+    model.bytesPerWork[0] = cost.bytesPerWork[0];
+    model.bytesPerWork[1] = cost.bytesPerWork[1];
   }
   if (options.coordinatorMsPerLease >= 0) model.coordinatorSecondsPerLease = options.coordinatorMsPerLease * 1e-3;
-  if (options.bytesPerRay > 0) model.bytesPerWork = options.bytesPerRay;
+  if (options.bytesPerRay > 0) model.bytesPerWork[0] = model.bytesPerWork[1] = options.bytesPerRay;
   model.linkBytesPerSecond = options.linkGbit * 1e9 / 8;
   model.cachedBytesPerFileByte[0] = job.cachedBytesPerFileByte[0];
   model.cachedBytesPerFileByte[1] = job.cachedBytesPerFileByte[1];
@@ -314,7 +315,10 @@ int runBenchCluster(const BenchClusterOptions& options) {
     for (size_t workers : counts) {
       const ClusterModelOptions m = modelOf(jobs.front(), workers, options, jobs.front(), costs);
       std::cout << fmt::format(" {} workers {:.3f} ms CPU{};", workers, m.coordinatorSecondsPerLease * 1e3,
-                               m.bytesPerWork > 0 ? fmt::format(" + {:.1f} bytes per ray", m.bytesPerWork) : "");
+                               m.bytesPerWork[0] > 0 || m.bytesPerWork[1] > 0
+                                   ? fmt::format(" + {:.1f} / {:.1f} bytes per ray (photons / render)",
+                                                 m.bytesPerWork[0], m.bytesPerWork[1])
+                                   : "");
     }
     std::cout << fmt::format(" bytes on a {} Gbit/s link\n", options.linkGbit);
   }

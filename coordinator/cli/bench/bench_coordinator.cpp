@@ -140,6 +140,7 @@ struct RunFigures {
   // the cluster model charges on the coordinator's link (bench cluster --bytes-per-ray).
   int64_t work = 0;
   double bytesPerWork = 0;
+  double bytesPerPhaseWork[2] = {0, 0};   // photon pass (photons and rays), render (camera and handed-on rays)
   double jobSeconds = 0, coordinatorCpuSeconds = 0;
   int64_t photons = 0, emitted = 0, depositRecords = 0, regionRecords = 0, photonsHandedOn = 0, cameraRays = 0;
   int64_t refused = 0, errors = 0;
@@ -326,6 +327,10 @@ RunFigures runOnce(uint32_t workers, const std::string& store, const BenchCoordi
   }
   r.work = sims.tally.emitted + sims.tally.photonsHandedOn + sims.tally.cameraRays + sims.tally.raysHandedOn;
   if (r.work > 0) r.bytesPerWork = double(sims.bytesSent + sims.bytesReceived) / double(r.work);
+  const int64_t phaseWork[2] = {sims.tally.emitted + sims.tally.photonsHandedOn,
+                                sims.tally.cameraRays + sims.tally.raysHandedOn};
+  for (int phase : {0, 1})
+    if (phaseWork[phase] > 0) r.bytesPerPhaseWork[phase] = double(sims.phaseBytes[phase]) / double(phaseWork[phase]);
   return r;
 }
 
@@ -351,18 +356,18 @@ std::vector<uint32_t> parseCounts(const std::string& text) {
 std::string csvOf(const std::vector<RunFigures>& runs) {
   std::string csv =
       "workers,processes,leases,window_leases,window_s,leases_per_s,coordinator_cpu_ms_per_lease,coordinator_busy,"
-      "coordinator_waiting,simulated_workers_cpu_s,latency_median_ms,latency_p99_ms,bytes_in_per_lease,bytes_out_per_lease,disk_write_bytes_per_lease,work,bytes_per_work,job_s,"
+      "coordinator_waiting,simulated_workers_cpu_s,latency_median_ms,latency_p99_ms,bytes_in_per_lease,bytes_out_per_lease,disk_write_bytes_per_lease,work,bytes_per_work,bytes_per_photon_work,bytes_per_render_work,job_s,"
       "coordinator_cpu_s,photons,emitted,deposit_records,region_records,photons_handed_on,camera_rays,results_refused,"
       "errors,balanced\n";
   for (const RunFigures& r : runs)
     csv += fmt::format(
-        "{},{},{},{},{:.6f},{:.1f},{:.4f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.0f},{:.0f},{},{:.2f},{:.3f},{:.3f},"
-        "{},{},{},{},{},{},{},{},{}\n",
+        "{},{},{},{},{:.6f},{:.1f},{:.4f},{:.3f},{:.3f},{:.3f},{:.3f},{:.3f},{:.0f},{:.0f},{:.0f},{},{:.2f},{:.2f},{:.2f},"
+        "{:.3f},{:.3f},{},{},{},{},{},{},{},{},{}\n",
         r.workers, r.processes, r.leases, r.windowLeases, r.windowSeconds, r.leasesPerSecond, r.cpuMsPerLease,
         r.coordinatorBusy, r.coordinatorWaiting, r.simulatedCpuSeconds, r.latencyMedianMs, r.latencyP99Ms,
-        r.bytesInPerLease, r.bytesOutPerLease, r.diskWritesPerLease, r.work, r.bytesPerWork, r.jobSeconds,
-        r.coordinatorCpuSeconds, r.photons, r.emitted, r.depositRecords, r.regionRecords, r.photonsHandedOn,
-        r.cameraRays, r.refused, r.errors, r.balanced() ? 1 : 0);
+        r.bytesInPerLease, r.bytesOutPerLease, r.diskWritesPerLease, r.work, r.bytesPerWork, r.bytesPerPhaseWork[0],
+        r.bytesPerPhaseWork[1], r.jobSeconds, r.coordinatorCpuSeconds, r.photons, r.emitted, r.depositRecords,
+        r.regionRecords, r.photonsHandedOn, r.cameraRays, r.refused, r.errors, r.balanced() ? 1 : 0);
   return csv;
 }
 

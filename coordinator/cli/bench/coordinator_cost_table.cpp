@@ -35,9 +35,14 @@ CoordinatorCostTable::CoordinatorCostTable(const std::string& path) {
   for (int number = 2; std::getline(in, line); ++number) {
     const auto row = fields(line);
     try {
-      Row r{std::stod(row.at(column["workers"])),
-            {std::stod(row.at(column["coordinator_cpu_ms_per_lease"])) * 1e-3, std::stod(row.at(column["bytes_per_work"]))}};
-      if (!(r.workers >= 1) || !(r.cost.cpuSecondsPerLease >= 0) || !(r.cost.bytesPerWork >= 0))
+      Row r{std::stod(row.at(column["workers"])), {std::stod(row.at(column["coordinator_cpu_ms_per_lease"])) * 1e-3}};
+      const double all = std::stod(row.at(column["bytes_per_work"]));
+      const char* phaseColumns[2] = {"bytes_per_photon_work", "bytes_per_render_work"};
+      for (int phase : {0, 1})
+        r.cost.bytesPerWork[phase] =
+            column.count(phaseColumns[phase]) ? std::stod(row.at(column[phaseColumns[phase]])) : all;
+      if (!(r.workers >= 1) || !(r.cost.cpuSecondsPerLease >= 0) || !(r.cost.bytesPerWork[0] >= 0) ||
+          !(r.cost.bytesPerWork[1] >= 0))
         throw std::invalid_argument("negative or no workers");
       rows_.push_back(r);
     } catch (const std::exception& e) {
@@ -55,8 +60,11 @@ CoordinatorCost CoordinatorCostTable::at(size_t workers) const {
   const auto above = std::find_if(rows_.begin(), rows_.end(), [&](const Row& r) { return r.workers >= n; });
   const auto below = above - 1;
   const double f = std::log(n / below->workers) / std::log(above->workers / below->workers);
-  return {below->cost.cpuSecondsPerLease + f * (above->cost.cpuSecondsPerLease - below->cost.cpuSecondsPerLease),
-          below->cost.bytesPerWork + f * (above->cost.bytesPerWork - below->cost.bytesPerWork)};
+  const auto between = [f](double a, double b) { return a + f * (b - a); };
+  CoordinatorCost cost;
+  cost.cpuSecondsPerLease = between(below->cost.cpuSecondsPerLease, above->cost.cpuSecondsPerLease);
+  for (int phase : {0, 1}) cost.bytesPerWork[phase] = between(below->cost.bytesPerWork[phase], above->cost.bytesPerWork[phase]);
+  return cost;
 }
 
 }  // namespace portico::cli

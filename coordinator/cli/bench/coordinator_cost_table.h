@@ -13,7 +13,7 @@ namespace portico::cli {
 
 struct CoordinatorCost {
   double cpuSecondsPerLease = 0;
-  double bytesPerWork = 0;
+  double bytesPerWork[2] = {0, 0};   // photon pass, render (a CSV without them: bytes_per_work for both)
 };
 
 class CoordinatorCostTable {

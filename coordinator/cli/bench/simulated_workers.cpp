@@ -109,7 +109,9 @@ class WorkerProcess {
                              {"assigns", report_.assigns},
                              {"photon_fetches", report_.photonFetches},
                              {"errors", report_.errors},
-                             {"cpu_s", processCpuSeconds()}};
+                             {"cpu_s", processCpuSeconds()},
+                             {"photon_phase_bytes", report_.phaseBytes[0]},
+                             {"render_phase_bytes", report_.phaseBytes[1]}};
     std::ofstream out(options_.report);
     out << totals.dump() << "\n";
     for (const auto& [sent, latency] : report_.results) out << sent << ' ' << latency << '\n';
@@ -117,9 +119,12 @@ class WorkerProcess {
   }
 
  private:
-  void send(SimulatedWorker& w, capnp::MessageBuilder& message, net::Encoding encoding = net::Encoding::Packed) {
+  // `phase`: the phase whose bytes these are (-1: none, as a heartbeat's).
+  void send(SimulatedWorker& w, capnp::MessageBuilder& message, net::Encoding encoding = net::Encoding::Packed,
+            int phase = -1) {
     zmq::message_t frame = net::encode(message, encoding);
     report_.bytesSent += int64_t(frame.size());
+    if (phase >= 0) report_.phaseBytes[phase] += int64_t(frame.size());
     (void)w.socket->send(frame, zmq::send_flags::dontwait);
     w.lastSentNs = steadyNs();
   }
@@ -128,8 +133,13 @@ class WorkerProcess {
     zmq::message_t frame;
     while (w.socket->recv(frame, zmq::recv_flags::dontwait)) {
       report_.bytesReceived += int64_t(frame.size());
+      const auto bytes = int64_t(frame.size());
       auto decoded = std::make_unique<net::Decoded>(std::move(frame));
       const auto envelope = decoded->envelope();
+      if (envelope.which() == wire::Envelope::ASSIGN)
+        report_.phaseBytes[envelope.getAssign().getPhase() == wire::Phase::RENDER ? 1 : 0] += bytes;
+      else if (envelope.which() == wire::Envelope::PHOTONS)
+        report_.phaseBytes[1] += bytes;
       switch (envelope.which()) {
         case wire::Envelope::WELCOME: {
           w.welcomed = true;
@@ -182,7 +192,7 @@ class WorkerProcess {
       auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
       fetch.setJob(assign.getJob());
       fetch.setCell(assign.getCell());
-      send(w, message);
+      send(w, message, net::Encoding::Packed, 1);
       ++report_.photonFetches;
       w.fetching = key;
     }
@@ -198,7 +208,7 @@ class WorkerProcess {
   void answer(SimulatedWorker& w, wire::Assign::Reader assign) {
     if (!neighbours_) neighbours_.emplace(SceneStore::open(assign.getSpec().getStore().cStr()));
     SimulatedResult result = simulateResult(assign, options_.shape, *neighbours_, options_.depositRegions);
-    send(w, *result.message, net::Encoding::Flat);
+    send(w, *result.message, net::Encoding::Flat, assign.getPhase() == wire::Phase::RENDER ? 1 : 0);
     report_.tally.add(result.tally);
     ++w.progress;
     w.resultsAwaitingAssign.push_back(report_.results.size());
@@ -217,6 +227,7 @@ void SimulatedReport::add(const SimulatedReport& o) {
   tally.add(o.tally);
   bytesSent += o.bytesSent, bytesReceived += o.bytesReceived, assigns += o.assigns;
   photonFetches += o.photonFetches, errors += o.errors, cpuSeconds += o.cpuSeconds;
+  phaseBytes[0] += o.phaseBytes[0], phaseBytes[1] += o.phaseBytes[1];
   results.insert(results.end(), o.results.begin(), o.results.end());
 }
 
@@ -242,6 +253,7 @@ SimulatedReport readSimulatedReport(const std::string& path) {
     r.tally.raysHandedOn = t.at("rays_handed_on");
     r.bytesSent = t.at("bytes_sent"), r.bytesReceived = t.at("bytes_received"), r.assigns = t.at("assigns");
     r.photonFetches = t.at("photon_fetches"), r.errors = t.at("errors"), r.cpuSeconds = t.at("cpu_s");
+    r.phaseBytes[0] = t.at("photon_phase_bytes"), r.phaseBytes[1] = t.at("render_phase_bytes");
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}:1: {}", path, e.what()));
   }

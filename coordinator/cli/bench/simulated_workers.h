@@ -36,6 +36,9 @@ struct SimulatedReport {
   SimulatedTally tally;
   int64_t bytesSent = 0, bytesReceived = 0, assigns = 0, photonFetches = 0, errors = 0;
   double cpuSeconds = 0;   // the processes' own (user + system)
+  // The bytes of each phase's messages, both ways: Assigns and Results of
+  // photon leases; of render leases, with FetchPhotons and their replies.
+  int64_t phaseBytes[2] = {0, 0};
   // Per Result: when it left (steady clock, ns) and how long until that
   // worker's next Assign came (ns; -1: none came).
   std::vector<std::pair<int64_t, int64_t>> results;

@@ -214,7 +214,7 @@ TEST(ClusterModel, AMeasuredCoordinatorCostReplacesTheRecordsAndItsBytesHoldTheL
   EXPECT_GT(slowCpu.coordinatorUtilization(), 0.9);
   EXPECT_GT(slowCpu.seconds(), 3 * recorded.seconds());
   options.coordinatorSecondsPerLease = -1;   // the record's again
-  options.bytesPerWork = 400;
+  options.bytesPerWork[0] = options.bytesPerWork[1] = 400;
   options.linkBytesPerSecond = 100e6;
   const ClusterPrediction slowLink = simulateCluster(record, options);
   EXPECT_GT(slowLink.coordinatorUtilization(), 0.9);

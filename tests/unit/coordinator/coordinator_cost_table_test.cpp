@@ -28,9 +28,20 @@ TEST(CoordinatorCostTable, InterpolatesInLogWorkersAndHoldsTheEnds) {
   EXPECT_DOUBLE_EQ(table.at(1).cpuSecondsPerLease, 1.0e-3);     // below the first row: held
   EXPECT_DOUBLE_EQ(table.at(16).cpuSecondsPerLease, 1.0e-3);
   EXPECT_NEAR(table.at(64).cpuSecondsPerLease, 0.7e-3, 1e-12);  // half way from 16 to 256 in log
-  EXPECT_NEAR(table.at(64).bytesPerWork, 44, 1e-9);
+  EXPECT_NEAR(table.at(64).bytesPerWork[0], 44, 1e-9);   // no per-phase columns: bytes_per_work for both
+  EXPECT_NEAR(table.at(64).bytesPerWork[1], 44, 1e-9);
   EXPECT_DOUBLE_EQ(table.at(1024).cpuSecondsPerLease, 0.4e-3);  // beyond the last: held
-  EXPECT_DOUBLE_EQ(table.at(1024).bytesPerWork, 48);
+  EXPECT_DOUBLE_EQ(table.at(1024).bytesPerWork[0], 48);
+}
+
+TEST(CoordinatorCostTable, ReadsEachPhasesBytesWhereTheCsvHasThem) {
+  const TemporaryDirectory dir("portico-cost-table");
+  const CoordinatorCostTable table(write(dir,
+                                         "workers,coordinator_cpu_ms_per_lease,bytes_per_work,bytes_per_photon_work,"
+                                         "bytes_per_render_work\n"
+                                         "64,0.5,40,9,300\n"));
+  EXPECT_DOUBLE_EQ(table.at(64).bytesPerWork[0], 9);
+  EXPECT_DOUBLE_EQ(table.at(64).bytesPerWork[1], 300);
 }
 
 TEST(CoordinatorCostTable, AFileWithoutTheColumnsOrWithABadRowIsRefusedNamingIt) {
