@@ -32,6 +32,7 @@
 #include "coordinator/cli/bench/bench_plot.h"
 #include "coordinator/cli/bench/simulated_workers.h"
 #include "coordinator/cli/commands.h"
+#include "coordinator/cli/local_services.h"
 
 namespace portico::cli {
 
@@ -194,11 +195,19 @@ void checkAccounting(const nlohmann::json& status, const SimulatedReport& sims, 
   expect("errors the coordinator sent", sims.errors, 0);
 }
 
+// Ctrl-C or SIGTERM ends a run by an exception, whose unwinding stops the
+// coordinator and the simulated workers (ChildProcess), instead of leaving
+// them running without the bench.
+void throwIfInterrupted() {
+  if (interrupted()) throw std::runtime_error("interrupted: the coordinator and simulated workers were stopped");
+}
+
 // Waits for `done`, polling every 20 ms; throws `what` after `seconds`.
 template <typename Done>
 void waitFor(Done done, double seconds, const std::string& what) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
   while (!done()) {
+    throwIfInterrupted();
     if (std::chrono::steady_clock::now() > deadline) throw std::runtime_error(what);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
@@ -268,6 +277,7 @@ RunFigures runOnce(uint32_t workers, const std::string& store, const BenchCoordi
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.timeoutSeconds);
   while (true) {
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    throwIfInterrupted();
     status = nlohmann::json::parse(client.statusJson(job));
     const std::string state = status.value("state", "");
     if (state == "done" || state == "failed" || state == "cancelled") break;
@@ -424,6 +434,7 @@ int runBenchCoordinator(BenchCoordinatorOptions o, bool workersGiven, bool floor
     if (!photonsGiven) o.photonsPerLight = 200;
   }
   const std::vector<uint32_t> counts = parseCounts(o.workers);
+  catchInterrupts();
   if (o.workersPerProcess == 0) throw std::invalid_argument("--workers-per-process must be at least 1");
   const std::optional<BuildingPreset> preset = findBuildingPreset(o.preset, o.floors);
   if (!preset)

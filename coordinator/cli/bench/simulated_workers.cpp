@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/resource.h>
 
 #include <chrono>
@@ -234,6 +235,9 @@ void SimulatedReport::add(const SimulatedReport& o) {
 int runSimulatedWorkers(const SimulatedWorkersOptions& options) {
   signal(SIGTERM, onStop);
   signal(SIGINT, onStop);
+  // A bench killed outright (SIGKILL) leaves no one to stop these workers:
+  // they stop with it.
+  ::prctl(PR_SET_PDEATHSIG, SIGTERM);
   WorkerProcess process(options);
   process.run();
   process.writeReport();
