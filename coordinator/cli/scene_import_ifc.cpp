@@ -93,6 +93,7 @@ ImportSummary importIfcModel(const std::string& ifc, const std::string& store, c
     std::cerr << fmt::format("{}: {}: finding rooms in its geometry instead\n", ifc,
                              findRooms->value("reason", std::string("no usable IfcSpace")));
     importOptions.findRooms = true;
+    importOptions.rooms.solidsAreClosed = true;   // IfcOpenShell's solids: a footing's inside is no room
     importOptions.lampPerFoundRoom = findRooms->value("lamps", false);
     importOptions.cameraPerFoundRoom = true;
   }

@@ -12,6 +12,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "common/accel/triangle_intersect.h"
 #include "common/scene/import/binned_cells.h"
 #include "common/triangle_box_overlap.h"
 
@@ -147,10 +148,48 @@ std::vector<uint32_t> fillComponent(const Grid& grid, uint64_t seed, Member&& me
   return members;
 }
 
+// Whether p lies inside a closed solid of the scene (meshes of closed
+// solids whose faces look out, as IfcOpenShell tessellates IFC elements):
+// along at least two of three skew directions (skew, so that no ray runs
+// along a wall's edges; three, so that one ray through a glass pane or a
+// gap does not decide), the first surface met faces away from p and the
+// surfaces crossed are odd in number.
+bool insideClosedSolid(const ImportedScene& scene, const Vec3& p) {
+  const Vec3 directions[3] = {normalize(Vec3(1.0f, 0.0123f, 0.0371f)), normalize(Vec3(0.0291f, 1.0f, 0.0173f)),
+                              normalize(Vec3(0.0137f, 0.0419f, 1.0f))};
+  int inside = 0;
+  for (const Vec3& direction : directions) {
+    const Ray ray{p, direction};
+    const WatertightRay frame(direction);
+    uint64_t crossings = 0;
+    float nearest = kInfinity;
+    bool nearestFacesAway = false;
+    for (const ImportedObject& object : scene.objects)
+      for (size_t t = 0; t < object.triangleCount(); ++t) {
+        const Vec3 a = object.vertex(object.indices[3 * t]), b = object.vertex(object.indices[3 * t + 1]),
+                   c = object.vertex(object.indices[3 * t + 2]);
+        float distance = 0, u = 0, v = 0;
+        if (!intersectTriangle(frame, ray, a, b, c, distance, u, v)) continue;
+        ++crossings;
+        if (distance < nearest) {
+          nearest = distance;
+          nearestFacesAway = dot(cross(b - a, c - a), direction) > 0.0f;
+        }
+      }
+    inside += int(crossings % 2 == 1 && nearestFacesAway);
+  }
+  return inside >= 2;
+}
+
 // Steps 3 and 4: each free voxel's region, 0 outdoors, kNone where no core
-// reaches (solid voxels, the inside of thick walls); returns the number of rooms.
+// reaches (solid voxels, the inside of thick walls); returns the number of
+// rooms. A core inside a closed solid (a footing or a column thicker than
+// an opening is wide: no triangle touches its inside) is no room, where
+// `insideSolid` can tell.
+template <typename InsideSolid>
 uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint16_t>& distance, const Grid& grid,
-                      uint16_t coreDistance, uint64_t minCoreVoxels, std::vector<uint32_t>& region) {
+                      uint16_t coreDistance, uint64_t minCoreVoxels, InsideSolid&& insideSolid,
+                      std::vector<uint32_t>& region) {
   region.assign(grid.count(), kNone);
   std::vector<uint8_t> marked(grid.count(), 0);
   auto core = [&](uint64_t v) { return distance[v] >= coreDistance; };
@@ -168,7 +207,7 @@ uint32_t labelRegions(const std::vector<uint8_t>& solid, const std::vector<uint1
     uint32_t id = kNone;
     if (touchesBoundary)
       id = 0;
-    else if (members.size() >= minCoreVoxels)
+    else if (members.size() >= minCoreVoxels && !insideSolid(members.front()))
       id = ++rooms;
     if (id == kNone) continue;
     for (uint32_t v : members) region[v] = id;
@@ -370,7 +409,12 @@ FoundRooms findRooms(const ImportedScene& scene, const std::string& source, cons
   const std::vector<uint16_t> distance = distanceToSolid(solid, grid);
   report(options, "regions", 0.0);
   std::vector<uint32_t> region;
-  rooms.rooms = labelRegions(solid, distance, grid, coreDistance, minCoreVoxels, region);
+  auto insideSolid = [&](uint32_t v) {
+    if (!options.solidsAreClosed) return false;
+    const auto c = grid.coordinates(v);
+    return insideClosedSolid(scene, rooms.voxelBounds(c[0], c[1], c[2]).center());
+  };
+  rooms.rooms = labelRegions(solid, distance, grid, coreDistance, minCoreVoxels, insideSolid, region);
   if (rooms.rooms == 0)
     throw noRooms(fmt::format("no enclosed space wider than {} m (the free space is all outdoors at {} m voxels)",
                               options.openingWidth, rooms.voxelSize));

@@ -45,6 +45,10 @@ struct RoomFinderOptions {
   float openingWidth = 1.5f;     // free space narrower than this (doors, windows) separates regions
   float minRoomVolume = 1.0f;    // cubic metres of core below which a component is not a room
   uint64_t maxVoxels = 48ull << 20;
+  // The meshes are closed solids with outward faces (an IFC model's
+  // elements): a core inside one (a footing block) is no room. Off for
+  // meshes in general, whose walls may be single faces.
+  bool solidsAreClosed = false;
   // Called with a stage name and its fraction done, a few times a stage.
   std::function<void(const std::string& stage, double fraction)> onProgress;
 };
