@@ -4,7 +4,8 @@
 # geometry only and finds the rooms in it. IfcOpenHouse (no IfcSpace) and
 # Revit's CPM house (no IfcSpace) become valid stores with a region per room,
 # a camera named "room N" and a ceiling panel in each; room 1's view renders
-# lit, every photon accounted for; the rooms' air is in conversion.json. A
+# lit, every photon accounted for; the rooms' air is in conversion.json.
+# With a light fixture, the room gets the fixture's lamp instead. A
 # model that is not a building (four walls and a floor, no roof) stops with
 # the room finder's one line and leaves no store behind.
 # (The outdoors is open: light leaves through windows and CPM's unfilled voids.)
@@ -67,6 +68,37 @@ PY
 # IfcOpenHouse: one room; the inside of its 2 m deep footing block is no room.
 check IfcOpenHouse_IFC4.ifc 1
 check Revit2022-CPM.ifc 4
+
+# IfcOpenHouse with a light fixture under its roof (added with IfcOpenShell's API): its lamp, no room panels.
+"$src/.venv/bin/python3" - "$src/tests/scenes/ifc/corpus/IfcOpenHouse_IFC4.ifc" "$work/house-lamp.ifc" <<'PY'
+import sys, numpy as np, ifcopenshell, ifcopenshell.api as api
+model = ifcopenshell.open(sys.argv[1])
+context = [c for c in model.by_type("IfcGeometricRepresentationContext") if c.ContextType == "Model"][0]
+fixture = api.run("root.create_entity", model, ifc_class="IfcLightFixture", name="ceiling lamp")
+corners = [[(x * 0.3, y * 0.3, z * 0.1) for x in (-1, 1) for y in (-1, 1) for z in (0, 1)]]   # metres (the API's)
+faces = [[(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]]
+api.run("geometry.assign_representation", model, product=fixture, representation=api.run(
+    "geometry.add_mesh_representation", model, context=context, vertices=corners, faces=faces))
+placement = np.eye(4)
+placement[:3, 3] = (0.0, 2.5, 2.3)   # IFC axes: over the middle of the house, under its roof
+api.run("geometry.edit_object_placement", model, product=fixture, matrix=placement)
+api.run("spatial.assign_container", model, products=[fixture], relating_structure=model.by_type("IfcBuildingStorey")[0])
+model.write(sys.argv[2])
+PY
+"$bin/portico" scene import --keep-conversion "$work/house-lamp-conv" "$work/house-lamp.ifc" "$work/house-lamp" \
+    > /dev/null 2>&1
+python3 - "$work/house-lamp-conv" <<'PY'
+import json, sys
+conversion = json.load(open(sys.argv[1] + "/conversion.json"))
+s, room = conversion["summary"], conversion["found_rooms"][0]
+if (s["light_fixtures"], s["lights"], s["light_source"], s["rooms_found"]) != (1, 1, "fixtures", 1):
+    print(f"house with a fixture: {s}"); sys.exit(1)
+lamp = [[float(x) for x in line.split()[1:]] for line in open(sys.argv[1] + "/meshes/lamp-0000.obj") if line.startswith("v ")]
+centre = [sum(p[a] for p in lamp) / len(lamp) for a in range(3)]
+if not all(room["air_lo"][a] < centre[a] < room["air_hi"][a] for a in range(3)):
+    print(f"house with a fixture: its lamp at {centre} is not in the room's air {room['air_lo']} {room['air_hi']}"); sys.exit(1)
+print("ok house with a fixture: 1 room, its fixture's lamp, no room panel")
+PY
 
 # Four walls and a floor, no roof: no rooms, one line, nothing written, in bounded time.
 store="$work/walls"
