@@ -25,6 +25,7 @@
 #include "common/util/output_path.h"
 #include "common/util/process_memory.h"
 #include "coordinator/analysis_sensors.h"
+#include "coordinator/assign_encoder.h"
 #include "coordinator/cell_choice.h"
 #include "coordinator/file_server.h"
 #include "coordinator/job_limits.h"
@@ -34,6 +35,7 @@
 #include "coordinator/peer_rights.h"
 #include "coordinator/photon_reuse.h"
 #include "coordinator/render_passes.h"
+#include "coordinator/result_applier.h"
 #include "coordinator/result_check.h"
 
 namespace portico {
@@ -130,9 +132,10 @@ void Coordinator::run() {
 // coordinator's CPU in a photon pass, and at the end of a pass, where
 // Results of a few photons each arrive faster than they are committed,
 // the workers would wait for the coordinator. A round takes all that
-// has arrived and makes two transactions of it, whatever the number of
-// messages: the leases refilling the slots that the Results freed, then
-// the messages themselves with the timers and the scheduling (each
+// has arrived and makes one or two transactions of it, whatever the number
+// of messages: the leases refilling the slots that the Results freed, when
+// a worker would otherwise run out of work meanwhile (WorkerInfo::runsShort),
+// then the messages themselves with the timers and the scheduling (each
 // handler's own transaction nests in it as a savepoint, so a rejected
 // Result still leaves nothing). Each commits before what it sends leaves:
 // no lease, reply or job id goes out before what it refers to is durable.
@@ -181,7 +184,7 @@ void Coordinator::runRound() {
   // coordinator's longest step), so that the workers trace meanwhile
   // instead of waiting for it. A new lease cannot hold these Results'
   // crossings, not queued yet; any order of leases gives the same bits.
-  bool resultsArrived = false;
+  bool refillFirst = false;
   for (const Incoming& in : arrived) {
     auto envelope = in.message->envelope();
     if (envelope.which() != wire::Envelope::RESULT || refusalFor(in.role, envelope.which())) continue;
@@ -201,11 +204,20 @@ void Coordinator::runRound() {
         arrivedLeases_[lease] = sent->second;
         worker->second.leases.erase(sent);
       }
-      resultsArrived = true;
+      refillFirst = refillFirst || worker->second.runsShort();
     }
   }
-  if (resultsArrived) inRound([&] { dispatch(); });
+  // A worker still holding a lease of some length traces it while the
+  // Results are applied, and its next lease goes with the round's own
+  // commit: one commit per round, not two.
+  if (refillFirst) inRound([&] { dispatch(); });
 
+  // A wake-up with nothing to do (no message, no timer due, no lease to
+  // hand out) opens no transaction: the loop wakes ten times a second.
+  if (arrived.empty() && !requeueOwed_ && nowMs() - lastHeartbeatMs_ < options_.heartbeatMs && !leaseWanted()) {
+    security_->logConnectionEvents();
+    return;
+  }
   size_t handled = 0;
   bool requeued = false;
   const bool committed = inRound([&] {
@@ -527,6 +539,13 @@ Coordinator::JobContext& Coordinator::context(uint64_t job) {
   return jobs_.emplace(job, std::move(context)).first->second;
 }
 
+bool Coordinator::leaseWanted() {
+  if (nowMs() < diskPausedUntilMs_) return false;
+  if (std::none_of(workers_.begin(), workers_.end(), [](const auto& w) { return w.second.wantsLease(); }))
+    return false;
+  return !store_.pendingCells(1).empty();
+}
+
 void Coordinator::dispatch() {
   if (nowMs() < diskPausedUntilMs_) return;   // the disk refused the last round's writes
   for (auto& [identity, worker] : workers_) {
@@ -625,46 +644,23 @@ Coordinator::Assignment Coordinator::assignWork(WorkerInfo& worker) {
   }
   const uint64_t lease = opened.id;
   if (!lease) return Assignment::Assigned;
-  capnp::MallocMessageBuilder message;
-  auto assign = message.initRoot<wire::Envelope>().initAssign();
-  assign.setLease(lease);
-  assign.setAttempt(opened.attempt);
-  assign.setJob(chosen->job);
-  assign.setPhase(chosen->phase == 0 ? wire::Phase::PHOTONS : wire::Phase::RENDER);
-  assign.setCell(chosen->cell);
-  assign.setSpec(job->reader());
-  assign.setPhotonJob(job->photonJob);
-  if (chosen->phase == 1) assign.getSpec().setSeed(passSeed(job->reader().getSeed(), job->renderPass));
-  assign.setLeaseWork(leaseWork);
-  assign.setCellWork(std::max(chosen->work, leaseWork));
-  // What the lease asks for is summed as its batches are copied: its Result must add up to it.
-  LeaseExpectation expected;
-  expected.phase = chosen->phase;
-  const uint32_t spp = job->reader().getSpp();
-  const auto copyBatches = [&](const std::vector<QueuedBatch>& from, capnp::List<wire::RayBatch>::Builder to) {
-    for (size_t i = 0; i < from.size(); ++i) {
-      net::MessageReader reader(from[i].payload.data(), from[i].payload.size());   // packed or flat
-      const auto batch = reader.root<wire::RayBatch>();
-      expected.add(batch, spp);
-      to.setWithCaveats(static_cast<unsigned>(i), batch);
-    }
-  };
+  AssignContents contents;
+  contents.lease = opened;
+  contents.spec = job->reader();
+  contents.photonJob = job->photonJob;
+  contents.renderPass = job->renderPass;
+  contents.cellWork = chosen->work;
+  contents.batches = &batches;
+  contents.moreCells = &moreCells;
   if (region) {
-    auto target = assign.initDepositRegion();
-    target.setPath(std::filesystem::absolute(store_.photonFile(chosen->job)).string());
-    target.setOffset(uint64_t(region->offset));
-    target.setSize(uint64_t(region->size));
+    contents.region = AssignContents::Region{std::filesystem::absolute(store_.photonFile(chosen->job)).string(),
+                                             region->offset, region->size};
     depositRegions_[lease] = *region;
   }
-  copyBatches(batches, assign.initBatches(static_cast<unsigned>(batches.size())));
-  if (!moreCells.empty()) {
-    auto more = assign.initMoreCells(static_cast<unsigned>(moreCells.size()));
-    for (size_t i = 0; i < moreCells.size(); ++i) {
-      more[unsigned(i)].setCell(moreCells[i].first);
-      copyBatches(moreCells[i].second, more[unsigned(i)].initBatches(static_cast<unsigned>(moreCells[i].second.size())));
-    }
-  }
+  capnp::MallocMessageBuilder message;
+  const LeaseExpectation expected = encodeAssign(contents, message);
   send(worker.identity, message, net::Encoding::Flat);   // rays: packing gains little, costs a pass
+  ++leasesSent_;
   if (worker.leases.empty()) worker.progressMs = nowMs();   // its lease clock starts with its first lease
   WorkerInfo::LeaseInFlight inFlight{wallMs(), leaseWork, {}, expected};
   inFlight.job = chosen->job, inFlight.cell = chosen->cell, inFlight.phase = opened.phase;
@@ -713,51 +709,11 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     if (active) {
       const auto sent = arrivedLeases_.find(leaseId);
       checkResultCounts(sent != arrivedLeases_.end() ? &sent->second.expected : nullptr, lease->phase, result);
-      const size_t cellCount = context->scene->cells().size();
-      for (auto crossing : result.getCrossings()) {
-        if (crossing.getCell() >= cellCount)
-          throw BadResultError(fmt::format("it sends rays to cell {}, which does not exist", crossing.getCell()));
-        // One first segment that holds the whole copy: no growth, no second segment.
-        capnp::MallocMessageBuilder batch(uint(crossing.getRays().totalSize().wordCount + 8));
-        batch.initRoot<wire::RayBatch>().setRays(crossing.getRays());
-        store_.addBatch(lease->job, crossing.getCell(), lease->phase, BatchKind::Rays, crossing.getRays().size(),
-                        net::flatToString(batch));   // rays: packing gains little, costs a pass each way
-      }
-      int64_t regionBytes = 0, resultBytes = 0;
-      std::vector<RegionDeposit> inRegion;
-      try {
-        inRegion = regionDeposits(leaseId, region ? &*region : nullptr, result, cellCount);
-      } catch (const std::runtime_error& e) {
-        throw BadResultError(e.what());
-      }
-      for (const RegionDeposit& d : inRegion) {
-        store_.addPhotonsAt(lease->job, d.cell, d.extent);
-        regionBytes += d.extent.size;
-      }
-      for (auto deposits : result.getDeposits()) {
-        if (deposits.getCell() >= cellCount)
-          throw BadResultError(fmt::format("it deposits photons in cell {}, which does not exist", deposits.getCell()));
-        auto records = deposits.getRecords();
-        if (records.size() == 0) continue;
-        if (records.size() % sizeof(PhotonRecord) != 0)
-          throw BadResultError(fmt::format("it holds a photon table of {} bytes, not whole records", records.size()));
-        store_.addPhotons(lease->job, deposits.getCell(), records.size() / sizeof(PhotonRecord),
-                          std::string_view(reinterpret_cast<const char*>(records.begin()), records.size()));
-        resultBytes += int64_t(records.size());
-      }
-      if (regionBytes > 0) store_.addCounter(lease->job, kPhotonBytesFromWorkersCounter, regionBytes);
-      if (resultBytes > 0) store_.addCounter(lease->job, kPhotonBytesFromResultsCounter, resultBytes);
-      if (result.getFilm().size() > 0) {
-        std::unordered_map<uint32_t, FixedRgb> sums;
-        auto spec = context->reader();
-        const uint64_t pixelCount = uint64_t(spec.getWidth()) * spec.getHeight();
-        for (auto pixel : result.getFilm()) {
-          checkFilmValue(pixel, pixelCount);
-          if (!sums[pixel.getPixel()].addWithinRange(FixedRgb{pixel.getR(), pixel.getG(), pixel.getB()}))
-            throw FilmRangeError();
-        }
-        store_.addFilm(lease->job, sums, pixelCount);
-      }
+      auto spec = context->reader();
+      applyResult(store_,
+                  {leaseId, lease->job, lease->phase, context->scene->cells().size(),
+                   uint64_t(spec.getWidth()) * spec.getHeight()},
+                  region ? &*region : nullptr, result);
       recordResultCounters(identity, *lease, result);
     }
     tx.commit();
@@ -782,6 +738,7 @@ void Coordinator::onResult(const std::string& identity, wire::Result::Reader res
     recordCellFailure(*lease, fmt::format("cell {}: {}", lease->cell, e.what()));
     return;
   }
+  ++resultsApplied_;
   refusedResults_.erase({lease->job, lease->cell});
   takenBack_.erase({lease->job, lease->cell});
   retries_.erase({lease->job, lease->cell});
@@ -845,7 +802,7 @@ bool Coordinator::sidelined(const WorkerInfo& worker) const {
 
 uint64_t Coordinator::peakResident() {
   const int64_t now = nowMs();
-  if (now - peakResidentReadMs_ >= 100) {
+  if (now - peakResidentReadMs_ >= 1000) {
     peakResident_ = peakResidentBytes();
     peakResidentReadMs_ = now;
   }
@@ -1104,6 +1061,21 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
       return;
     }
   }
+  // A worker that reads the photon file itself gets where the batches lie:
+  // no photon bytes pass through this thread or its socket.
+  if (request.getReadsPhotonFile())
+    if (const auto extents = store_.photonExtents(photonJob, request.getCell())) {
+      reply.setFile(std::filesystem::absolute(store_.photonFile(photonJob)).string());
+      auto list = reply.initExtents(static_cast<unsigned>(extents->size()));
+      for (size_t i = 0; i < extents->size(); ++i) {
+        list[unsigned(i)].setOffset(uint64_t((*extents)[i].offset));
+        list[unsigned(i)].setSize(uint64_t((*extents)[i].size));
+        list[unsigned(i)].setCrc((*extents)[i].crc);
+      }
+      store_.addCounter(job, kPhotonTablesReadByWorkersCounter, 1);
+      send(identity, message);
+      return;
+    }
   std::vector<std::string> blobs;
   try {
     blobs = store_.photonBatches(photonJob, request.getCell());
@@ -1122,9 +1094,13 @@ void Coordinator::onFetchPhotons(const std::string& identity, wire::FetchPhotons
     return;
   }
   auto list = reply.initBatches(static_cast<unsigned>(blobs.size()));
-  for (size_t i = 0; i < blobs.size(); ++i)
+  int64_t bytes = 0;
+  for (size_t i = 0; i < blobs.size(); ++i) {
     list.set(static_cast<unsigned>(i),
              capnp::Data::Reader(reinterpret_cast<const kj::byte*>(blobs[i].data()), blobs[i].size()));
+    bytes += int64_t(blobs[i].size());
+  }
+  if (bytes > 0) store_.addCounter(job, kPhotonBytesSentCounter, bytes);
   send(identity, message, net::Encoding::Flat);   // photon records: bytes, not words to squeeze
 }
 
@@ -1291,6 +1267,11 @@ void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
                                 {"priority", job.priority},
                                 {"required_tags", job.requiredTags}});
   }
+  // Since it started, all jobs: its CPU (every thread) over the leases it
+  // sent or the Results it applied is its cost per lease.
+  status["coordinator"] = {{"cpu_us", processCpuMicros()},
+                           {"leases_sent", leasesSent_},
+                           {"results_applied", resultsApplied_}};
   status["workers"] = workersStatus(workers_, nowMs());
   for (auto& worker : status["workers"]) {
     const auto refused = refusalsByWorker_.find(worker.value("name", ""));

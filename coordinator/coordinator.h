@@ -122,6 +122,9 @@ class Coordinator {
   void onGoodbye(const std::string& identity);
 
   void dispatch();
+  // Whether a worker wants a lease while work is pending (dispatch has
+  // something to try).
+  bool leaseWanted();
   // One lease for the worker; or none, because no work is pending at all
   // (dispatch stops) or because what is pending is best left to the
   // workers that hold its cells (the next worker is asked).
@@ -262,7 +265,11 @@ class Coordinator {
   // (coordinator/deposit_regions.h), and the source of their nonces.
   std::unordered_map<uint64_t, DepositRegionGrant> depositRegions_;
   std::mt19937_64 nonceSource_{std::random_device{}()};
-  // The coordinator's own peak resident memory, read at most every 100 ms
+  // The coordinator's own work so far, in every status reply (its CPU per
+  // lease, for whoever measures it from outside: `portico bench coordinator`).
+  int64_t leasesSent_ = 0;
+  int64_t resultsApplied_ = 0;
+  // The coordinator's own peak resident memory, read at most once a second
   // (a Result's transaction records it in the job's statistics).
   uint64_t peakResident();
   uint64_t peakResident_ = 0;

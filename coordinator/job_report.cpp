@@ -34,13 +34,13 @@ int64_t get(const std::map<std::string, int64_t>& counters, const std::string& n
 // "accel.cell.<id>.<spec>" counters: builds per spec, and per cell the specs
 // it was built with (more than one when `auto` rebuilt it, or when several
 // workers loaded it with different choices).
-void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohmann::json& stats) {
+void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohmann::json& stats, bool perCell) {
   nlohmann::json builds = nlohmann::json::object(), cells = nlohmann::json::object();
   const std::string builtPrefix = "accel.built.", cellPrefix = "accel.cell.";
   for (const auto& [name, value] : counters) {
     if (name.rfind(builtPrefix, 0) == 0) {
       builds[name.substr(builtPrefix.size())] = value;
-    } else if (name.rfind(cellPrefix, 0) == 0) {
+    } else if (perCell && name.rfind(cellPrefix, 0) == 0) {
       const std::string rest = name.substr(cellPrefix.size());
       const size_t dot = rest.find('.');
       if (dot == std::string::npos) continue;
@@ -48,7 +48,7 @@ void addAcceleratorChoices(const std::map<std::string, int64_t>& counters, nlohm
     }
   }
   stats["accelerators"] = builds;
-  stats["cell_accelerators"] = cells;
+  if (perCell) stats["cell_accelerators"] = cells;
 }
 
 // Cell reloads, from the same per-cell counters (one per load, whatever the
@@ -133,8 +133,12 @@ nlohmann::json daylightSettings(wire::JobSpec::Reader spec) {
 }
 }  // namespace
 
-nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
-  const auto counters = store.counters(job.id);
+namespace {
+// The statistics from the job's counters, read once by the caller; a
+// status reply leaves out the accelerators of each cell (one entry per cell:
+// the statistics file has them), so that a poll costs little on a tower.
+nlohmann::json statisticsOf(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec,
+                            const std::map<std::string, int64_t>& counters, bool perCell) {
   nlohmann::json stats;
   stats["job"] = job.id;
   stats["state"] = std::string(toString(job.state));
@@ -154,7 +158,9 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                                                                      : "radiance"},
                        {"daylight", daylightSettings(spec)}};
   // A job that reused an earlier job's photon pass shows that pass's photons.
-  const auto photonCounters = job.photonSource ? store.counters(job.photonSource) : counters;
+  std::map<std::string, int64_t> lenderCounters;
+  if (job.photonSource) lenderCounters = store.counters(job.photonSource);
+  const auto& photonCounters = job.photonSource ? lenderCounters : counters;
   stats["photons"] = {{"emitted", get(photonCounters, "photons.emitted")},
                       {"deposits", get(photonCounters, "photons.deposits")},
                       {"absorbed", get(photonCounters, "photons.absorbed")},
@@ -197,6 +203,8 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                    {"job_bytes", files.photons + files.batches},
                    {"photon_bytes_from_workers", get(counters, std::string(kPhotonBytesFromWorkersCounter))},
                    {"photon_bytes_from_results", get(counters, std::string(kPhotonBytesFromResultsCounter))},
+                   {"photon_tables_read_by_workers", get(counters, std::string(kPhotonTablesReadByWorkersCounter))},
+                   {"photon_bytes_sent", get(counters, std::string(kPhotonBytesSentCounter))},
                    {"jobs_db_bytes", store.databaseBytes()}};
   stats["leases"] = get(counters, "leases.completed");
   // Photon-pass leases that carried more cells than their own, and how many.
@@ -205,10 +213,13 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   stats["photon_pass_restarts"] = get(counters, JobStore::kPhotonPassRestarts);
   const int64_t cpuAtSubmit = get(counters, std::string(kCoordinatorCpuAtSubmitCounter));
   const int64_t cpuAtLastResult = get(counters, std::string(kCoordinatorCpuAtLastResultCounter));
+  const int64_t coordinatorCpuMicros =
+      cpuAtSubmit > 0 && cpuAtLastResult > cpuAtSubmit ? cpuAtLastResult - cpuAtSubmit : 0;
+  const int64_t leasesCompleted = get(counters, "leases.completed");
   stats["time_ms"] = {{"photons", get(counters, "time.photons_ms")},
                       // The coordinator's CPU from submit to the last Result
                       // (other jobs' too, when several run at once).
-                      {"coordinator_cpu", cpuAtSubmit > 0 && cpuAtLastResult > cpuAtSubmit ? (cpuAtLastResult - cpuAtSubmit) / 1000 : 0},
+                      {"coordinator_cpu", coordinatorCpuMicros / 1000},
                       {"render", get(counters, "time.render_ms")},
                       {"accelerator_build", std::llround(get(counters, "time.accel_build_us") * 1e-3)},
                       // Cell loads: reading, validating and building, all workers added up.
@@ -217,8 +228,11 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
                       // against the phases' time x workers, how busy they were.
                       {"leases", std::llround(get(counters, std::string(kLeaseTimeCounter)) * 1e-3)},
                       {"total", (job.finishedMs ? job.finishedMs : job.phaseStartedMs) - job.createdMs}};
+  // That CPU over the job's leases: what one lease costs the coordinator,
+  // every thread of it (statements, commits, messages, files, status polls).
+  stats["coordinator_cpu_per_lease_us"] = leasesCompleted > 0 ? coordinatorCpuMicros / leasesCompleted : 0;
   stats["film"] = {{"non_finite_contributions", get(counters, "film.non_finite")}};
-  addAcceleratorChoices(counters, stats);
+  addAcceleratorChoices(counters, stats, perCell);
   stats["render_passes"] = renderPassStatistics(store, job, spec);
   if (spec.hasAnalysis())
     stats["analysis"] = {{"sensors", spec.getAnalysis().getSensors()},
@@ -229,10 +243,15 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   return stats;
 }
 
+}  // namespace
+
+nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec) {
+  return statisticsOf(store, job, spec, store.counters(job.id), true);
+}
+
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs) {
-  nlohmann::json status = jobStatistics(store, job, spec);
-  status.erase("cell_accelerators");   // one entry per cell: the statistics file has it
   const auto counters = store.counters(job.id);
+  nlohmann::json status = statisticsOf(store, job, spec, counters, false);
   const int64_t photonsDone = status["photons"]["absorbed"].get<int64_t>() + status["photons"]["escaped"].get<int64_t>();
   // The passes started so far (the statistics' own count: the one being
   // rendered, else those done, at least one): a job in passes does not

@@ -28,6 +28,10 @@ inline constexpr std::string_view kCoordinatorCpuAtLastResultCounter = "time.coo
 // Results for the coordinator to write.
 inline constexpr std::string_view kPhotonBytesFromWorkersCounter = "disk.photon_bytes_from_workers";
 inline constexpr std::string_view kPhotonBytesFromResultsCounter = "disk.photon_bytes_from_results";
+// Render phase: photon tables a worker read from the photon file itself
+// (FetchPhotons.readsPhotonFile), and the bytes of those sent in replies.
+inline constexpr std::string_view kPhotonTablesReadByWorkersCounter = "disk.photon_tables_read_by_workers";
+inline constexpr std::string_view kPhotonBytesSentCounter = "disk.photon_bytes_sent";
 
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);

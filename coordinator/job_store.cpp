@@ -93,13 +93,25 @@ JobStore::JobStore(const std::string& path, int64_t batchSegmentBytes)
   refuseFilesOfUnknownJobs(path);
   migrate();
   sqlite3_rollback_hook(
-      db_.handle(), [](void* store) { static_cast<JobStore*>(store)->unleasedValid_ = false; }, this);
+      db_.handle(),
+      [](void* store) {
+        auto* self = static_cast<JobStore*>(store);
+        self->unleasedValid_ = self->remainingValid_ = false;
+        self->jobsChanged();
+      },
+      this);
   // The hook misses a nested transaction's partial rollback (a savepoint).
-  db_.setRollbackListener([this] { unleasedValid_ = false; });
+  db_.setRollbackListener([this] {
+    unleasedValid_ = remainingValid_ = false;
+    jobsChanged();
+  });
+  db_.setObserver(&counters_);
   // Files left by an earlier run: those no row refers to go.
   for (const AppendFiles::Key& file : batches_.filesOnDisk()) reclaimCandidates_.insert(file);
   reclaimBatchFiles();
 }
+
+JobStore::~JobStore() { db_.setObserver(nullptr); }
 
 // Files of jobs that jobs.db does not hold mean, in general, that jobs.db
 // lost its last commits (its -wal file deleted, the file truncated or
@@ -143,14 +155,29 @@ void JobStore::refuseFilesOfUnknownJobs(const std::string& path) {
 
 void JobStore::loadUnleasedWork() {
   unleased_.clear();
-  ranked_.clear();
   auto& s = db_.prepare(
       "SELECT job, phase, cell, SUM(work), COUNT(*) FROM batches WHERE lease IS NULL GROUP BY job, phase, cell");
   while (s.step())
-    changeUnleased({uint64_t(s.columnInt(0)), int(s.columnInt(1)), uint32_t(s.columnInt(2))}, s.columnInt(3),
-                   s.columnInt(4));
+    unleased_.change(uint64_t(s.columnInt(0)), int(s.columnInt(1)), uint32_t(s.columnInt(2)), s.columnInt(3),
+                     s.columnInt(4));
   s.reset();
   unleasedValid_ = true;
+}
+
+void JobStore::loadRemainingWork() {
+  remaining_.clear();
+  queuedRays_.clear();
+  auto& s = db_.prepare(
+      "SELECT job, phase, cell, SUM(work), COUNT(*), SUM(work) FILTER (WHERE kind = 0) FROM batches "
+      "GROUP BY job, phase, cell");
+  while (s.step()) {
+    const uint64_t job = uint64_t(s.columnInt(0));
+    const int phase = int(s.columnInt(1));
+    remaining_.change(job, phase, uint32_t(s.columnInt(2)), s.columnInt(3), s.columnInt(4));
+    if (const int64_t rays = s.columnInt(5); rays != 0) queuedRays_[{job, phase}] += rays;
+  }
+  s.reset();
+  remainingValid_ = true;
 }
 
 namespace {
@@ -427,6 +454,7 @@ void JobStore::rechecksumPhotonFiles() {
 }
 
 uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
+  jobsChanged();
   auto& s = db_.prepare(
       "INSERT INTO jobs(spec, state, created_ms, phase_started_ms, photon_record_bytes) VALUES (?, ?, ?, ?, ?)");
   s.bindBlob(1, spec.data(), spec.size()).bind(2, toString(JobState::Photons)).bind(3, nowMs).bind(4, nowMs);
@@ -436,12 +464,14 @@ uint64_t JobStore::createJob(const std::string& spec, int64_t nowMs) {
 }
 
 void JobStore::setPriority(uint64_t job, int priority) {
+  jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET priority = ? WHERE id = ?");
   s.bind(1, int64_t(priority)).bind(2, int64_t(job));
   s.run();
 }
 
 void JobStore::setRequiredTags(uint64_t job, const std::vector<std::string>& tags) {
+  jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET required_tags = ? WHERE id = ?");
   s.bind(1, joinTags(tags)).bind(2, int64_t(job));
   s.run();
@@ -472,12 +502,20 @@ constexpr const char* kJobColumns =
 }  // namespace
 
 std::optional<JobRecord> JobStore::job(uint64_t id) {
-  auto& s = db_.prepare(fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns));
+  if (auto cached = jobRecords_.find(id); cached != jobRecords_.end()) return cached->second;
+  static const std::string kSelect = fmt::format("SELECT {} FROM jobs WHERE id = ?", kJobColumns);
+  auto& s = db_.prepare(kSelect);
   s.bind(1, int64_t(id));
   std::optional<JobRecord> result;
   if (s.step()) result = readJob(s);
   s.reset();
+  if (result) jobRecords_.emplace(id, *result);
   return result;
+}
+
+void JobStore::jobsChanged() {
+  activeJobsValid_ = false;
+  jobRecords_.clear();
 }
 
 std::vector<JobRecord> JobStore::jobs(bool activeOnly) {
@@ -490,6 +528,7 @@ std::vector<JobRecord> JobStore::jobs(bool activeOnly) {
 }
 
 void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const std::string& error) {
+  jobsChanged();
   const bool finished = !isActive(state);
   if (finished) {
     // Its batch files go once the end is committed (reclaimBatchFiles); a
@@ -507,6 +546,7 @@ void JobStore::setJobState(uint64_t job, JobState state, int64_t nowMs, const st
 }
 
 void JobStore::setPhotonPass(uint64_t job, const std::string& key, uint64_t source) {
+  jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET photon_key = ?, photon_source = ? WHERE id = ?");
   s.bind(1, key).bind(2, int64_t(source)).bind(3, int64_t(job));
   s.run();
@@ -544,12 +584,14 @@ bool JobStore::photonFileHoldsItsBatches(uint64_t job) {
 }
 
 void JobStore::markPhotonPassComplete(uint64_t job) {
+  jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET photons_complete = 1 WHERE id = ?");
   s.bind(1, int64_t(job));
   s.run();
 }
 
 void JobStore::withdrawPhotonPass(uint64_t job) {
+  jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET photon_key = '' WHERE id = ?");
   s.bind(1, int64_t(job));
   s.run();
@@ -588,55 +630,50 @@ void JobStore::addBatch(uint64_t job, uint32_t cell, int phase, BatchKind kind, 
     retireBatchSegment(job, segment);
     batchSegments_[job] = segment + 1;
   }
-  if (unleasedValid_) changeUnleased({job, phase, cell}, work, 1);
+  if (unleasedValid_) unleased_.change(job, phase, cell, work, 1);
+  if (remainingValid_) {
+    remaining_.change(job, phase, cell, work, 1);
+    if (kind == BatchKind::Rays) queuedRays_[{job, phase}] += work;
+  }
 }
 
 int64_t JobStore::queuedRays(uint64_t job, int phase) {
-  auto& s = db_.prepare("SELECT COALESCE(SUM(work), 0) FROM batches WHERE job = ? AND phase = ? AND kind = 0");
-  s.bind(1, int64_t(job)).bind(2, int64_t(phase));
-  s.step();
-  const int64_t n = s.columnInt(0);
-  s.reset();
-  return n;
+  if (!remainingValid_) loadRemainingWork();
+  const auto it = queuedRays_.find({job, phase});
+  return it == queuedRays_.end() ? 0 : it->second;
 }
 
 std::vector<PendingCell> JobStore::pendingCells(
     size_t limit, const std::function<bool(const std::vector<std::string>&)>& mayTake) {
   if (!unleasedValid_) loadUnleasedWork();
+  if (!activeJobsValid_) loadActiveJobs();
   std::vector<std::pair<uint64_t, int>> activePhase;
-  auto& s = db_.prepare(
-      "SELECT id, state, required_tags FROM jobs WHERE state IN ('photons', 'render') ORDER BY priority DESC, id");
-  while (s.step()) {
-    if (mayTake && !mayTake(splitTags(s.columnText(2)))) continue;
-    activePhase.emplace_back(uint64_t(s.columnInt(0)), phaseOf(jobStateFromString(s.columnText(1))));
-  }
-  s.reset();
+  for (const ActiveJob& job : activeJobs_)
+    if (!mayTake || mayTake(job.requiredTags)) activePhase.emplace_back(job.id, job.phase);
   // The highest priority first, the oldest job of equal ones; in a job,
   // most work first (ties: lower cell): the ranked index's order, read no
   // further than `limit` (a tower's 18 K cells with work are not sorted
   // for each lease).
   std::vector<PendingCell> result;
   for (const auto& [job, phase] : activePhase) {
-    for (auto it = ranked_.lower_bound({job, phase, std::numeric_limits<int64_t>::min(), 0});
-         it != ranked_.end() && result.size() < limit; ++it) {
-      const auto& [rankedJob, rankedPhase, negativeWork, cell] = *it;
-      if (rankedJob != job || rankedPhase != phase) break;
-      result.push_back({job, cell, phase, -negativeWork});
-    }
     if (result.size() >= limit) break;
+    unleased_.visitRanked(job, phase, [&, job = job, phase = phase](uint32_t cell, int64_t work) {
+      result.push_back({job, cell, phase, work});
+      return result.size() < limit;
+    });
   }
   return result;
 }
 
-void JobStore::changeUnleased(const std::tuple<uint64_t, int, uint32_t>& key, int64_t work, int64_t batches) {
-  const auto& [job, phase, cell] = key;
-  auto it = unleased_.find(key);
-  if (it != unleased_.end()) ranked_.erase({job, phase, -it->second.work, cell});
-  else it = unleased_.emplace(key, Unleased{}).first;
-  it->second.work += work;
-  it->second.batches += batches;
-  if (it->second.batches <= 0) unleased_.erase(it);
-  else ranked_.insert({job, phase, -it->second.work, cell});
+void JobStore::loadActiveJobs() {
+  activeJobs_.clear();
+  auto& s = db_.prepare(
+      "SELECT id, state, required_tags FROM jobs WHERE state IN ('photons', 'render') ORDER BY priority DESC, id");
+  while (s.step())
+    activeJobs_.push_back(
+        {uint64_t(s.columnInt(0)), phaseOf(jobStateFromString(s.columnText(1))), splitTags(s.columnText(2))});
+  s.reset();
+  activeJobsValid_ = true;
 }
 
 // The cell's unleased batches, oldest first, up to maxWork (at least one).
@@ -681,12 +718,14 @@ int64_t JobStore::takeUnleased(const PendingCell& cell, int64_t maxWork, std::ve
 // Marks the batches as the lease's, and takes them out of the cell's unleased work.
 void JobStore::markLeased(uint64_t lease, const PendingCell& cell, const std::vector<QueuedBatch>& batches,
                           int64_t work) {
-  auto& mark = db_.prepare("UPDATE batches SET lease = ? WHERE id = ?");
-  for (const QueuedBatch& batch : batches) {
-    mark.bind(1, int64_t(lease)).bind(2, batch.id);
-    mark.run();
-  }
-  if (unleasedValid_) changeUnleased({cell.job, cell.phase, cell.cell}, -work, -int64_t(batches.size()));
+  // They are the cell's oldest unleased batches (takeUnleased): those up to
+  // the last one's id, one statement whatever their number.
+  auto& mark = db_.prepare(
+      "UPDATE batches SET lease = ? WHERE job = ? AND phase = ? AND cell = ? AND lease IS NULL AND id <= ?");
+  mark.bind(1, int64_t(lease)).bind(2, int64_t(cell.job)).bind(3, int64_t(cell.phase)).bind(4, int64_t(cell.cell));
+  mark.bind(5, batches.back().id);
+  mark.run();
+  if (unleasedValid_) unleased_.change(cell.job, cell.phase, cell.cell, -work, -int64_t(batches.size()));
 }
 
 LeaseRecord JobStore::openLease(const PendingCell& cell, const std::string& worker, int64_t maxWork, int64_t nowMs,
@@ -749,9 +788,16 @@ std::vector<LeaseRecord> JobStore::openLeases() {
 }
 
 void JobStore::completeLease(uint64_t lease) {
-  auto& del = db_.prepare("DELETE FROM batches WHERE lease = ?");
+  auto& del = db_.prepare("DELETE FROM batches WHERE lease = ? RETURNING job, phase, cell, kind, work");
   del.bind(1, int64_t(lease));
-  del.run();
+  while (del.step())
+    if (remainingValid_) {
+      const uint64_t job = uint64_t(del.columnInt(0));
+      const int phase = int(del.columnInt(1));
+      remaining_.change(job, phase, uint32_t(del.columnInt(2)), -del.columnInt(4), -1);
+      if (del.columnInt(3) == int64_t(BatchKind::Rays)) queuedRays_[{job, phase}] -= del.columnInt(4);
+    }
+  del.reset();
   auto& close = db_.prepare("DELETE FROM leases WHERE id = ?");
   close.bind(1, int64_t(lease));
   close.run();
@@ -787,11 +833,8 @@ int64_t JobStore::remainingWork(uint64_t job, int phase) {
 }
 
 bool JobStore::hasRemainingWork(uint64_t job, int phase) {
-  auto& s = db_.prepare("SELECT EXISTS (SELECT 1 FROM batches WHERE job = ? AND phase = ?)");
-  s.bind(1, int64_t(job)).bind(2, int64_t(phase));
-  const bool any = s.step() && s.columnInt(0) != 0;
-  s.reset();
-  return any;
+  if (!remainingValid_) loadRemainingWork();
+  return remaining_.any(job, phase);
 }
 
 int64_t JobStore::openLeaseCount(uint64_t job) {
@@ -804,17 +847,18 @@ int64_t JobStore::openLeaseCount(uint64_t job) {
 }
 
 std::map<uint32_t, int64_t> JobStore::pendingWorkByCell(uint64_t job, int phase, size_t limit) {
-  auto& s = db_.prepare(
-      "SELECT cell, SUM(work) AS w FROM batches WHERE job = ? AND phase = ? GROUP BY cell ORDER BY w DESC LIMIT ?");
-  s.bind(1, int64_t(job)).bind(2, int64_t(phase)).bind(3, int64_t(limit));
+  if (!remainingValid_) loadRemainingWork();
   std::map<uint32_t, int64_t> result;
-  while (s.step()) result[uint32_t(s.columnInt(0))] = s.columnInt(1);
-  s.reset();
+  if (limit == 0) return result;
+  remaining_.visitRanked(job, phase, [&](uint32_t cell, int64_t work) {
+    result[cell] = work;
+    return result.size() < limit;
+  });
   return result;
 }
 
 void JobStore::dropJobWork(uint64_t job) {
-  unleasedValid_ = false;
+  unleasedValid_ = remainingValid_ = false;
   auto& del = db_.prepare("DELETE FROM batches WHERE job = ?");
   del.bind(1, int64_t(job));
   del.run();
@@ -824,15 +868,14 @@ void JobStore::dropJobWork(uint64_t job) {
 }
 
 void JobStore::restartJob(uint64_t job, int64_t nowMs) {
+  jobsChanged();
   dropJobWork(job);
   for (const char* table : {"photons", "film", "render_progress", "render_passes", "lease_log"}) {
     auto& s = db_.prepare(fmt::format("DELETE FROM {} WHERE job = ?", table));
     s.bind(1, int64_t(job));
     s.run();
   }
-  auto& counters = db_.prepare("DELETE FROM counters WHERE job = ? AND name != ?");
-  counters.bind(1, int64_t(job)).bind(2, kPhotonPassRestarts);
-  counters.run();
+  counters_.dropAllBut(job, kPhotonPassRestarts);
   addCounter(job, kPhotonPassRestarts, 1);
   auto& records = db_.prepare(
       "UPDATE jobs SET photon_record_bytes = ?, photon_source = 0, photons_complete = 0 WHERE id = ?");
@@ -842,13 +885,7 @@ void JobStore::restartJob(uint64_t job, int64_t nowMs) {
   photons_.forget({job, 0});
 }
 
-void JobStore::addCounter(uint64_t job, std::string_view name, int64_t delta) {
-  auto& s = db_.prepare(
-      "INSERT INTO counters(job, name, value) VALUES (?, ?, ?) "
-      "ON CONFLICT(job, name) DO UPDATE SET value = value + excluded.value");
-  s.bind(1, int64_t(job)).bind(2, name).bind(3, delta);
-  s.run();
-}
+void JobStore::addCounter(uint64_t job, std::string_view name, int64_t delta) { counters_.add(job, name, delta); }
 
 JobStore::JobFileBytes JobStore::jobFileBytes(uint64_t job) const {
   namespace fs = std::filesystem;
@@ -876,13 +913,7 @@ int64_t JobStore::databaseBytes() const {
   return total;
 }
 
-void JobStore::raiseCounter(uint64_t job, std::string_view name, int64_t value) {
-  auto& s = db_.prepare(
-      "INSERT INTO counters(job, name, value) VALUES (?, ?, ?) "
-      "ON CONFLICT(job, name) DO UPDATE SET value = MAX(value, excluded.value)");
-  s.bind(1, int64_t(job)).bind(2, name).bind(3, value);
-  s.run();
-}
+void JobStore::raiseCounter(uint64_t job, std::string_view name, int64_t value) { counters_.raise(job, name, value); }
 
 void JobStore::logLease(const LeaseLogEntry& e) {
   auto& s = db_.prepare(
@@ -936,12 +967,8 @@ std::vector<LeaseLogEntry> JobStore::leaseLog(uint64_t job) {
 }
 
 std::map<std::string, int64_t> JobStore::counters(uint64_t job) {
-  auto& s = db_.prepare("SELECT name, value FROM counters WHERE job = ?");
-  s.bind(1, int64_t(job));
-  std::map<std::string, int64_t> result;
-  while (s.step()) result[s.columnText(0)] = s.columnInt(1);
-  s.reset();
-  return result;
+  const CounterTable::Values& values = counters_.of(job);
+  return {values.begin(), values.end()};
 }
 
 void JobStore::addPhotons(uint64_t job, uint32_t cell, int64_t count, std::string_view payload) {
@@ -996,6 +1023,23 @@ std::vector<std::string> JobStore::photonBatches(uint64_t job, uint32_t cell) {
   for (Stored& batch : stored)
     result.push_back(batch.blob ? std::move(*batch.blob) : photons_.read({job, 0}, batch.extent));
   return result;
+}
+
+std::optional<std::vector<FileExtent>> JobStore::photonExtents(uint64_t job, uint32_t cell) {
+  auto& s = db_.prepare(
+      "SELECT file_offset IS NULL, file_offset, file_size, file_crc FROM photons WHERE job = ? AND cell = ? "
+      "ORDER BY id");
+  s.bind(1, int64_t(job)).bind(2, int64_t(cell));
+  std::optional<std::vector<FileExtent>> extents(std::in_place);
+  while (s.step()) {
+    if (s.columnInt(0) != 0) {
+      extents.reset();
+      break;
+    }
+    extents->push_back({s.columnInt(1), s.columnInt(2), uint32_t(s.columnInt(3))});
+  }
+  s.reset();
+  return extents;
 }
 
 void JobStore::addFilm(uint64_t job, const std::unordered_map<uint32_t, FixedRgb>& sums, uint64_t pixelCount) {

@@ -19,6 +19,8 @@
 #include "common/transport/film.h"
 #include "common/util/sqlite.h"
 #include "coordinator/append_files.h"
+#include "coordinator/cell_work_index.h"
+#include "coordinator/counter_table.h"
 
 namespace portico {
 
@@ -109,6 +111,7 @@ class JobStore {
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
   // batchSegmentBytes: kBatchSegmentBytes but in tests.
   explicit JobStore(const std::string& path, int64_t batchSegmentBytes = kBatchSegmentBytes);
+  ~JobStore();
 
   sql::Database& database() { return db_; }
 
@@ -191,6 +194,7 @@ class JobStore {
   // (`portico bench cluster`) replays.
   void logLease(const LeaseLogEntry& entry);
   std::vector<LeaseLogEntry> leaseLog(uint64_t job);
+  // Read from memory (counter_table.h): no statement.
   std::map<std::string, int64_t> counters(uint64_t job);
 
   // The payload goes to the job's photon file (append_files.h) at once, its
@@ -208,6 +212,9 @@ class JobStore {
   int64_t reserveDepositRegion(uint64_t job, int64_t size, std::string_view head);
   // In the order they were added; throws naming the file when one is damaged.
   std::vector<std::string> photonBatches(uint64_t job, uint32_t cell);
+  // Where they lie in the job's photon file (photonFile), in the same order,
+  // without reading them; none when a batch is a blob of an older schema.
+  std::optional<std::vector<FileExtent>> photonExtents(uint64_t job, uint32_t cell);
   std::filesystem::path photonFile(uint64_t job) const { return photons_.pathOf({job, 0}); }
   std::filesystem::path batchFile(uint64_t job, uint32_t segment) const { return batches_.pathOf({job, segment}); }
   // The job's bytes on disk beside jobs.db: its photon file (the blocks it
@@ -249,6 +256,7 @@ class JobStore {
   uint32_t batchSegment(uint64_t job);
   void retireBatchSegment(uint64_t job, uint32_t segment);
   sql::Database db_;
+  CounterTable counters_{db_};   // observes db_'s transactions (set in the constructor, unset in the destructor)
   AppendFiles photons_;
   AppendFiles batches_;
   // The segment each job appends to (loaded from jobs.db on first use), and
@@ -256,24 +264,35 @@ class JobStore {
   int64_t batchSegmentBytes_;
   std::map<uint64_t, uint32_t> batchSegments_;
   std::set<AppendFiles::Key> reclaimCandidates_;
-  // The unleased work per (job, phase, cell), what pendingCells() ranks: kept
-  // beside the batches table because grouping every queued batch on each
-  // lease was a sixth of the coordinator's time in a photon pass. One entry
-  // per cell with work, not per batch, so the coordinator's memory stays
-  // bounded by the building, not the queues. Rebuilt from the table at
-  // start, after any rollback (sqlite3_rollback_hook, and the
-  // database's listener for a nested transaction's) and after the rare
-  // bulk changes (requeues, dropped jobs).
-  struct Unleased {
-    int64_t work = 0;
-    int64_t batches = 0;
-  };
-  std::map<std::tuple<uint64_t, int, uint32_t>, Unleased> unleased_;
-  // The same entries ranked as pendingCells() returns them: (job, phase,
-  // -work, cell). changeUnleased keeps both.
-  std::set<std::tuple<uint64_t, int, int64_t, uint32_t>> ranked_;
-  void changeUnleased(const std::tuple<uint64_t, int, uint32_t>& key, int64_t work, int64_t batches);
+  // The work per (job, phase, cell) in memory (cell_work_index.h): the
+  // unleased, what pendingCells() ranks, and all that is left, leased or
+  // not, with the queued rays of each (job, phase), what status shows and
+  // what tells a phase's end. Rebuilt from the table at start, after any
+  // rollback (sqlite3_rollback_hook, and the database's listener for a
+  // nested transaction's) and after the rare bulk changes (requeues,
+  // dropped jobs).
+  CellWorkIndex unleased_;
   bool unleasedValid_ = false;
+  CellWorkIndex remaining_;
+  std::map<std::pair<uint64_t, int>, int64_t> queuedRays_;
+  bool remainingValid_ = false;
+  void loadRemainingWork();
+  // The active jobs in pendingCells()'s order, read again after any change
+  // of a job's state, priority or tags, and after a rollback: a lease no
+  // longer reads the jobs table.
+  struct ActiveJob {
+    uint64_t id = 0;
+    int phase = 0;
+    std::vector<std::string> requiredTags;
+  };
+  std::vector<ActiveJob> activeJobs_;
+  bool activeJobsValid_ = false;
+  void loadActiveJobs();
+  // The jobs read so far (job()), dropped with the active jobs at any change
+  // of the jobs table and at any rollback: a Result reads its job's record
+  // without a statement.
+  std::unordered_map<uint64_t, JobRecord> jobRecords_;
+  void jobsChanged();
 };
 
 }  // namespace portico

@@ -66,6 +66,16 @@ struct WorkerInfo {
     return double(held) < workPerSecond * kQueuedSeconds;
   }
   bool idle() const { return ready && leases.empty() && stalledSinceMs == 0; }   // shown by status
+  // What it holds ends within kRefillSeconds of its work (or it holds
+  // nothing): its next lease should leave before the Results just in are
+  // applied (Coordinator::runRound), not after.
+  static constexpr double kRefillSeconds = 0.05;
+  bool runsShort() const {
+    if (leases.empty() || workPerSecond <= 0) return true;
+    int64_t held = 0;
+    for (const auto& [id, lease] : leases) held += lease.work;
+    return double(held) < workPerSecond * kRefillSeconds;
+  }
   CellCacheModel cells;        // what it likely holds
   // Lease sizing: about kLeaseSeconds of this worker's measured speed.
   double workPerSecond = 0;   // rays (photons, pixel samples) per second; 0 until measured

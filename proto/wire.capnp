@@ -330,6 +330,18 @@ struct Failure {
 struct FetchPhotons {
   job @0 :UInt64;           # the lease's job; the coordinator serves the tables of its photonJob
   cell @1 :UInt32;
+  # The worker reads the job's photon file itself where it can (a shared
+  # file system): the reply may name where the batches lie (PhotonsReply.file)
+  # instead of carrying them. False (older workers, and a worker that could
+  # not read what a reply named): the bytes come in the reply.
+  readsPhotonFile @2 :Bool;
+}
+
+# Where one photon batch lies in the job's photon file, and its CRC-32C.
+struct FileExtent {
+  offset @0 :UInt64;
+  size @1 :UInt64;
+  crc @2 :UInt32;
 }
 
 struct PhotonsReply {
@@ -337,6 +349,12 @@ struct PhotonsReply {
   cell @1 :UInt32;
   batches @2 :List(Data);   # the cell's photon table: 16-byte records, batch by batch
   error @3 :Text;           # non-empty: the table could not be read (no batches); the lease is failed, nothing cached
+  # To a worker that reads the photon file itself (FetchPhotons.readsPhotonFile):
+  # the file (absolute) and the batches' places in it, in order, instead of
+  # `batches`. One it cannot read, or whose bytes fail their CRC, it asks
+  # for again, bytes included.
+  file @4 :Text;
+  extents @5 :List(FileExtent);
 }
 
 # Cells over the wire: a worker without the scene store's file system asks

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <filesystem>
 #include <csignal>
 #include <cstring>
 #include <deque>
@@ -27,6 +28,7 @@
 #include "worker/crash_report.h"
 #include "worker/lease_load.h"
 #include "worker/lease_runner.h"
+#include "worker/photon_file_reader.h"
 
 namespace portico {
 
@@ -263,6 +265,22 @@ void WorkerSession::onPhotons(wire::PhotonsReply::Reader reply) {
     failLease(reply.getError().cStr());
     return;
   }
+  if (namesPhotonFile(reply)) {
+    std::string why;
+    auto records = readPhotonFile(reply, why);
+    if (!records) {
+      // Asked again, bytes included: the coordinator reads the file itself
+      // (and runs the photon pass again if it is damaged).
+      spdlog::warn("job {} cell {}: cannot read the photon file ({}); its photons come over the wire", reply.getJob(),
+                   reply.getCell(), why);
+      if (!std::filesystem::exists(reply.getFile().cStr())) photonFilesUnreachable_ = true;
+      preparing_->photonBytesAsked = true;
+      advanceLease();
+      return;
+    }
+    startTracing(std::move(records));
+    return;
+  }
   startTracing(photonTableOf(reply));
 }
 
@@ -334,6 +352,7 @@ void WorkerSession::advanceLease() {
     auto fetch = message.initRoot<wire::Envelope>().initFetchPhotons();
     fetch.setJob(assign.getJob());
     fetch.setCell(assign.getCell());
+    fetch.setReadsPhotonFile(!photonFilesUnreachable_ && !preparing_->photonBytesAsked);
     link_->send(message);
     preparing_->waitingForPhotons = true;
     return;

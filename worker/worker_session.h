@@ -89,6 +89,7 @@ class WorkerSession {
   struct PreparingLease {
     std::unique_ptr<net::Decoded> assign;
     bool waitingForPhotons = false;
+    bool photonBytesAsked = false;   // the photon file it named could not be read: the bytes were asked for
     bool waitingForFile = false;
     std::string requestedStore, requestedFile;   // the FetchFile sent: a chunk must answer it
   };
@@ -133,6 +134,9 @@ class WorkerSession {
   // (WorkerInfo::kLeasesInFlight), so that it is here the moment the
   // tracing thread is free.
   std::optional<PreparingLease> preparing_;
+  // The coordinator's photon files cannot be opened from here (another
+  // machine): photon tables are asked for with their bytes from then on.
+  bool photonFilesUnreachable_ = false;
   std::future<void> tracing_;   // the tracing thread of the current chain
   int leasesReported_ = 0;      // Results sent (--crash-after-leases)
   // Shared by the main thread and the tracing thread, under `mutex`.

@@ -150,6 +150,7 @@ void Database::setUserVersion(int version) { exec(fmt::format("PRAGMA user_versi
 // of its CPU in a photon pass.
 Transaction::Transaction(Database& db) : db_(db), nested_(db.inTransaction()) {
   db_.prepare(nested_ ? "SAVEPOINT nested" : "BEGIN IMMEDIATE").run();
+  if (auto* observer = db_.observer()) observer->begun(nested_);
 }
 
 Transaction::~Transaction() {
@@ -161,12 +162,16 @@ Transaction::~Transaction() {
       // Destructors must not throw; the connection reports the next error.
     }
     db_.notifyRollback();
+    if (auto* observer = db_.observer()) observer->rolledBack(nested_);
   }
 }
 
 void Transaction::commit() {
+  auto* observer = db_.observer();
+  if (observer && !nested_) observer->beforeCommit();
   db_.prepare(nested_ ? "RELEASE nested" : "COMMIT").run();
   done_ = true;
+  if (observer) observer->committed(nested_);
 }
 
 }  // namespace portico::sql

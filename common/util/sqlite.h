@@ -60,6 +60,19 @@ class Statement {
   std::string sql_;
 };
 
+// Told of every Transaction's steps, for a cache of what the database holds
+// that writes itself back at the end of the outermost transaction
+// (coordinator/counter_table.h). `nested`: a savepoint's.
+class TransactionObserver {
+ public:
+  virtual ~TransactionObserver() = default;
+  virtual void begun(bool nested) = 0;
+  // The outermost transaction is about to commit: the last writes go into it.
+  virtual void beforeCommit() = 0;
+  virtual void committed(bool nested) = 0;
+  virtual void rolledBack(bool nested) = 0;
+};
+
 class Database {
  public:
   enum class Mode { ReadOnly, ReadWriteCreate };
@@ -88,9 +101,13 @@ class Database {
   void notifyRollback() const {
     if (rollbackListener_) rollbackListener_();
   }
+  // One observer at most (null: none); it must outlive the database or be unset.
+  void setObserver(TransactionObserver* observer) { observer_ = observer; }
+  TransactionObserver* observer() const { return observer_; }
 
  private:
   std::function<void()> rollbackListener_;
+  TransactionObserver* observer_ = nullptr;
   std::string path_;
   sqlite3* db_ = nullptr;
   std::unordered_map<std::string, std::unique_ptr<Statement>> statements_;

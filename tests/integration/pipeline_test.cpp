@@ -140,6 +140,10 @@ TEST_F(Pipeline, DepositsWrittenByWorkersIntoThePhotonFileChangeNoBit) {
   EXPECT_EQ(bytesOf(regionStats, "photon_bytes_from_workers") + bytesOf(regionStats, "photon_bytes_from_results"),
             bytesOf(resultStats, "photon_bytes_from_results"));
   EXPECT_EQ(bytesOf(resultStats, "photon_bytes_from_workers"), 0);
+  // The render phase's photon tables: read by the workers from the photon
+  // file, none sent through the coordinator.
+  EXPECT_GT(bytesOf(regionStats, "photon_tables_read_by_workers"), 0);
+  EXPECT_EQ(bytesOf(regionStats, "photon_bytes_sent"), 0);
   EXPECT_EQ(differingFloats(dir_ / "regions.exr", dir_ / "results.exr"), 0u);
   if (!namespaces) GTEST_SKIP() << "cannot create a mount namespace here (unshare -m): " << readFile(dir_ / "unshare.log");
   const auto mixedStats = nlohmann::json::parse(readFile(dir_ / "mixed.exr.json"));
@@ -147,6 +151,9 @@ TEST_F(Pipeline, DepositsWrittenByWorkersIntoThePhotonFileChangeNoBit) {
   EXPECT_GT(bytesOf(mixedStats, "photon_bytes_from_workers"), 0);
   EXPECT_GT(bytesOf(mixedStats, "photon_bytes_from_results"), 0);
   EXPECT_NE(readFile(dir_ / "mixed" / "worker-1.log").find("deposits go in the results"), std::string::npos);
+  // The worker that cannot see the photon file asks for its tables' bytes.
+  EXPECT_GT(bytesOf(mixedStats, "photon_bytes_sent"), 0);
+  EXPECT_NE(readFile(dir_ / "mixed" / "worker-1.log").find("cannot read the photon file"), std::string::npos);
   EXPECT_EQ(differingFloats(dir_ / "regions.exr", dir_ / "mixed.exr"), 0u);
 }
 

@@ -8,7 +8,8 @@
 # pixels exactly (oiiotool --diff with zero tolerance: EXR headers carry the
 # write time, so file hashes differ anyway) and the job's counters that do
 # not depend on scheduling (photons, rays, film; not leases, loads, maps
-# built or rays forwarded between held cells). Exit status 0: all the same.
+# built, rays forwarded between held cells, memory peaks or the bytes each
+# way photons took to and from the files). Exit status 0: all the same.
 # Takes about 2 minutes on 2 cores.
 set -euo pipefail
 old_bin=$(realpath "$1"); new_bin=$(realpath "$2")
@@ -20,6 +21,7 @@ mkdir -p "$work"
 counters() {
   sqlite3 "$1" "select name, value from counters where job = 1
     and name not like 'time.%' and name not like 'cells.%' and name not like 'accel.%' and name not like 'leases.%'
+    and name not like 'memory.%' and name not like 'disk.%'
     and name not in ('irradiance.points', 'photon_maps.built', 'rays.forwarded') order by name" > "$2"
 }
 
