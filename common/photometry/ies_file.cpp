@@ -165,6 +165,11 @@ IesPhotometry parseIes(std::string_view text, const std::string& name) {
   ies.width = reader.number("the width") * metres;
   ies.length = reader.number("the length") * metres;
   ies.height = reader.number("the height") * metres;
+  try {
+    ies.opening = LuminousOpening::fromLm63(ies.width, ies.length, ies.height);
+  } catch (const std::invalid_argument& e) {
+    reader.fail(reader.previousLine(), e.what());
+  }
   ies.ballastFactor = reader.positive("the ballast factor");
   const double thirdField = reader.number(olderThan2002 ? "the ballast-lamp photometric factor" : "the future-use field");
   if (olderThan2002) {

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/photometry/candela_grid.h"
+#include "common/photometry/luminous_opening.h"
 
 namespace portico {
 
@@ -19,7 +20,8 @@ struct IesPhotometry {
   double candelaMultiplier = 1;
   double ballastFactor = 1;
   double ballastLampFactor = 1;  // LM-63-1995 and older only; later files give 1 (or another field there)
-  double width = 0, length = 0, height = 0;   // luminous opening, metres
+  double width = 0, length = 0, height = 0;   // luminous opening, metres (LM-63 signs: negative is round)
+  LuminousOpening opening;                    // the shape those give (luminous_opening.h)
   // Candela values as given times the multiplier, the ballast factor and
   // (files before LM-63-2002) the ballast-lamp factor: what the luminaire
   // emits.
@@ -29,8 +31,8 @@ struct IesPhotometry {
 };
 
 // Throws std::runtime_error "NAME: line N: problem" (one line) for a file
-// that is malformed, truncated, has a negative candela value or uses what
-// is not read (TILT=INCLUDE or a tilt file, photometric types A and B).
+// that is malformed, truncated, has a negative candela value, a luminous
+// opening of none of LM-63's shapes, or uses what is not read (TILT=INCLUDE or a tilt file, photometric types A and B).
 IesPhotometry parseIes(std::string_view text, const std::string& name);
 // The same for a file on disk ("PATH: cannot be read" when it cannot).
 IesPhotometry readIesFile(const std::string& path);

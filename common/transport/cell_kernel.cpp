@@ -76,6 +76,17 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
   // A daylight-factor analysis samples the sky's openings only (lampsLit).
   std::vector<uint32_t> candidates;
   if (lampsLit(parameters)) candidates = LightSampler::lightsNear(scene, tracer.cell().id(), parameters.lightHops);
+  if (lampsLit(parameters)) {
+    const Bounds3& box = scene.cells()[tracer.cell().id()].bounds;
+    for (const AreaLight& light : scene.lights()) {
+      const Bounds3 opening = light.openingBounds();
+      if (opening.empty() || opening.lo.x > box.hi.x || opening.lo.y > box.hi.y || opening.lo.z > box.hi.z ||
+          opening.hi.x < box.lo.x || opening.hi.y < box.lo.y || opening.hi.z < box.lo.z)
+        continue;
+      openingsHere_.push_back(light.id);
+      openingBoxes_.push_back(opening);
+    }
+  }
   if (parameters.daylight.any()) {
     daylight_.emplace(scene, parameters.daylight);
     outdoors_.emplace(scene);
@@ -138,7 +149,8 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
   std::vector<uint32_t> scratch;
   const uint32_t emissionSpp = emissionSamplesPerPixel();
   if (emissionSpp > 0 && !daylight_ && !emitterPixels_)
-    emitterPixels_.emplace(*camera_, parameters_.width, parameters_.height, tracer_.cell(), scene_.materials());
+    emitterPixels_.emplace(*camera_, parameters_.width, parameters_.height, tracer_.cell(), scene_.materials(),
+                           openingBoxes_);
   for (uint32_t pixel = firstPixel; pixel < firstPixel + pixelCount; ++pixel) {
     traceEmissionRays(pixel, emissionSpp, samples, scratch, out);
     const uint32_t x = pixel % parameters_.width, y = pixel / parameters_.width;
@@ -162,6 +174,7 @@ void CellKernel::generateCameraRays(uint32_t firstPixel, uint32_t pixelCount, Ke
 }
 
 bool CellKernel::cellHasEmitters() const {
+  if (!openingsHere_.empty()) return true;
   const CellGeometry& cell = tracer_.cell();
   for (uint32_t primitive = 0; primitive < cell.mesh().triangleCount; ++primitive)
     if (scene_.materials()[cell.material(primitive)].emissive()) return true;
@@ -385,6 +398,9 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
   for (;;) {
     ++out.counters.raySegments;
     const CellEvent event = tracer_.trace(toRay(current));
+    if (!openingsHere_.empty() && parameters_.aov == JobSettings::Aov::Radiance &&
+        seeLuminaire(current, event.kind == CellEvent::Kind::Leave ? current.tMax : event.t, out))
+      return;
     switch (event.kind) {
       case CellEvent::Kind::Leave:
         ++out.counters.raysEscaped;
@@ -514,6 +530,21 @@ void CellKernel::addEmission(const RayState& ray, const CellEvent& hit, KernelOu
   hitNormalFacing(tracer_.cell().mesh(), hit.primitive, ray.direction, front);
   // Emitters are one-sided: only their front shows their radiance.
   if (front) addToFilm(ray.pixel, ray.weight * material.emission, out);
+}
+
+bool CellKernel::seeLuminaire(const RayState& ray, float end, KernelOutputs& out) {
+  const AreaLight* seen = nullptr;
+  for (const uint32_t id : openingsHere_) {
+    const AreaLight& light = scene_.lights()[id];
+    if (const std::optional<float> t = light.openingHit(ray.origin, ray.direction, ray.tMin, end)) {
+      end = *t;   // the nearest so far; a later one must be nearer still
+      seen = &light;
+    }
+  }
+  if (!seen) return false;
+  ++out.counters.raysFinished;
+  if (emissionSeenByThisRay(ray)) addToFilm(ray.pixel, ray.weight * seen->openingRadiance(ray.direction), out);
+  return true;
 }
 
 CellEvent CellKernel::traceThroughGlass(RayState& ray, KernelOutputs& out) const {

@@ -130,6 +130,11 @@ class CellKernel {
     return ray.kind == RayKind::Camera && (ray.pathId & kEmissionPath) != 0;
   }
   void addEmission(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
+  // A camera ray meeting a luminaire's luminous opening (openingsHere_)
+  // before `end` ends there: the opening is opaque to the camera, and
+  // shows its luminance I / A_projected (its emitted light: the ray's
+  // share, as addEmission's). Returns whether it met one.
+  bool seeLuminaire(const RayState& ray, float end, KernelOutputs& out);
   // A camera ray traced on from just before a portal (tMinBeforePortal)
   // can hit a wall a hair beyond the cell's box; a gather or shadow ray
   // starting there, outside the box, would leave the cell without meeting
@@ -230,6 +235,12 @@ class CellKernel {
   // light hops are its candidates, and the sun's.
   std::vector<AreaLight> lights_;
   std::vector<uint32_t> nearOpenings_;
+  // Luminaires whose luminous opening reaches into this cell's box (lamps
+  // lit): a camera ray in the cell may see them. An opening across a cell
+  // boundary is in each cell's list; a ray, traced cell after cell along
+  // its line, meets it in the one where its line does.
+  std::vector<uint32_t> openingsHere_;
+  std::vector<Bounds3> openingBoxes_;
   std::optional<LightSampler> lightSampler_;
   std::optional<CameraModel> camera_;
   // Where emission rays can meet an emitter, made by the first camera batch

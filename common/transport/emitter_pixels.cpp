@@ -2,11 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 namespace portico {
 
 EmitterPixels::EmitterPixels(const CameraModel& camera, uint32_t width, uint32_t height, const CellGeometry& cell,
-                             const std::vector<Material>& materials)
+                             const std::vector<Material>& materials, const std::vector<Bounds3>& luminaireOpenings)
     : width_(width), height_(height) {
   const MeshView& mesh = cell.mesh();
   for (uint32_t primitive = 0; primitive < mesh.triangleCount && !everyPixel_; ++primitive) {
@@ -21,22 +22,35 @@ EmitterPixels::EmitterPixels(const CameraModel& camera, uint32_t width, uint32_t
     if (!materials[cell.material(primitive)].emissive()) continue;
     Vec3 corners[3];
     mesh.triangle(primitive, corners[0], corners[1], corners[2]);
-    // Wholly behind the camera's plane: no camera ray (each has a positive
-    // part along the axis) meets it.
-    if (camera.depthOf(corners[0]) <= 0 && camera.depthOf(corners[1]) <= 0 && camera.depthOf(corners[2]) <= 0)
-      continue;
-    float minX = kInfinity, minY = kInfinity, maxX = -kInfinity, maxY = -kInfinity;
-    for (const Vec3& corner : corners) {
-      float px, py;
-      if (!camera.project(corner, minDepth, px, py) || !std::isfinite(px) || !std::isfinite(py)) {
-        everyPixel_ = true;
-        return;
-      }
-      minX = std::min(minX, px), maxX = std::max(maxX, px);
-      minY = std::min(minY, py), maxY = std::max(maxY, py);
-    }
-    markBox(minX, minY, maxX, maxY);
+    markCorners(camera, corners, minDepth);
+    if (everyPixel_) return;
   }
+  for (const Bounds3& box : luminaireOpenings) {
+    Vec3 corners[8];
+    for (int k = 0; k < 8; ++k)
+      corners[k] = Vec3(k & 1 ? box.hi.x : box.lo.x, k & 2 ? box.hi.y : box.lo.y, k & 4 ? box.hi.z : box.lo.z);
+    markCorners(camera, corners, minDepth);
+    if (everyPixel_) return;
+  }
+}
+
+template <size_t N>
+void EmitterPixels::markCorners(const CameraModel& camera, const Vec3 (&corners)[N], float minDepth) {
+  // Wholly behind the camera's plane: no camera ray (each has a positive
+  // part along the axis) meets it.
+  if (std::all_of(std::begin(corners), std::end(corners), [&](const Vec3& c) { return camera.depthOf(c) <= 0; }))
+    return;
+  float minX = kInfinity, minY = kInfinity, maxX = -kInfinity, maxY = -kInfinity;
+  for (const Vec3& corner : corners) {
+    float px, py;
+    if (!camera.project(corner, minDepth, px, py) || !std::isfinite(px) || !std::isfinite(py)) {
+      everyPixel_ = true;
+      return;
+    }
+    minX = std::min(minX, px), maxX = std::max(maxX, px);
+    minY = std::min(minY, py), maxY = std::max(maxY, py);
+  }
+  markBox(minX, minY, maxX, maxY);
 }
 
 void EmitterPixels::markBox(float minX, float minY, float maxX, float maxY) {

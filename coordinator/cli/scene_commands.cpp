@@ -66,11 +66,12 @@ int runSceneIes(const std::vector<std::string>& files) {
       const LuminousIntensity intensity(ies.grid, file);
       const double peak = *std::max_element(ies.grid.candela.begin(), ies.grid.candela.end());
       std::cout << fmt::format(
-          "{}: {}, {} vertical x {} horizontal angles ({}), peak {:.1f} cd, {:.2f} lm; lamps: {}\n", file,
+          "{}: {}, {} vertical x {} horizontal angles ({}), peak {:.1f} cd, {:.2f} lm; lamps: {}; opening: {}\n", file,
           ies.standard, ies.grid.vertical.size(), ies.grid.horizontal.size(), horizontalSymmetry(ies.grid), peak,
           intensity.lumens(),
           ies.ratedLumens() < 0 ? std::string("absolute photometry")
-                                : fmt::format("{} x {} lm rated", ies.lampCount, ies.lumensPerLamp));
+                                : fmt::format("{} x {} lm rated", ies.lampCount, ies.lumensPerLamp),
+          ies.opening.describe());
     } catch (const std::runtime_error& e) {
       std::cerr << "portico: " << e.what() << "\n";
       status = 1;

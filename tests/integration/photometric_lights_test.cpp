@@ -209,6 +209,95 @@ TEST_F(PhotometricLights, ALuminanceRenderIsInCdPerSquareMetreWithItsFalseColour
   EXPECT_FALSE(fs::exists(png));
 }
 
+// A camera sees an IES luminaire's luminous opening (building.json
+// "opening", over the file's 0 0 0) with the luminance I(gamma, C) /
+// A_projected: through `portico render` on one cell, and on a 2 x 2 x 2 grid
+// of cells where the opening straddles four of them (a camera ray finds it
+// in whichever cell its line meets it, the camera in another), the pixels
+// wholly on the opening are within 1 % of the closed form (a rectangle:
+// L W cos gamma), 5 % more light fails; one and two workers give the same
+// bits; the file's own opening (a point) leaves those pixels dark.
+TEST_F(PhotometricLights, ACameraSeesTheLuminousOpeningAtIOverItsProjectedAreaInAnyCellWithTheSameBits) {
+  writeIes(dir_ / "downlight.ies");
+  writeFloor(dir_ / "floor.obj", 3);
+  constexpr int kSize = 40;
+  const Vec3 luminaire(0, kHeight, 0), eye(1.5f, 0.6f, 1.2f);
+  nlohmann::json building = {
+      {"objects", {{{"obj", "floor.obj"}, {"albedo", {kAlbedo, kAlbedo, kAlbedo}}}}},
+      // 0.3 m wide (along C90: z), 0.6 m long (along C0: x), flat, facing down.
+      {"lights",
+       {{{"name", "panel"}, {"ies", "downlight.ies"}, {"position", {0, kHeight, 0}}, {"colour", {1, 1, 1}},
+         {"opening", {0.3, 0.6, 0}}}}},
+      {"camera",
+       {{"origin", {eye.x, eye.y, eye.z}}, {"target", {0, kHeight, 0}}, {"up", {0, 1, 0}}, {"fov_y_deg", 20},
+        {"width", kSize}, {"height", kSize}}}};
+  const fs::path oneCell = import("opening", building);
+  const fs::path store = dir_ / "opening-grid-store";
+  ASSERT_EQ(runCommand({kBin + "portico", "scene", "import", "--grid", "2", (dir_ / "opening.json").string(),
+                        store.string()},
+                       dir_ / "grid-import.log"),
+            0)
+      << readFile(dir_ / "grid-import.log");
+  const SceneStore grid = SceneStore::open(store.string());
+  ASSERT_EQ(grid.cells().size(), 8u);
+  int cellsReached = 0;   // the cells the opening reaches into
+  for (const CellInfo& cell : grid.cells())
+    cellsReached += cell.bounds.lo.x < 0.3f && cell.bounds.hi.x > -0.3f && cell.bounds.lo.z < 0.15f &&
+                    cell.bounds.hi.z > -0.15f && cell.bounds.lo.y <= kHeight && cell.bounds.hi.y >= kHeight;
+  EXPECT_EQ(cellsReached, 4);
+  const std::vector<std::string> options{"--spp", "4"};   // render() adds 1 worker, 20 000 photons
+  const LinearImage single = render(oneCell, "one-cell", options);
+  const LinearImage gridOne = render(store, "grid-1", options);
+  std::vector<std::string> twoWorkers{kBin + "portico", "render", store.string(), "-o", (dir_ / "grid-2.exr").string(),
+                                      "--workers", "2", "--spp", "4", "--photons", "20000"};
+  ASSERT_EQ(runCommand(twoWorkers, dir_ / "grid-2.log"), 0) << readFile(dir_ / "grid-2.log");
+  const LinearImage gridTwo = readImage((dir_ / "grid-2.exr").string());
+  EXPECT_TRUE(gridOne.rgb == gridTwo.rgb) << "one and two workers render different bits";
+
+  // The pixels whose four corners' rays all meet the opening's rectangle.
+  const Vec3 forward = normalize(luminaire - eye);
+  const Vec3 right = normalize(cross(forward, Vec3(0, 1, 0))), up = cross(right, forward);
+  const float tanHalf = std::tan(10.0f * float(kDeg));
+  const auto through = [&](float px, float py) {
+    return normalize(forward + right * ((2 * px / kSize - 1) * tanHalf) + up * ((1 - 2 * py / kSize) * tanHalf));
+  };
+  const auto onOpening = [&](const Vec3& d) {
+    const Vec3 p = eye + d * ((kHeight - eye.y) / d.y) - luminaire;
+    return std::abs(p.x) < 0.3f && std::abs(p.z) < 0.15f;
+  };
+  const auto luminanceOf = [&](const LinearImage& image, size_t pixel) {
+    return 179.0 * (0.2126 * image.rgb[3 * pixel] + 0.7152 * image.rgb[3 * pixel + 1] + 0.0722 * image.rgb[3 * pixel + 2]);
+  };
+  building["lights"][0].erase("opening");
+  const LinearImage unseen = render(import("point", building), "point", options);
+  for (const auto& [image, what] : {std::pair<const LinearImage&, const char*>{single, "one cell"}, {gridOne, "8 cells"}}) {
+    double worst = 0, nearestWrong = 1e9;
+    int covered = 0;
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        if (!(onOpening(through(x, y)) && onOpening(through(x + 1, y)) && onOpening(through(x, y + 1)) &&
+              onOpening(through(x + 1, y + 1))))
+          continue;
+        ++covered;
+        const Vec3 toward = -through(x + 0.5f, y + 0.5f);   // from the luminaire; its frame: C0 +x, C90 -z, nadir -y
+        const double gamma = std::acos(double(-toward.y)) / kDeg;
+        double c = std::atan2(double(-toward.z), double(toward.x)) / kDeg;
+        if (c < 0) c += 360;
+        const double expected = candela(gamma, c) / (0.6 * 0.3 * double(-toward.y));
+        const size_t pixel = size_t(y) * kSize + x;
+        worst = std::max(worst, std::abs(luminanceOf(image, pixel) / expected - 1));
+        nearestWrong = std::min(nearestWrong, std::abs(luminanceOf(image, pixel) / (1.05 * expected) - 1));
+        EXPECT_LT(luminanceOf(unseen, pixel), 1.0) << "a point luminaire shows at pixel " << pixel;
+      }
+    std::printf("  %s: %d pixels wholly on the opening, worst %.3f %% from I / (L W cos gamma); against 5 %% more "
+                "light at least %.3f %%\n",
+                what, covered, 100 * worst, 100 * nearestWrong);
+    EXPECT_GT(covered, 100) << what;
+    EXPECT_LT(worst, 0.01) << what;
+    EXPECT_GT(nearestWrong, 0.01) << what;
+  }
+}
+
 // A lamp given by its flux renders exactly as the lamp given by the
 // radiance that flux makes: the same bits.
 TEST_F(PhotometricLights, LumensRenderTheSameBitsAsTheRadianceTheyMake) {

@@ -167,9 +167,9 @@ void checkObjectsInCells(const ImportedScene& scene, const std::string& path) {
 // An entry of the building.json's "lights": its triangles (an emissive,
 // black material) and the light itself.
 void addGivenLight(const BuildingLight& given, uint32_t cell, MaterialTable& materials, ImportedScene& scene) {
-  if (given.shape == LightShape::Point) {   // a luminaire: no triangles, no camera sees it
+  if (given.shape == LightShape::Point) {   // a luminaire: no triangles (a camera sees its opening)
     scene.lights.push_back(ImportedLight{given.label(), cell, Parallelogram{given.corner, given.edge1, given.edge2},
-                                         given.radiance, given.shape, given.intensity});
+                                         given.radiance, given.shape, given.intensity, given.opening});
     return;
   }
   ImportedObject object;
@@ -292,6 +292,8 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
 
   for (const ImportedObject& object : scene.objects) extendBounds(scene.bounds, object);
   for (const BuildingCamera& camera : building.cameras) scene.bounds.extend(camera.camera.origin);
+  for (const ImportedLight& light : scene.lights)   // a luminaire's opening, which cameras see
+    if (const Bounds3 opening = light.areaLight().openingBounds(); !opening.empty()) scene.bounds.extend(opening);
   for (const BuildingLight& light : building.lights) {
     if (light.shape != LightShape::Point) continue;   // area lights' triangles are objects
     scene.bounds.extend(light.corner);

@@ -303,8 +303,13 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
   return objects;
 }
 
-// Photometric files already read, by resolved path.
-using LuminaireFiles = std::map<std::string, std::shared_ptr<const LuminousIntensity>>;
+// Photometric files already read, by resolved path: the distribution and
+// the file's luminous opening.
+struct LuminaireFile {
+  std::shared_ptr<const LuminousIntensity> intensity;
+  LuminousOpening opening;
+};
+using LuminaireFiles = std::map<std::string, LuminaireFile>;
 
 // A unit vector from `value`, named `what` in messages.
 Vec3 unitVector(const Reader& reader, const json& value, const std::string& what) {
@@ -319,18 +324,31 @@ Vec3 unitVector(const Reader& reader, const json& value, const std::string& what
 void readLuminaire(const Reader& reader, const json& entry, const json& ies, const std::string& what,
                    const fs::path& baseDirectory, LuminaireFiles& distributions, BuildingLight& light) {
   reader.requireKnownKeys(entry, what, {"name", "cell", "ies", "position", "aim", "c0", "lumens", "colour_temperature",
-                                        "colour"});
+                                        "colour", "opening"});
   const std::string file = reader.string(ies, what + ".ies");
   if (file.empty()) reader.fail(what + ": the ies file name is empty");
   const fs::path iesPath(file);
   light.iesPath = (iesPath.is_absolute() ? iesPath : baseDirectory / iesPath).lexically_normal().string();
-  std::shared_ptr<const LuminousIntensity>& intensity = distributions[light.iesPath];
-  if (!intensity) {
+  LuminaireFile& read = distributions[light.iesPath];
+  if (!read.intensity) {
     try {
-      intensity = std::make_shared<const LuminousIntensity>(readIesFile(light.iesPath).grid,
-                                                            fs::path(light.iesPath).filename().string());
+      const IesPhotometry ies = readIesFile(light.iesPath);
+      read.intensity = std::make_shared<const LuminousIntensity>(ies.grid, fs::path(light.iesPath).filename().string());
+      read.opening = ies.opening;
     } catch (const std::runtime_error& e) {
       reader.fail(fmt::format("{}: {}", what, e.what()));
+    }
+  }
+  const std::shared_ptr<const LuminousIntensity>& intensity = read.intensity;
+  light.opening = read.opening;
+  // "opening": [width, length, height] in metres, as an LM-63 file gives
+  // them (negative sizes: round shapes), instead of the file's.
+  if (const json* opening = reader.member(entry, "opening")) {
+    const Vec3 given = reader.vec3(*opening, what + " opening");
+    try {
+      light.opening = LuminousOpening::fromLm63(given.x, given.y, given.z);
+    } catch (const std::invalid_argument& e) {
+      reader.fail(fmt::format("{}: opening: {}", what, e.what()));
     }
   }
   if (!(intensity->lumens() > 0)) reader.fail(fmt::format("{}: {} emits no light (every candela value is 0)", what, file));

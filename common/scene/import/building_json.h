@@ -59,6 +59,7 @@ struct BuildingLight {
   // corner is its "position", edge1 its "aim" (the nadir), edge2 its "c0";
   // radiance the RGB intensity per candela (W/sr per cd).
   std::shared_ptr<const LuminousIntensity> intensity;
+  LuminousOpening opening;   // the file's, or "opening" [width, length, height]
   std::string iesPath;       // resolved against the json's directory
   // "lights[2] ('desk lamp')": how messages name the light.
   std::string label() const;

@@ -53,6 +53,7 @@ struct ImportedLight {
   // A point luminaire's candela distribution (shape: corner = its point,
   // edge1 its nadir, edge2 its C0 direction; radiance per candela).
   std::shared_ptr<const LuminousIntensity> intensity;
+  LuminousOpening opening;   // a point luminaire's luminous opening
   // The store's record of it (id left to the writer).
   AreaLight areaLight() const {
     AreaLight light;
@@ -63,6 +64,7 @@ struct ImportedLight {
     light.edge2 = shape.edge2;
     light.radiance = radiance;
     light.intensity = intensity;
+    light.opening = opening;
     return light;
   }
 };

@@ -49,7 +49,7 @@ ImportedScene sceneFromStore(const std::string& directory) {
   for (const AreaLight& light : store.lights())
     scene.lights.push_back(ImportedLight{"light " + std::to_string(light.id), light.cell,
                                          Parallelogram{light.corner, light.edge1, light.edge2}, light.radiance,
-                                         light.shape, light.intensity});
+                                         light.shape, light.intensity, light.opening});
   scene.cameras = store.cameras();
   scene.site = store.site();
   for (const Camera& camera : scene.cameras) scene.bounds.extend(Bounds3(camera.origin, camera.origin));

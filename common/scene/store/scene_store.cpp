@@ -158,7 +158,7 @@ class CatalogueReader {
                                         : LightShape::Parallelogram;
       lights.push_back(light);
     }
-    if (version >= 8) readPointLights(lights);
+    if (version >= 8) readPointLights(lights, version);
     for (const AreaLight& light : lights)
       if (light.isPoint() && !light.intensity) fail(fmt::format("light {}: a point light without a distribution", light.id));
     return lights;
@@ -171,8 +171,9 @@ class CatalogueReader {
     return values;
   }
 
-  // Each point luminaire's candela distribution (version 8 on).
-  void readPointLights(std::vector<AreaLight>& lights) {
+  // Each point luminaire's candela distribution (version 8 on) and
+  // luminous opening (version 9 on).
+  void readPointLights(std::vector<AreaLight>& lights, int version) {
     std::vector<std::shared_ptr<const LuminousIntensity>> distributions;
     sql::Statement& row =
         db_.prepare("SELECT id, name, vertical, horizontal, candela FROM light_distributions ORDER BY id");
@@ -183,7 +184,9 @@ class CatalogueReader {
         fail(fmt::format("light distribution {} ('{}'): {}", row.columnInt(0), row.columnText(1), problem));
       distributions.push_back(std::make_shared<const LuminousIntensity>(std::move(grid), row.columnText(1)));
     }
-    sql::Statement& link = db_.prepare("SELECT light, distribution FROM point_lights ORDER BY light");
+    sql::Statement& link = db_.prepare(fmt::format(
+        "SELECT light, distribution, {} FROM point_lights ORDER BY light",
+        version >= 9 ? "opening_width, opening_length, opening_height" : "0.0, 0.0, 0.0"));
     while (link.step()) {
       const int64_t light = link.columnInt(0), distribution = link.columnInt(1);
       if (light < 0 || size_t(light) >= lights.size() || !lights[size_t(light)].isPoint())
@@ -191,6 +194,12 @@ class CatalogueReader {
       if (distribution < 0 || size_t(distribution) >= distributions.size())
         fail(fmt::format("light {}: unknown light distribution {}", light, distribution));
       lights[size_t(light)].intensity = distributions[size_t(distribution)];
+      try {
+        lights[size_t(light)].opening =
+            LuminousOpening::fromLm63(link.columnDouble(2), link.columnDouble(3), link.columnDouble(4));
+      } catch (const std::invalid_argument& e) {
+        fail(fmt::format("light {}: {}", light, e.what()));
+      }
     }
   }
 

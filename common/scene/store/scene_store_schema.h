@@ -29,7 +29,10 @@ namespace portico::scene_schema {
 //      light_distributions (a photometric file's candela grid) and
 //      point_lights (which distribution each point luminaire has).
 //      Versions 1 to 7 are still read, without point luminaires.
-constexpr int kVersion = 8;
+//   9: point_lights.opening_width/length/height (a luminaire's luminous
+//      opening, metres, LM-63 signs: what cameras see). Version 8 is still
+//      read, every opening 0 0 0 (a point no camera sees).
+constexpr int kVersion = 9;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -89,7 +92,10 @@ CREATE TABLE light_distributions(
   candela BLOB NOT NULL);
 CREATE TABLE point_lights(
   light INTEGER PRIMARY KEY REFERENCES lights(id),
-  distribution INTEGER NOT NULL REFERENCES light_distributions(id));
+  distribution INTEGER NOT NULL REFERENCES light_distributions(id),
+  opening_width REAL NOT NULL DEFAULT 0,
+  opening_length REAL NOT NULL DEFAULT 0,
+  opening_height REAL NOT NULL DEFAULT 0);
 CREATE TABLE cameras(
   id INTEGER PRIMARY KEY,
   name TEXT NOT NULL UNIQUE,

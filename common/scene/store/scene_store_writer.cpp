@@ -431,7 +431,13 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
           .bindBlob(5, grid.candela.data(), grid.candela.size() * sizeof(double))
           .run();
     }
-    db.prepare("INSERT INTO point_lights VALUES (?, ?)").bind(1, int64_t{light.id}).bind(2, it->second).run();
+    db.prepare("INSERT INTO point_lights VALUES (?, ?, ?, ?, ?)")
+        .bind(1, int64_t{light.id})
+        .bind(2, it->second)
+        .bind(3, light.opening.width())
+        .bind(4, light.opening.length())
+        .bind(5, light.opening.height())
+        .run();
   }
   int64_t cameraId = 0;
   const auto insertCamera = [&](const Camera& c) {

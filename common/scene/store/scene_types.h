@@ -3,11 +3,13 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "common/math.h"
 #include "common/photometry/luminous_intensity.h"
+#include "common/photometry/luminous_opening.h"
 
 namespace portico {
 
@@ -45,8 +47,10 @@ enum class LightShape : uint8_t { Parallelogram, Triangle, Point };
 // candela distribution `intensity` of a photometric file, from the point
 // `corner`; `edge1` is its nadir (unit: vertical angle 0), `edge2` its C0
 // direction (unit, perpendicular to edge1), and `radiance` the RGB
-// intensity per candela (W sr^-1 per channel per cd). It has no triangles:
-// no camera ray meets it.
+// intensity per candela (W sr^-1 per channel per cd). It has no triangles;
+// a camera sees its luminous `opening` (centred on the point) with the
+// luminance I / A_projected, but light and photons pass through it: they
+// leave the point as before.
 struct AreaLight {
   uint32_t id = 0;
   uint32_t cell = 0;
@@ -54,6 +58,7 @@ struct AreaLight {
   Vec3 corner, edge1, edge2;
   Vec3 radiance;
   std::shared_ptr<const LuminousIntensity> intensity;   // a point luminaire's; null for area lights
+  LuminousOpening opening;                              // a point luminaire's; none for area lights
   bool isTriangle() const { return shape == LightShape::Triangle; }
   bool isPoint() const { return shape == LightShape::Point; }
   // The emitting side; a point luminaire's nadir.
@@ -77,6 +82,30 @@ struct AreaLight {
   Vec3 fromLuminaire(const Vec3& local) const { return edge2 * local.x + luminaireC90() * local.y + edge1 * local.z; }
   // A point luminaire's RGB intensity (W/sr) towards unit `direction`.
   Vec3 intensityToward(const Vec3& direction) const { return radiance * intensity->candela(toLuminaire(direction)); }
+  // Whether a camera can see it: a point luminaire with a visible opening.
+  bool seenAsOpening() const { return isPoint() && opening.visible(); }
+  // Where the ray origin + t direction (unit) meets its opening, in (tMin, tMax).
+  std::optional<float> openingHit(const Vec3& origin, const Vec3& direction, float tMin, float tMax) const {
+    return opening.hit(toLuminaire(origin - corner), toLuminaire(direction), tMin, tMax);
+  }
+  // The RGB radiance its opening shows along a ray of unit `direction`
+  // (towards it): I / A_projected of the light leaving it the other way.
+  Vec3 openingRadiance(const Vec3& direction) const {
+    const Vec3 out = toLuminaire(normalize(-direction));
+    const double area = opening.projectedArea(out);
+    if (!(area > 0)) return Vec3(0.0f);
+    return radiance * float(double(intensity->candela(out)) / area);
+  }
+  // The world box around its opening (empty when it has none).
+  Bounds3 openingBounds() const {
+    Bounds3 box;
+    if (!seenAsOpening()) return box;
+    const Vec3 half = opening.size() * 0.5f;
+    for (int k = 0; k < 8; ++k)
+      box.extend(corner + fromLuminaire(Vec3(k & 1 ? half.x : -half.x, k & 2 ? half.y : -half.y,
+                                             k & 4 ? half.z : -half.z)));
+    return box;
+  }
   // A uniformly distributed point for (u, v) uniform in [0,1)^2. A triangle
   // folds the square's far half onto itself (u + v > 1 -> 1 - u, 1 - v), so
   // both shapes use the same two random numbers.

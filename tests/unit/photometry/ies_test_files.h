@@ -17,13 +17,14 @@ inline std::vector<double> angles(double first, double last, double step) {
   return out;
 }
 
-// An LM-63-2002 file (or `header`) of `candela(gamma, c)` on the grid.
+// An LM-63-2002 file (or `header`) of `candela(gamma, c)` on the grid, its
+// luminous opening `opening` (width length height, metres).
 inline std::string iesText(const std::vector<double>& vertical, const std::vector<double>& horizontal,
                            const std::function<double(double, double)>& candela, double multiplier = 1.0,
                            double ballastFactor = 1.0, const std::string& header = "IESNA:LM-63-2002",
-                           double thirdField = 1.0) {
+                           double thirdField = 1.0, const std::string& opening = "0.1 0.1 0") {
   std::string text = header + "\n[TEST] portico unit test\n[LUMINAIRE] analytic distribution\nTILT=NONE\n";
-  text += fmt::format("1 -1 {} {} {} 1 2 0.1 0.1 0\n{} {} 20\n", multiplier, vertical.size(), horizontal.size(),
+  text += fmt::format("1 -1 {} {} {} 1 2 {}\n{} {} 20\n", multiplier, vertical.size(), horizontal.size(), opening,
                       ballastFactor, thirdField);
   for (double v : vertical) text += fmt::format("{} ", v);
   text += "\n";

@@ -185,7 +185,7 @@ TEST(SceneStore, RoundTripsEveryRecordExactly) {
   EXPECT_EQ(camera.cell, scene.camera.cell);
 
   EXPECT_EQ(store.meta().at("generator"), "tiny-test");
-  EXPECT_EQ(store.meta().at("format_version"), "8");
+  EXPECT_EQ(store.meta().at("format_version"), "9");
   EXPECT_FALSE(store.materials()[0].glass());
   EXPECT_FALSE(store.site());
 
@@ -618,13 +618,57 @@ TEST(SceneStore, RefusesGlassThatMakesLight) {
   }
 }
 
+// A point luminaire keeps its luminous opening (LM-63's width, length and
+// height, as given); a store of version 8, before openings were kept, reads
+// every luminaire as a point no camera sees.
+TEST(SceneStore, KeepsALuminairesOpeningAndReadsVersionEightsAsPoints) {
+  TempDirectory temp;
+  TinyScene scene;
+  scene.light.shape = LightShape::Point;
+  scene.light.corner = Vec3(1, 1.9f, 1);
+  scene.light.edge1 = Vec3(0, -1, 0);
+  scene.light.edge2 = Vec3(1, 0, 0);
+  scene.light.radiance = Vec3(1.0f / 179);
+  scene.light.intensity = std::make_shared<const LuminousIntensity>(
+      CandelaGrid{{0, 90}, {0}, {100, 50}}, "lamp.ies");
+  scene.light.opening = LuminousOpening::fromLm63(-0.2, 0.6, -0.2);   // a tube along C0
+  scene.write(temp / "store");
+  const AreaLight read = SceneStore::open(temp / "store").lights().at(0);
+  EXPECT_EQ(read.opening.width(), -0.2);
+  EXPECT_EQ(read.opening.length(), 0.6);
+  EXPECT_EQ(read.opening.height(), -0.2);
+  EXPECT_EQ(read.opening.shape(), LuminousOpening::Shape::Cylinder);
+  EXPECT_TRUE(read.seenAsOpening());
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    for (const char* column : {"opening_width", "opening_length", "opening_height"})
+      db.exec(std::string("ALTER TABLE point_lights DROP COLUMN ") + column);
+    db.setUserVersion(8);
+  }
+  const AreaLight old = SceneStore::open(temp / "store").lights().at(0);
+  EXPECT_EQ(old.opening.shape(), LuminousOpening::Shape::None);
+  EXPECT_FALSE(old.seenAsOpening());
+  EXPECT_NEAR(old.intensity->lumens(), read.intensity->lumens(), 1e-9);
+  // An opening of no LM-63 shape, written by hand, is refused naming the light.
+  {
+    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
+    db.exec("ALTER TABLE point_lights ADD COLUMN opening_width REAL NOT NULL DEFAULT -1");
+    db.exec("ALTER TABLE point_lights ADD COLUMN opening_length REAL NOT NULL DEFAULT 1");
+    db.exec("ALTER TABLE point_lights ADD COLUMN opening_height REAL NOT NULL DEFAULT 0");
+    db.setUserVersion(9);
+  }
+  const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
+  EXPECT_NE(error.find("light 0: the luminous opening (width -1, length 1, height 0) is none of"), std::string::npos)
+      << error;
+}
+
 // Version 1 (before materials.hidden_from_camera) is still read: nothing hidden.
 TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TempDirectory temp;
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 8);
+    EXPECT_EQ(db.userVersion(), 9);
     db.exec("DROP TABLE point_lights");
     db.exec("DROP TABLE light_distributions");
     db.exec("DROP TABLE site");
