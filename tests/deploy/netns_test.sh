@@ -72,17 +72,17 @@ if [ -n "$netem" ]; then shaping="tc netem delay 2ms rate 100mbit"
 else shaping="tc tbf rate 100mbit; this kernel has no netem: the 2 ms delay each way from delay_relay.py"; fi
 log "namespaces: coordinator $coord_ns, workers ${worker_ns[*]}; links: $shaping"
 # The coordinator's folder, which no worker sees.
-shared="$work/coordinator"
-mkdir -p "$shared"
-"$bin/portico" scene generate --preset l-shape "$shared/building" > "$work/generate.log" 2>&1
+job_dir="$work/coordinator"
+mkdir -p "$job_dir"
+"$bin/portico" scene generate --preset l-shape "$job_dir/building" > "$work/generate.log" 2>&1
 "$bin/portico" keys generate "$work/keys" > /dev/null
 options=(--photons 300000 --spp 4 --gather 2 --width 160 --height 120 --seed 7)
 log "reference: portico render with one local worker"
-"$bin/portico" render "$shared/building" -o "$work/reference.exr" "${options[@]}" --workers 1 > "$work/reference.log" 2>&1
+"$bin/portico" render "$job_dir/building" -o "$work/reference.exr" "${options[@]}" --workers 1 > "$work/reference.log" 2>&1
 
 port=5555
 ip netns exec "$coord_ns" "$bin/portico-coordinator" --listen "tcp://0.0.0.0:$port" --keys "$work/keys" \
-  --db "$shared/jobs.db" --heartbeat-ms 500 --liveness-ms 3000 > "$work/coordinator.log" 2>&1 &
+  --db "$job_dir/jobs.db" --heartbeat-ms 500 --liveness-ms 3000 > "$work/coordinator.log" 2>&1 &
 pids+=($!)
 endpoint="tcp://127.0.0.1:$port"
 # TCP connects from a worker's namespace: to its own link's address, and to another worker's.
@@ -132,7 +132,7 @@ log "the coordinator's greeting reaches worker 0's namespace after $delay ms"
 for i in 0 1 2; do
   # Its own mount namespace, the coordinator's folder covered by an empty tmpfs.
   ip netns exec "${worker_ns[$i]}" unshare --mount --propagation private sh -c \
-    'mount -t tmpfs tmpfs "$1" && shift && exec "$@"' sh "$shared" \
+    'mount -t tmpfs tmpfs "$1" && shift && exec "$@"' sh "$job_dir" \
     "$bin/portico-worker" --connect "${worker_endpoint[$i]}" --keys "$work/keys" --cache-dir "$work/cache-$i" \
     --memory 1GiB --name "ns-worker-$i" > "$work/worker-$i.log" 2>&1 &
   pids+=($!)
@@ -151,13 +151,13 @@ wait_for_workers() {
 wait_for_workers 3
 
 log "job 1: three workers across namespaces"
-job=$(client submit "$shared/building" -o "$shared/image-1.exr" "${options[@]}")
+job=$(client submit "$job_dir/building" -o "$job_dir/image-1.exr" "${options[@]}")
 client wait "$job" --timeout 120 > /dev/null || fail "job $job did not finish: $(client status "$job")"
-expect_same_pixels "$shared/image-1.exr" "$work/reference.exr"
+expect_same_pixels "$job_dir/image-1.exr" "$work/reference.exr"
 for i in 0 1 2; do
   [ -s "$work/cache-$i/"*/scene.db ] 2> /dev/null || fail "worker $i fetched no scene.db into its --cache-dir"
 done
-python3 - "$shared/image-1.exr.json" <<'PY' || fail "the workers wrote deposits into the coordinator's files"
+python3 - "$job_dir/image-1.exr.json" <<'PY' || fail "the workers wrote deposits into the coordinator's files"
 import json, sys
 disk = json.load(open(sys.argv[1]))["disk"]
 assert disk["photon_bytes_from_workers"] == 0 and disk["photon_bytes_from_results"] > 0, disk
@@ -165,7 +165,7 @@ print(f"deposits all in Results: {disk['photon_bytes_from_results']} bytes")
 PY
 
 log "job 2: its own photon pass; worker 0's link cut while it holds a lease"
-job=$(client submit "$shared/building" -o "$shared/image-2.exr" "${options[@]}" --fresh-photons)
+job=$(client submit "$job_dir/building" -o "$job_dir/image-2.exr" "${options[@]}" --fresh-photons)
 cut=""
 for _ in $(seq 600); do
   if client status "$job" --json 2> /dev/null | python3 -c '
@@ -185,5 +185,5 @@ client wait "$job" --timeout 120 > /dev/null || fail "job $job did not finish af
 grep -q "requeued: worker ns-worker-0" "$work/coordinator.log" ||
   fail "the coordinator did not take back worker 0's lease (coordinator.log)"
 grep "requeued: worker ns-worker-0" "$work/coordinator.log" | head -2
-expect_same_pixels "$shared/image-2.exr" "$work/reference.exr"
+expect_same_pixels "$job_dir/image-2.exr" "$work/reference.exr"
 echo "PASS"
