@@ -145,7 +145,7 @@ void Coordinator::runRound() {
     std::string identity;
     size_t bytes = 0;
     std::unique_ptr<net::Decoded> message;
-    std::optional<net::Role> role;   // what the peer was admitted as
+    std::optional<net::Peer> peer;   // what the peer was admitted as, and who it is
   };
   std::vector<Incoming> arrived;
   for (int drained = 0; drained < 256; ++drained) {
@@ -170,8 +170,8 @@ void Coordinator::runRound() {
     }
     try {
       const size_t bytes = frame.size();
-      const auto role = security_->roleOf(frame);
-      arrived.push_back({id, bytes, std::make_unique<net::Decoded>(std::move(frame)), role});
+      auto peer = security_->peerOf(frame);
+      arrived.push_back({id, bytes, std::make_unique<net::Decoded>(std::move(frame)), std::move(peer)});
     } catch (const kj::Exception& e) {
       spdlog::warn("dropped a malformed message from {}: {}", shortId(id), e.getDescription().cStr());
     } catch (const std::exception& e) {
@@ -187,7 +187,7 @@ void Coordinator::runRound() {
   bool refillFirst = false;
   for (const Incoming& in : arrived) {
     auto envelope = in.message->envelope();
-    if (envelope.which() != wire::Envelope::RESULT || refusalFor(in.role, envelope.which())) continue;
+    if (envelope.which() != wire::Envelope::RESULT || refusalFor(roleOf(in.peer), envelope.which())) continue;
     if (auto worker = workers_.find(in.identity); worker != workers_.end()) {
       const uint64_t lease = envelope.getResult().getLease();
       int64_t workerMicros = 0, loadMicros = 0, trianglesLoaded = 0;
@@ -222,7 +222,7 @@ void Coordinator::runRound() {
   bool requeued = false;
   const bool committed = inRound([&] {
     for (; handled < arrived.size(); ++handled)
-      handle(arrived[handled].identity, *arrived[handled].message, arrived[handled].bytes, arrived[handled].role);
+      handle(arrived[handled].identity, *arrived[handled].message, arrived[handled].bytes, arrived[handled].peer);
     // What a failed round's undo could not write. After the messages: the
     // leases whose Results just arrived are no longer counted as traced.
     if (requeueOwed_) {
@@ -250,7 +250,7 @@ void Coordinator::runRound() {
   // requests, heartbeats and file fetches are answered even on a full disk.
   if (!committed)
     for (size_t i = handled + 1; i < arrived.size(); ++i)
-      handle(arrived[i].identity, *arrived[i].message, arrived[i].bytes, arrived[i].role);
+      handle(arrived[i].identity, *arrived[i].message, arrived[i].bytes, arrived[i].peer);
   arrivedLeases_.clear();   // a dropped Result is not logged
 }
 
@@ -366,7 +366,8 @@ void Coordinator::noteDiskTrouble(const std::string& what) {
 }
 
 void Coordinator::handle(const std::string& identity, const net::Decoded& decoded, size_t bytes,
-                         std::optional<net::Role> role) {
+                         const std::optional<net::Peer>& peer) {
+  const std::optional<net::Role> role = roleOf(peer);
   const int64_t started = nowMs();
   struct SlowLog {
     int64_t started;
@@ -408,13 +409,13 @@ void Coordinator::handle(const std::string& identity, const net::Decoded& decode
       case wire::Envelope::FAILURE: onFailure(identity, envelope.getFailure()); break;
       case wire::Envelope::FETCH_PHOTONS: onFetchPhotons(identity, envelope.getFetchPhotons()); break;
       case wire::Envelope::FETCH_FILE: onFetchFile(identity, envelope.getFetchFile()); break;
-      case wire::Envelope::FETCH_IMAGE: onFetchImage(identity, envelope.getFetchImage()); break;
-      case wire::Envelope::SUBMIT: onSubmit(identity, envelope.getSubmit()); break;
-      case wire::Envelope::STATUS: onStatus(identity, envelope.getStatus()); break;
-      case wire::Envelope::CANCEL: onCancel(identity, envelope.getCancel()); break;
-      case wire::Envelope::JOB_DETAIL: onJobDetail(identity, envelope.getJobDetail()); break;
-      case wire::Envelope::FETCH_PREVIEW: onFetchPreview(identity, envelope.getFetchPreview()); break;
-      case wire::Envelope::PRIORITY: onPriority(identity, envelope.getPriority()); break;
+      case wire::Envelope::FETCH_IMAGE: onFetchImage(identity, peer, envelope.getFetchImage()); break;
+      case wire::Envelope::SUBMIT: onSubmit(identity, peer, envelope.getSubmit()); break;
+      case wire::Envelope::STATUS: onStatus(identity, peer, envelope.getStatus()); break;
+      case wire::Envelope::CANCEL: onCancel(identity, peer, envelope.getCancel()); break;
+      case wire::Envelope::JOB_DETAIL: onJobDetail(identity, peer, envelope.getJobDetail()); break;
+      case wire::Envelope::FETCH_PREVIEW: onFetchPreview(identity, peer, envelope.getFetchPreview()); break;
+      case wire::Envelope::PRIORITY: onPriority(identity, peer, envelope.getPriority()); break;
       case wire::Envelope::GOODBYE: onGoodbye(identity); break;
       case wire::Envelope::SHUTDOWN: {
         spdlog::info("shutdown requested by {}", shortId(identity));
@@ -1127,13 +1128,15 @@ void Coordinator::onFetchFile(const std::string& identity, wire::FetchFile::Read
   send(identity, message);
 }
 
-void Coordinator::onFetchImage(const std::string& identity, wire::FetchImage::Reader request) {
+void Coordinator::onFetchImage(const std::string& identity, const std::optional<net::Peer>& peer,
+                               wire::FetchImage::Reader request) {
   capnp::MallocMessageBuilder message;
   auto reply = message.initRoot<wire::Envelope>().initImage();
   reply.setJob(request.getJob());
   try {
     auto job = store_.job(request.getJob());
     if (!job) throw std::runtime_error(fmt::format("job {} does not exist", request.getJob()));
+    if (!mayManage(peer, *job)) throw std::runtime_error(notYours(*job, "fetch its image"));
     if (job->state != JobState::Done)
       throw std::runtime_error(fmt::format("job {} is {}, not done: it has no image", job->id, toString(job->state)));
     auto spec = context(job->id).reader();
@@ -1147,7 +1150,8 @@ void Coordinator::onFetchImage(const std::string& identity, wire::FetchImage::Re
   send(identity, message);
 }
 
-void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader submit) {
+void Coordinator::onSubmit(const std::string& identity, const std::optional<net::Peer>& peer,
+                           wire::Submit::Reader submit) {
   capnp::MallocMessageBuilder reply;
   auto answer = reply.initRoot<wire::Envelope>().initSubmitReply();
   try {
@@ -1204,6 +1208,7 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
       store_.setPhotonPass(job, photonKey, lender.value_or(0));
       store_.setPriority(job, priority);
       store_.setRequiredTags(job, requiredTags);
+      store_.setOwner(job, peer ? peer->who : std::string());
       if (settings.analysis) {
         store_.setJobSensors(job, encodeSensors(sensors));
         const auto outside = std::count_if(sensors.begin(), sensors.end(), [](const Sensor& s) { return s.cell < 0; });
@@ -1231,11 +1236,22 @@ void Coordinator::onSubmit(const std::string& identity, wire::Submit::Reader sub
   send(identity, reply);
 }
 
-void Coordinator::onStatus(const std::string& identity, wire::StatusRequest::Reader request) {
-  replyStatus(identity, request.getJob());
+void Coordinator::onStatus(const std::string& identity, const std::optional<net::Peer>& peer,
+                           wire::StatusRequest::Reader request) {
+  replyStatus(identity, peer, request.getJob());
 }
 
-void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
+bool Coordinator::mayManage(const std::optional<net::Peer>& peer, const JobRecord& job) const {
+  if (!security_->ownersApart()) return true;   // one user's own keys or uid: every peer is that user
+  if (!peer) return false;
+  return peer->role == net::Role::Operator || (!job.owner.empty() && job.owner == peer->who);
+}
+
+std::string Coordinator::notYours(const JobRecord& job, const std::string& action) {
+  return fmt::format("job {} is another user's: only its owner or an operator may {}", job.id, action);
+}
+
+void Coordinator::replyStatus(const std::string& identity, const std::optional<net::Peer>& peer, uint64_t jobId) {
   nlohmann::json status;
   const int64_t now = wallMs();
   if (jobId != 0) {
@@ -1258,14 +1274,22 @@ void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
         status["waiting"] = reasons;
         status.erase("eta_s");   // it would only grow
       }
+    const bool mine = mayManage(peer, *job);
+    status["mine"] = mine;
+    if (!mine) hideOwnersDetail(status);
   } else {
     status["jobs"] = nlohmann::json::array();
-    for (const JobRecord& job : store_.jobs(false))
-      status["jobs"].push_back({{"job", job.id},
-                                {"state", std::string(toString(job.state))},
-                                {"error", job.error},
-                                {"priority", job.priority},
-                                {"required_tags", job.requiredTags}});
+    for (const JobRecord& job : store_.jobs(false)) {
+      const bool mine = mayManage(peer, job);
+      nlohmann::json listed = {{"job", job.id},
+                               {"state", std::string(toString(job.state))},
+                               {"error", job.error},
+                               {"priority", job.priority},
+                               {"required_tags", job.requiredTags},
+                               {"mine", mine}};
+      if (!mine) hideOwnersDetail(listed);
+      status["jobs"].push_back(std::move(listed));
+    }
   }
   // Since it started, all jobs: its CPU (every thread) over the leases it
   // sent or the Results it applied is its cost per lease.
@@ -1282,10 +1306,16 @@ void Coordinator::replyStatus(const std::string& identity, uint64_t jobId) {
   send(identity, message);
 }
 
-void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Reader request) {
+void Coordinator::onCancel(const std::string& identity, const std::optional<net::Peer>& peer,
+                           wire::CancelRequest::Reader request) {
   auto job = store_.job(request.getJob());
   if (!job) {
     sendError(identity, fmt::format("job {} does not exist", request.getJob()));
+    return;
+  }
+  if (!mayManage(peer, *job)) {
+    spdlog::warn("refused to cancel job {} for {}: not its owner", job->id, shortId(identity));
+    sendError(identity, notYours(*job, "cancel it"));
     return;
   }
   if (isActive(job->state)) {
@@ -1297,29 +1327,33 @@ void Coordinator::onCancel(const std::string& identity, wire::CancelRequest::Rea
     forgetEndedJob(job->id);
     spdlog::info("job {} cancelled", job->id);
   }
-  replyStatus(identity, job->id);
+  replyStatus(identity, peer, job->id);
 }
 
-void Coordinator::onJobDetail(const std::string& identity, wire::JobDetailRequest::Reader request) {
+void Coordinator::onJobDetail(const std::string& identity, const std::optional<net::Peer>& peer,
+                              wire::JobDetailRequest::Reader request) {
   const auto job = store_.job(request.getJob());
   if (!job) {
     sendError(identity, fmt::format("job {} does not exist", request.getJob()));
     return;
   }
   nlohmann::json detail = cellActivity(store_, *job, workers_);
-  detail["log"] = options_.jobLog ? options_.jobLog->lines(job->id) : std::vector<std::string>();
+  // Its log names its files: its owner's (and operators') only.
+  detail["log"] = options_.jobLog && mayManage(peer, *job) ? options_.jobLog->lines(job->id) : std::vector<std::string>();
   capnp::MallocMessageBuilder message;
   message.initRoot<wire::Envelope>().initJobDetailReply().setJson(detail.dump());
   send(identity, message);
 }
 
-void Coordinator::onFetchPreview(const std::string& identity, wire::FetchPreview::Reader request) {
+void Coordinator::onFetchPreview(const std::string& identity, const std::optional<net::Peer>& peer,
+                                 wire::FetchPreview::Reader request) {
   capnp::MallocMessageBuilder message;
   auto reply = message.initRoot<wire::Envelope>().initPreview();
   reply.setJob(request.getJob());
   try {
     const auto job = store_.job(request.getJob());
     if (!job) throw std::runtime_error(fmt::format("job {} does not exist", request.getJob()));
+    if (!mayManage(peer, *job)) throw std::runtime_error(notYours(*job, "see its image"));
     // The spec as stored (resolved at submit): no need to open the store.
     net::PackedReader stored(job->spec.data(), job->spec.size());
     const auto spec = stored.root<wire::JobSpec>();
@@ -1341,10 +1375,15 @@ void Coordinator::onFetchPreview(const std::string& identity, wire::FetchPreview
   send(identity, message);
 }
 
-void Coordinator::onPriority(const std::string& identity, wire::PriorityRequest::Reader request) {
+void Coordinator::onPriority(const std::string& identity, const std::optional<net::Peer>& peer,
+                             wire::PriorityRequest::Reader request) {
   auto job = store_.job(request.getJob());
   if (!job) {
     sendError(identity, fmt::format("job {} does not exist", request.getJob()));
+    return;
+  }
+  if (!mayManage(peer, *job)) {
+    sendError(identity, notYours(*job, "change its priority"));
     return;
   }
   int priority;
@@ -1366,7 +1405,7 @@ void Coordinator::onPriority(const std::string& identity, wire::PriorityRequest:
     tx.commit();
   }
   spdlog::info("job {}: priority {} (was {})", job->id, priority, job->priority);
-  replyStatus(identity, job->id);
+  replyStatus(identity, peer, job->id);
 }
 
 void Coordinator::onGoodbye(const std::string& identity) { releaseWorker(identity, "left"); }

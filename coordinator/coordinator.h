@@ -79,7 +79,17 @@ class Coordinator {
     wire::JobSpec::Reader reader() { return spec->getRoot<wire::JobSpec>().asReader(); }
   };
 
-  void handle(const std::string& identity, const net::Decoded& message, size_t bytes, std::optional<net::Role> role);
+  void handle(const std::string& identity, const net::Decoded& message, size_t bytes,
+              const std::optional<net::Peer>& peer);
+  static std::optional<net::Role> roleOf(const std::optional<net::Peer>& peer) {
+    return peer ? std::optional<net::Role>(peer->role) : std::nullopt;
+  }
+  // Whether `peer` may see `job` in full (its paths, error, log, image) and
+  // steer it (cancel, priority): with per-user keys (RouterSecurity::
+  // ownersApart) its owner and operators only; else every peer, all being
+  // this user. A job without an owner (schema 13 and before) is operators'.
+  bool mayManage(const std::optional<net::Peer>& peer, const JobRecord& job) const;
+  static std::string notYours(const JobRecord& job, const std::string& action);
   void onHello(const std::string& identity, wire::Hello::Reader hello);
   void onReady(const std::string& identity);
   void onResult(const std::string& identity, wire::Result::Reader result);
@@ -106,19 +116,22 @@ class Coordinator {
   // runs its pass again if it still runs, else it lends no more.
   void withdrawDamagedLender(uint64_t lender, const std::string& reason);
   void onFetchFile(const std::string& identity, wire::FetchFile::Reader request);
-  void onFetchImage(const std::string& identity, wire::FetchImage::Reader request);
+  void onFetchImage(const std::string& identity, const std::optional<net::Peer>& peer, wire::FetchImage::Reader request);
   // The jobs of the leases the worker holds (what it may fetch files and photons of).
   std::set<uint64_t> jobsLeasedTo(const std::string& identity);
-  void onSubmit(const std::string& identity, wire::Submit::Reader submit);
-  void onStatus(const std::string& identity, wire::StatusRequest::Reader request);
-  void replyStatus(const std::string& identity, uint64_t job);   // job 0: all jobs
-  void onCancel(const std::string& identity, wire::CancelRequest::Reader request);
+  void onSubmit(const std::string& identity, const std::optional<net::Peer>& peer, wire::Submit::Reader submit);
+  void onStatus(const std::string& identity, const std::optional<net::Peer>& peer, wire::StatusRequest::Reader request);
+  // job 0: all jobs; other users' without their paths, errors and logs (mayManage).
+  void replyStatus(const std::string& identity, const std::optional<net::Peer>& peer, uint64_t job);
+  void onCancel(const std::string& identity, const std::optional<net::Peer>& peer, wire::CancelRequest::Reader request);
   // The dashboard's (coordinator/job_activity.h): a job's cells and log
   // lines, and its film so far, made small.
-  void onJobDetail(const std::string& identity, wire::JobDetailRequest::Reader request);
-  void onFetchPreview(const std::string& identity, wire::FetchPreview::Reader request);
+  void onJobDetail(const std::string& identity, const std::optional<net::Peer>& peer,
+                   wire::JobDetailRequest::Reader request);
+  void onFetchPreview(const std::string& identity, const std::optional<net::Peer>& peer,
+                      wire::FetchPreview::Reader request);
   // A job's new priority, for its leases from now on (those in flight finish).
-  void onPriority(const std::string& identity, wire::PriorityRequest::Reader request);
+  void onPriority(const std::string& identity, const std::optional<net::Peer>& peer, wire::PriorityRequest::Reader request);
   void onGoodbye(const std::string& identity);
 
   void dispatch();

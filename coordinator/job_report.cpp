@@ -249,6 +249,18 @@ nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpe
   return statisticsOf(store, job, spec, store.counters(job.id), true);
 }
 
+void hideOwnersDetail(nlohmann::json& status) {
+  if (status.contains("error") && !status["error"].get<std::string>().empty()) status["error"] = "(another user's job)";
+  if (status.contains("settings")) {
+    status["settings"].erase("store");
+    status["settings"].erase("output");
+  }
+  // Why it waits, without the path an unreadable store's reason names.
+  if (status.contains("waiting"))
+    for (auto& reason : status["waiting"])
+      if (reason.get<std::string>().rfind("store cannot be read", 0) == 0) reason = "store cannot be read";
+}
+
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs) {
   const auto counters = store.counters(job.id);
   nlohmann::json status = statisticsOf(store, job, spec, counters, false);

@@ -35,6 +35,10 @@ inline constexpr std::string_view kPhotonBytesSentCounter = "disk.photon_bytes_s
 
 nlohmann::json jobStatistics(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec);
 nlohmann::json jobStatus(JobStore& store, const JobRecord& job, wire::JobSpec::Reader spec, int64_t nowMs);
+// Takes out of a job's status (or its line in the jobs list) what another
+// user may not see (docs/security.md): its scene store and output paths and
+// its error (errors name files); what is left says how it runs.
+void hideOwnersDetail(nlohmann::json& status);
 nlohmann::json workersStatus(const WorkerRegistry& workers, int64_t nowMs);
 
 // The job's film as radiance: the sum of its passes over the passes done

@@ -369,6 +369,10 @@ constexpr const char* kSchemaVersion13 = R"sql(
       ALTER TABLE jobs ADD COLUMN priority INTEGER NOT NULL DEFAULT 0;
       ALTER TABLE jobs ADD COLUMN required_tags TEXT NOT NULL DEFAULT '';
     )sql";
+// Version 14: each job's owner, who submitted it (net::Peer::who: "key:Z85"
+// or "uid:N"); jobs of older versions have none ('': docs/security.md says
+// who sees them).
+constexpr const char* kSchemaVersion14 = "ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''";
 
 // LeaseLogEntry::moreCellWork as its column holds it, and back.
 std::string moreCellWorkText(const std::vector<std::pair<uint32_t, int64_t>>& cells) {
@@ -417,6 +421,7 @@ void JobStore::migrate() {
   step(11, [&] { db_.exec(kSchemaVersion11); });
   step(12, [&] { db_.exec(kSchemaVersion12); });
   step(13, [&] { db_.exec(kSchemaVersion13); });
+  step(14, [&] { db_.exec(kSchemaVersion14); });
 }
 
 // Schema 3 -> 4: each photon batch's zlib CRC-32 is checked and replaced by
@@ -470,6 +475,13 @@ void JobStore::setPriority(uint64_t job, int priority) {
   s.run();
 }
 
+void JobStore::setOwner(uint64_t job, const std::string& owner) {
+  jobsChanged();
+  auto& s = db_.prepare("UPDATE jobs SET owner = ? WHERE id = ?");
+  s.bind(1, owner).bind(2, int64_t(job));
+  s.run();
+}
+
 void JobStore::setRequiredTags(uint64_t job, const std::vector<std::string>& tags) {
   jobsChanged();
   auto& s = db_.prepare("UPDATE jobs SET required_tags = ? WHERE id = ?");
@@ -494,11 +506,12 @@ JobRecord readJob(sql::Statement& s) {
   job.photonsComplete = s.columnInt(10) != 0;
   job.priority = int(s.columnInt(11));
   job.requiredTags = splitTags(s.columnText(12));
+  job.owner = s.columnText(13);
   return job;
 }
 constexpr const char* kJobColumns =
     "id, state, error, spec, created_ms, phase_started_ms, finished_ms, photon_record_bytes, photon_key, "
-    "photon_source, photons_complete, priority, required_tags";
+    "photon_source, photons_complete, priority, required_tags, owner";
 }  // namespace
 
 std::optional<JobRecord> JobStore::job(uint64_t id) {

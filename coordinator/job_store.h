@@ -55,6 +55,10 @@ struct JobRecord {
   // common/job/worker_tags.h).
   int priority = 0;
   std::vector<std::string> requiredTags;
+  // Who submitted it (schema 14; net::Peer::who), "" for a job of an older
+  // schema: with per-user keys only its owner and operators see its paths
+  // and log, and steer it (docs/security.md).
+  std::string owner;
 };
 
 struct PendingCell {
@@ -105,7 +109,7 @@ struct LeaseLogEntry {
 
 class JobStore {
  public:
-  static constexpr int kSchemaVersion = 13;
+  static constexpr int kSchemaVersion = 14;
   // A job's ray batch file starts a new segment past this size, so that
   // consumed segments can be deleted while the job runs.
   static constexpr int64_t kBatchSegmentBytes = int64_t(256) << 20;
@@ -122,6 +126,7 @@ class JobStore {
   // Scheduling only: what the job computes stays as it is.
   void setPriority(uint64_t job, int priority);
   void setRequiredTags(uint64_t job, const std::vector<std::string>& tags);
+  void setOwner(uint64_t job, const std::string& owner);
 
   // Photon-pass reuse (photon_reuse.h). At submit: what decides the job's
   // photon tables, and the earlier job whose tables it renders with (0: it

@@ -31,6 +31,7 @@ RouterSecurity::RouterSecurity(zmq::context_t& context, zmq::socket_t& router, c
   router.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(maxFrameBytes));
   const bool ipc = listen.rfind("ipc://", 0) == 0;
   inproc_ = listen.rfind("inproc://", 0) == 0;
+  ownersApart_ = !keysDirectory.empty() && !inproc_;
   if (!keysDirectory.empty() || (!ipc && !inproc_)) {
     const std::string directory = keysDirectory.empty() ? net::ensureDefaultKeys() : keysDirectory;
     const net::ServerKeys keys = net::loadServerKeys(directory);
@@ -60,8 +61,8 @@ RouterSecurity::RouterSecurity(zmq::context_t& context, zmq::socket_t& router, c
   connections_ = std::make_unique<net::ConnectionLog>(context, router, "coordinator", std::move(listener));
 }
 
-std::optional<net::Role> RouterSecurity::roleOf(zmq::message_t& frame) const {
-  if (inproc_) return net::Role::Operator;
+std::optional<net::Peer> RouterSecurity::peerOf(zmq::message_t& frame) const {
+  if (inproc_) return net::Peer{net::Role::Operator, "in-process"};
   if (guard_) {
     // The connection's descriptor (ZMQ_SRCFD: deprecated, still what libzmq 4.3 offers).
     const int fd = zmq_msg_get(frame.handle(), ZMQ_SRCFD);
@@ -69,7 +70,7 @@ std::optional<net::Role> RouterSecurity::roleOf(zmq::message_t& frame) const {
   }
   const char* userId = zmq_msg_gets(frame.handle(), "User-Id");
   if (!userId) return std::nullopt;
-  return net::roleNamed(userId);
+  return net::peerOfZapUserId(userId);
 }
 
 }  // namespace portico

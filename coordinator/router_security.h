@@ -40,10 +40,15 @@ class RouterSecurity {
   // std::runtime_error naming the file when a key file is bad.
   RouterSecurity(zmq::context_t& context, zmq::socket_t& router, const std::string& listen,
                  const std::string& keysDirectory, uint64_t maxFrameBytes);
-  // The role of the peer that sent `frame`, from what the ZAP handler
-  // admitted it as; none when it was admitted without one. Its connection
-  // has passed the handshake (ConnectionGuard).
-  std::optional<net::Role> roleOf(zmq::message_t& frame) const;
+  // The role of the peer that sent `frame` and who it is (its key or uid),
+  // from what the ZAP handler admitted it as; none when it was admitted
+  // without a role. Its connection has passed the handshake (ConnectionGuard).
+  std::optional<net::Peer> peerOf(zmq::message_t& frame) const;
+  // Whether the coordinator serves several users, each with keys of their
+  // own (--keys): then a client sees and steers only its own jobs in full
+  // (docs/security.md). Without --keys only this user's own keys or uid get
+  // in, and every peer is the same user.
+  bool ownersApart() const { return ownersApart_; }
   // Call from the serving loop: logs connections libzmq closed or refused.
   void logConnectionEvents() { connections_->drain(); }
 
@@ -52,6 +57,7 @@ class RouterSecurity {
   std::unique_ptr<ConnectionGuard> guard_;   // tcp:// only (ipc:// admits only local users)
   std::unique_ptr<net::ConnectionLog> connections_;
   bool inproc_ = false;   // the same process: every peer is an operator
+  bool ownersApart_ = false;
 };
 
 }  // namespace portico

@@ -5,7 +5,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <csignal>
+#include <cstdlib>
 #include <cstdint>
 #include <thread>
 
@@ -41,7 +43,8 @@ int main(int argc, char** argv) {
   app.add_option("--name", options.name, "name shown in status");
   app.add_option("--tag", options.tags,
                  "a pool this worker belongs to (repeatable): jobs submitted with --require NAME are leased only to "
-                 "workers having every tag they require; names of letters, digits, '-', '_', '.'")
+                 "workers having every tag they require; names of letters, digits, '-', '_', '.' (default: "
+                 "$PORTICO_WORKER_TAGS, names split at commas or spaces, as the deploy templates set it)")
       ->check(CLI::Validator([](std::string& tag) { return portico::tagNameProblem(tag); }, "NAME"));
   app.add_option("--heartbeat-ms", options.heartbeatMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 600000));
   app.add_option("--liveness-ms", options.livenessMs)->capture_default_str()->check(portico::cli::wholeNumber(1, 86400000));
@@ -75,6 +78,23 @@ int main(int argc, char** argv) {
   spdlog::set_pattern(fmt::format("[%H:%M:%S.%e] [worker {}] [%l] %v", options.name));
   try {
     options.memoryBytes = portico::parseByteSize(memory);
+    // The deploy templates (systemd, Kubernetes, Slurm, Docker) give a
+    // worker's pools in the environment, where a repeated option is awkward.
+    if (const char* given = std::getenv("PORTICO_WORKER_TAGS"); options.tags.empty() && given) {
+      std::string name;
+      for (const char* c = given;; ++c) {
+        if (*c == '\0' || *c == ',' || std::isspace(static_cast<unsigned char>(*c))) {
+          if (!name.empty()) options.tags.push_back(name);
+          name.clear();
+          if (*c == '\0') break;
+        } else {
+          name += *c;
+        }
+      }
+      for (const std::string& tag : options.tags)
+        if (const std::string problem = portico::tagNameProblem(tag); !problem.empty())
+          throw std::invalid_argument("PORTICO_WORKER_TAGS: " + problem);
+    }
     options.tags = portico::normalizedTags(options.tags, "--tag");
     // Free memory kept for the next lease: an eighth of the cache budget,
     // at most 256 MiB, so resident memory still follows the budget. On the

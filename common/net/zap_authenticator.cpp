@@ -66,19 +66,22 @@ void ZapAuthenticator::answer(const std::vector<zmq::message_t>& request) {
     const std::string address = text(request[3]), mechanism = text(request[5]);
     std::string why, throttleKey = mechanism;
     std::optional<Role> role;
+    std::string who;
     if (mechanism == "CURVE" && request.size() >= 7 && !owner_) {
       throttleKey = z85FromBinaryKey(request[6].data(), request[6].size());
       role = admitCurve(throttleKey, why);
+      who = "key:" + throttleKey;
     } else if (mechanism == "NULL" && owner_) {
       throttleKey = address;
       role = admitByUid(address, why);
+      if (const std::optional<uid_t> uid = ipcPeerUid(address)) who = fmt::format("uid:{}", *uid);
     } else {
       why = fmt::format("mechanism {} (the coordinator requires {})", mechanism, owner_ ? "NULL on ipc://" : "CURVE");
     }
     if (role) {
       status = "200";
       statusText = "OK";
-      userId = std::string(roleName(*role));
+      userId = zapUserId(Peer{*role, who});
     } else {
       logRefusal(throttleKey, address, why);
     }

@@ -1,6 +1,7 @@
 // A ZeroMQ authentication handler (ZAP, RFC 27): a thread answering
 // libzmq's requests on inproc://zeromq.zap.01. For a CURVE server it admits
-// the keys it was given (status 200, User-Id: the key's role) and refuses
+// the keys it was given (status 200, User-Id: the key's role and the key,
+// net::zapUserId) and refuses
 // every other (400). For an ipc:// socket without keys (NULL mechanism) it
 // admits the peers whose uid (libzmq appends ":uid:gid:pid", read with
 // SO_PEERCRED, to an ipc peer's address) is the server's own or root's, as

@@ -88,13 +88,15 @@ std::string describeStatus(const nlohmann::json& s) {
   std::string text;
   if (s.contains("jobs")) {
     for (const auto& job : s["jobs"])
-      text += fmt::format("job {} {} priority {}{}{}\n", job.value("job", int64_t{0}), job.value("state", "?"),
+      text += fmt::format("job {} {} priority {}{}{}{}\n", job.value("job", int64_t{0}), job.value("state", "?"),
                           job.value("priority", 0), tagsText(job, "required_tags", ", requires tags "),
+                          job.value("mine", true) ? "" : ", another user's",
                           job.value("error", "").empty() ? "" : " — " + job.value("error", ""));
     if (s["jobs"].empty()) text += "no jobs\n";
   } else {
     text += summaryLine(s) + "\n";
     text += fmt::format("priority: {}{}\n", s.value("priority", 0), tagsText(s, "required_tags", "; requires tags "));
+    if (!s.value("mine", true)) text += "another user's job: its paths, error and log are not shown\n";
     if (s.contains("error")) text += fmt::format("error: {}\n", s.value("error", ""));
     if (s.contains("waiting"))
       for (const auto& reason : s["waiting"]) text += fmt::format("waiting: {}\n", reason.get<std::string>());

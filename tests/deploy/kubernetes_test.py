@@ -150,6 +150,11 @@ check(wc["command"] == ["portico-worker"], "the worker container does not run po
 check(coordinator["spec"]["replicas"] == 1, "coordinator replicas != 1")
 check(coordinator["spec"]["strategy"]["type"] == "Recreate", "coordinator strategy is not Recreate")
 check(worker["spec"].get("replicas", 1) >= 1, "worker replicas < 1")
+# The workers' pools: portico-worker reads PORTICO_WORKER_TAGS (names split at commas or spaces).
+worker_env = {e["name"]: e.get("value") for e in wc.get("env", [])}
+check("PORTICO_WORKER_TAGS" in worker_env, "the worker container has no PORTICO_WORKER_TAGS (its pools)")
+check(all(re.fullmatch(r"[A-Za-z0-9_.\-]+", t) for t in re.split(r"[,\s]+", worker_env.get("PORTICO_WORKER_TAGS") or "") if t),
+      "PORTICO_WORKER_TAGS holds a tag portico-worker refuses")
 
 # Ports: --listen's port = containerPort = Service targetPort/port = workers' --connect.
 listen = argument(cc, "--listen") or ""

@@ -39,8 +39,9 @@ grep -Eq '^[0-9]+ cells, max_triangles_per_cell [0-9]+; largest cell .+: [0-9]+ 
   || fail "the sizing command of docs/deploy.md printed: $(cat sizing.out)"
 
 log "portico-local start"
-# As in docs/deploy.md, with a free port (*) and this test's own state folder.
-"$portico_local" start --workers 2 --state-dir "$state" --listen 'tcp://127.0.0.1:*' | tee start.out
+# As in docs/deploy.md, with a free port (*) and this test's own state folder; the
+# workers in pools bigmem and gpu (--tags), which the job below requires.
+"$portico_local" start --workers 2 --state-dir "$state" --listen 'tcp://127.0.0.1:*' --tags bigmem,gpu | tee start.out
 endpoint=$("$portico_local" endpoint --state-dir "$state")
 grep -qx "endpoint: $endpoint" start.out || fail "start did not print the endpoint $endpoint"
 grep -q "worker 1: .*log $state/worker-1.log" start.out || fail "start did not print the workers' logs"
@@ -53,12 +54,34 @@ fi
 grep -q "already running" second.err || fail "second start: $(cat second.err)"
 
 log "portico submit / wait against $endpoint"
-job=$(portico submit --coordinator "$endpoint" building -o image.exr "${deploy_render_options[@]}")
+job=$(portico submit --coordinator "$endpoint" building -o image.exr "${deploy_render_options[@]}" --require bigmem)
 portico wait --coordinator "$endpoint" "$job"
 expect_same_pixels image.exr reference.exr
 # Both workers are connected (the job status lists the coordinator's workers).
 portico status --coordinator "$endpoint" "$job" --json > status.json
 for i in 0 1; do grep -q "\"local-$i\"" status.json || fail "worker local-$i not in the job status"; done
+python3 -c '
+import json, sys
+workers = json.load(open("status.json"))["workers"]
+tags = sorted(tuple(w["tags"]) for w in workers)
+sys.exit(0 if tags == [("bigmem", "gpu")] * 2 else "workers tagged %s, not bigmem and gpu" % tags)' \
+  || fail "portico-local --tags did not reach the workers"
+# PORTICO_WORKER_TAGS, as the systemd, Kubernetes, Slurm and Docker templates set it.
+PORTICO_WORKER_TAGS="big.mem, spare" portico-worker --connect "$endpoint" --name env-tagged --memory 256MiB \
+  > env-worker.log 2>&1 &
+env_worker=$!
+for _ in $(seq 50); do
+  portico status --coordinator "$endpoint" --json > farm.json
+  grep -q '"env-tagged"' farm.json && break
+  sleep 0.1
+done
+kill "$env_worker"; wait "$env_worker" || true
+python3 -c '
+import json, sys
+tags = [w["tags"] for w in json.load(open("farm.json"))["workers"] if w["name"] == "env-tagged"]
+sys.exit(0 if tags == [["big.mem", "spare"]] else "env-tagged worker has tags %s" % tags)' \
+  || fail "PORTICO_WORKER_TAGS did not reach the worker: $(cat env-worker.log)"
+
 
 pids=$(cat "$state"/*.pid)
 log "portico-local stop"

@@ -58,4 +58,8 @@ for unit in portico-coordinator.service portico-worker@.service; do
     grep -q "^$variable=" "$units/portico.env" || fail "$unit uses \${$variable}, not set in portico.env"
   done
 done
+# The workers' pools: portico-worker reads PORTICO_WORKER_TAGS from the environment the
+# EnvironmentFile gives it, and says so in its --help.
+grep -q '^PORTICO_WORKER_TAGS=' "$units/portico.env" || fail "portico.env sets no PORTICO_WORKER_TAGS (the workers' pools)"
+"$bin/portico-worker" --help | grep -q 'PORTICO_WORKER_TAGS' || fail "portico-worker --help does not name PORTICO_WORKER_TAGS"
 log "PASS"

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 #include <regex>
 #include <thread>
@@ -204,6 +205,112 @@ TEST_F(Security, EachKeyGetsOnlyItsRolesRights) {
   EXPECT_EQ(code, 0) << readFile(dir / "operator-shuts-down.log");
   EXPECT_TRUE(waitForLog(dir / "coordinator.log", "coordinator stopping", std::chrono::seconds(10)))
       << readFile(dir / "coordinator.log");
+}
+
+// Two users of one coordinator, each with a client key of their own (two
+// lines of client.public), and an operator: a user sees the other's jobs in
+// the list and their progress, but not their scene store or output paths,
+// errors or log lines, nor their image; may not cancel them or change their
+// priority; sees and steers their own in full. The operator sees and steers
+// every job. Through the real coordinator and `portico` processes.
+TEST_F(Security, EachUserSeesAndSteersOnlyTheirOwnJobsAndTheOperatorEvery) {
+  const fs::path dir = dir_ / "owners";
+  fs::create_directories(dir);
+  const fs::path farm = dir / "farm", aliceKeys = farm, bobGenerated = dir / "bob-generated", bobKeys = dir / "bob",
+                 operatorKeys = dir / "operator";
+  for (const fs::path& generated : {farm, bobGenerated})
+    ASSERT_EQ(runCommand({kBin + "portico", "keys", "generate", generated.string()}, dir / "keys.log"), 0)
+        << readFile(dir / "keys.log");
+  // Bob's own pair, admitted by a second line of the farm's client.public.
+  fs::create_directories(bobKeys);
+  fs::copy_file(farm / "coordinator.public", bobKeys / "coordinator.public");
+  fs::copy_file(bobGenerated / "client.secret", bobKeys / "client.secret");
+  std::ofstream(farm / "client.public", std::ios::app) << readFile(bobGenerated / "client.public");
+  // The operator's folder: operator.secret alone.
+  fs::create_directories(operatorKeys);
+  fs::copy_file(farm / "coordinator.public", operatorKeys / "coordinator.public");
+  fs::copy_file(farm / "operator.secret", operatorKeys / "operator.secret");
+
+  ClusterOptions options;
+  options.coordinatorExtra = {"--keys", farm.string()};
+  options.clientKeys = aliceKeys.string();
+  LocalCluster cluster(dir, 0, {}, options);   // no worker: the jobs stay queued, active
+  const auto portico = [&](const std::string& name, const fs::path& keys, std::vector<std::string> args, int* code) {
+    std::vector<std::string> argv{kBin + "portico", args[0], "--coordinator", cluster.endpoint(), "--keys", keys.string()};
+    argv.insert(argv.end(), args.begin() + 1, args.end());
+    return captureOutput(argv, dir, name, code);
+  };
+  int code = -1;
+  const fs::path aliceOutput = dir / "alice-private" / "plan.exr", bobOutput = dir / "bob-private" / "view.exr";
+  fs::create_directories(aliceOutput.parent_path());
+  fs::create_directories(bobOutput.parent_path());
+  const std::string aliceJob =
+      portico("alice-submits", aliceKeys, {"submit", store_.string(), "-o", aliceOutput.string()}, &code);
+  ASSERT_EQ(code, 0) << readFile(dir / "alice-submits.log");
+  const std::string bobJob = portico("bob-submits", bobKeys, {"submit", store_.string(), "-o", bobOutput.string()}, &code);
+  ASSERT_EQ(code, 0) << readFile(dir / "bob-submits.log");
+  const auto trimmed = [](std::string s) { return s.substr(0, s.find_last_not_of(" \n") + 1); };
+  const std::string alice = trimmed(aliceJob), bob = trimmed(bobJob);
+
+  // Bob's view of Alice's job: its progress, not her paths.
+  const std::string bobSeesAlice = portico("bob-status-alice", bobKeys, {"status", alice, "--json"}, &code);
+  ASSERT_EQ(code, 0) << readFile(dir / "bob-status-alice.log");
+  const auto hidden = nlohmann::json::parse(bobSeesAlice);
+  EXPECT_EQ(hidden["mine"], false);
+  EXPECT_EQ(hidden["state"], "photons");
+  EXPECT_TRUE(hidden.contains("progress"));
+  for (const std::string& secret : {aliceOutput.string(), store_.string(), std::string("alice-private")})
+    EXPECT_EQ(bobSeesAlice.find(secret), std::string::npos) << secret << " shown to bob:\n" << bobSeesAlice;
+  const std::string bobList = portico("bob-list", bobKeys, {"status"}, &code);
+  EXPECT_NE(bobList.find("job " + alice + " photons priority 0, another user's"), std::string::npos) << bobList;
+  EXPECT_NE(bobList.find("job " + bob + " photons priority 0\n"), std::string::npos) << bobList;
+  // His own job in full.
+  const auto own = nlohmann::json::parse(portico("bob-status-own", bobKeys, {"status", bob, "--json"}, &code));
+  EXPECT_EQ(own["mine"], true);
+  EXPECT_EQ(own["settings"]["output"], bobOutput.string());
+  // Alice's log lines (the dashboard's JobDetail) are hers: none for Bob.
+  {
+    net::CoordinatorClient bobClient(cluster.endpoint(), bobKeys.string());
+    net::CoordinatorClient aliceClient(cluster.endpoint(), aliceKeys.string());
+    const auto bobDetail = nlohmann::json::parse(bobClient.jobDetailJson(std::stoull(alice)));
+    const auto aliceDetail = nlohmann::json::parse(aliceClient.jobDetailJson(std::stoull(alice)));
+    EXPECT_TRUE(bobDetail["log"].empty()) << bobDetail["log"].dump();
+    EXPECT_FALSE(aliceDetail["log"].empty());
+    EXPECT_NE(aliceDetail["log"].dump().find(store_.string()), std::string::npos) << aliceDetail["log"].dump();
+  }
+  // Bob may neither cancel Alice's job nor change its priority.
+  portico("bob-cancels-alice", bobKeys, {"cancel", alice}, &code);
+  EXPECT_NE(code, 0);
+  EXPECT_NE(readFile(dir / "bob-cancels-alice.log")
+                .find("job " + alice + " is another user's: only its owner or an operator may cancel it"),
+            std::string::npos)
+      << readFile(dir / "bob-cancels-alice.log");
+  portico("bob-priority-alice", bobKeys, {"priority", alice, "5"}, &code);
+  EXPECT_NE(code, 0);
+  EXPECT_EQ(cluster.status(std::stoull(alice))["state"], "photons");   // Alice's own view: untouched
+  EXPECT_EQ(cluster.status(std::stoull(alice))["priority"], 0);
+  EXPECT_EQ(cluster.status(std::stoull(alice))["settings"]["output"], aliceOutput.string());
+  // Alice cannot cancel Bob's either; she sees it without his paths.
+  portico("alice-cancels-bob", aliceKeys, {"cancel", bob}, &code);
+  EXPECT_NE(code, 0);
+  EXPECT_EQ(cluster.status(std::stoull(bob)).dump().find("bob-private"), std::string::npos);
+
+  // The operator sees every path and steers every job.
+  const std::string operatorSees = portico("operator-status-alice", operatorKeys, {"status", alice, "--json"}, &code);
+  EXPECT_EQ(nlohmann::json::parse(operatorSees)["settings"]["output"], aliceOutput.string());
+  portico("operator-priority-bob", operatorKeys, {"priority", bob, "3"}, &code);
+  EXPECT_EQ(code, 0) << readFile(dir / "operator-priority-bob.log");
+  portico("operator-cancels-alice", operatorKeys, {"cancel", alice}, &code);
+  EXPECT_EQ(code, 0) << readFile(dir / "operator-cancels-alice.log");
+  EXPECT_EQ(cluster.status(std::stoull(alice))["state"], "cancelled");
+  // And Bob his own.
+  portico("bob-cancels-own", bobKeys, {"cancel", bob}, &code);
+  EXPECT_EQ(code, 0) << readFile(dir / "bob-cancels-own.log");
+  const auto bobAfter = nlohmann::json::parse(portico("bob-status-after", bobKeys, {"status", bob, "--json"}, &code));
+  EXPECT_EQ(bobAfter["state"], "cancelled");
+  EXPECT_EQ(bobAfter["priority"], 3);
+  const std::string coordinatorLog = readFile(dir / "coordinator.log");
+  EXPECT_NE(coordinatorLog.find("refused to cancel job " + alice), std::string::npos) << coordinatorLog;
 }
 
 TEST_F(Security, TheCoordinatorListensBeyondLoopbackOnlyWithKeys) {

@@ -221,6 +221,8 @@ struct DashboardServer::Impl {
     if (!job || !status.is_object() || !status.contains("settings"))
       return refuse(response, 404, "no such job (yet)");
     const std::string store = status["settings"].value("store", "");
+    // Another user's job: the coordinator keeps its store's path from us.
+    if (store.empty()) return refuse(response, 404, "no floor plan: another user's job");
     std::lock_guard<std::mutex> lock(planMutex);
     auto it = plans.find(store);
     if (it == plans.end()) {

@@ -197,7 +197,8 @@ void FarmPoller::pollRound(net::CoordinatorClient& client) {
       try {
         const auto reply = client.fetchPreview(id, settings_.previewSide);
         const auto preview = reply->envelope().getPreview();
-        if (preview.getJob() == id) {
+        // None with its error (nothing rendered yet; another user's job).
+        if (preview.getJob() == id && preview.getWidth() > 0 && preview.getHeight() > 0) {
           PreviewFrame frame;
           frame.image.width = preview.getWidth();
           frame.image.height = preview.getHeight();

@@ -59,7 +59,9 @@ int64_t lastPhotonBatchOffset(JobStore& store) {
 }
 
 // Back to schema 12: no priorities, no worker pools.
+void dropVersionFourteenColumns(JobStore& store) { store.database().exec("ALTER TABLE jobs DROP COLUMN owner"); }
 void dropVersionThirteenColumns(JobStore& store) {
+  dropVersionFourteenColumns(store);
   store.database().exec("ALTER TABLE jobs DROP COLUMN priority; ALTER TABLE jobs DROP COLUMN required_tags");
 }
 
@@ -364,6 +366,23 @@ TEST_F(JobStoreTest, ADatabaseOfSchemaTwelveMigratesWithEveryJobAtPriorityZeroFo
   ASSERT_EQ(pending.size(), 2u);
   EXPECT_EQ(pending[0].job, 1u);   // the oldest first, as before priorities
   EXPECT_EQ(pending[1].job, 2u);
+}
+
+TEST_F(JobStoreTest, EachJobKeepsItsOwnerAndADatabaseOfSchemaThirteenMigratesWithNone) {
+  {
+    JobStore store(path_.string());
+    store.createJob("spec", 1);
+    dropVersionFourteenColumns(store);
+    store.database().setUserVersion(13);
+  }
+  JobStore migrated(path_.string());
+  EXPECT_EQ(migrated.database().userVersion(), JobStore::kSchemaVersion);
+  EXPECT_EQ(migrated.job(1)->owner, "");   // submitted before owners were kept
+  const uint64_t job = migrated.createJob("spec", 2);
+  migrated.setOwner(job, "key:abc");
+  EXPECT_EQ(migrated.job(job)->owner, "key:abc");
+  EXPECT_EQ(openSnapshot().job(job)->owner, "key:abc");
+  EXPECT_EQ(migrated.jobs(false).back().owner, "key:abc");
 }
 
 TEST_F(JobStoreTest, PendingCellsStayTrueToTheBatchesTableThroughLeasesRequeuesAndRollbacks) {
