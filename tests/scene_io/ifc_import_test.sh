@@ -58,21 +58,7 @@ if problems:
 print(f"ok {camera}: {s['cells']} cells, {s['portals']} portals, {s['doors_with_portal']}/{s['doors']} doors and "
       f"{s['windows_with_portal']}/{s['windows']} windows with a portal, escaped photons {p['escaped']}, rays {r['rays']['escaped']} of {r['rays']['traced']}")
 PY
-  python3 - "$store.png" <<'PY'
-import sys, zlib, struct
-# Mean of the PNG's bytes after inflating (8-bit RGB rows with filter bytes):
-# enough to tell a black image from a lit one without an imaging library.
-data = open(sys.argv[1], "rb").read()
-chunks, i = [], 8
-while i < len(data):
-    n = struct.unpack(">I", data[i:i + 4])[0]
-    if data[i + 4:i + 8] == b"IDAT": chunks.append(data[i + 8:i + 8 + n])
-    i += 12 + n
-raw = zlib.decompress(b"".join(chunks))
-mean = sum(raw) / len(raw)
-if mean < 8: print(f"{sys.argv[1]}: black (mean byte {mean:.1f})"); sys.exit(1)
-print(f"ok {sys.argv[1]}: mean byte {mean:.1f}")
-PY
+  python3 "$(dirname "$0")/png_not_black.py" "$store.png"
 }
 
 check AC20-FZK-Haus.ifc "5 Wohnen" 7 5 11 11
