@@ -15,6 +15,7 @@
 #include "common/scene/store/scene_store.h"
 #include "common/transport/camera_model.h"
 #include "common/transport/cell_kernel.h"
+#include "tests/support/traced_cell.h"
 #include "tests/unit/photometry/ies_test_files.h"
 #include "tests/unit/scene/scene_test_support.h"
 
@@ -83,14 +84,11 @@ struct Render {
 Render render(const std::string& opening) {
   testing_support::TempDirectory temp;
   writeScene(temp / "store", opening);
-  const SceneStore store = SceneStore::open(temp / "store");
-  const std::unique_ptr<CellGeometry> cell = CellGeometry::load(store.cellPath(0), 0, store.materials().size());
-  const std::unique_ptr<Accelerator> accelerator = buildAccelerator(parseAcceleratorSpec("bvh"), cell->mesh());
-  const CellTracer tracer(*cell, *accelerator);
+  const testing_support::TracedCell traced(temp / "store");
   JobSettings settings;
   settings.width = settings.height = kSize;
   settings.spp = 4;
-  CellKernel kernel(store, tracer, settings, nullptr);
+  CellKernel kernel(traced.store, traced.tracer, settings, nullptr);
   Render result;
   kernel.generateCameraRays(0, kSize * kSize, result.out);
   kernel.finishGathers(result.out);

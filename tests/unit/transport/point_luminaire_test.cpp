@@ -15,6 +15,7 @@
 #include "common/scene/store/scene_store.h"
 #include "common/transport/cell_kernel.h"
 #include "common/transport/photon_scattering.h"
+#include "tests/support/traced_cell.h"
 #include "tests/unit/photometry/ies_test_files.h"
 #include "tests/unit/scene/scene_test_support.h"
 
@@ -153,16 +154,13 @@ TEST(PointLuminaire, ACellKernelLightsAPlaneByTheInverseSquareAndCosineLaws) {
   testing_support::TempDirectory temp;
   constexpr uint32_t kSize = 24;
   writePlaneUnderDownlight(temp / "store", kSize);
-  const SceneStore store = SceneStore::open(temp / "store");
-  const std::unique_ptr<CellGeometry> cell = CellGeometry::load(store.cellPath(0), 0, store.materials().size());
-  const std::unique_ptr<Accelerator> accelerator = buildAccelerator(parseAcceleratorSpec("bvh"), cell->mesh());
-  const CellTracer tracer(*cell, *accelerator);
+  const testing_support::TracedCell traced(temp / "store");
   JobSettings settings;
   settings.width = settings.height = kSize;
   // Enough samples that a pixel's mean is its centre's value (E varies by
   // some 4 % across a pixel at 45 degrees).
   settings.spp = 64;
-  CellKernel kernel(store, tracer, settings, nullptr);   // direct light only: no photon map
+  CellKernel kernel(traced.store, traced.tracer, settings, nullptr);   // direct light only: no photon map
   KernelOutputs out;
   kernel.generateCameraRays(0, kSize * kSize, out);
   kernel.finishGathers(out);
