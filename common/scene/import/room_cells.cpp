@@ -284,38 +284,97 @@ void describeRooms(const std::vector<uint32_t>& region, const std::vector<uint8_
   }
 }
 
-// Step 5: boxes greedy in x, then y, then z, each over the free voxels of one
-// region and any solid voxels (a wall goes to whichever box reaches it
-// first: solid voxels join regions arbitrarily, and following them would cut
-// rooms into many small boxes). Returns each voxel's box.
-std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& region, const std::vector<uint8_t>& solid,
-                                   const Grid& grid,
+// Step 5: boxes, each over the air of one region (its free voxels a core
+// reached) and any voxels no region's air needs: solid ones and pockets no
+// core reached. A box starts at the deepest air voxel not yet in a box, rooms
+// before outdoors, so a room's first box starts in its middle; it grows by
+// one layer on each face in turn, as long as the layer's voxels are free for
+// it, so it spreads as the room does and stops where another region's air
+// begins: a room with clear walls is one box, and it takes its walls, floor
+// and ceiling (up to the next room's air), so rays meet them without
+// crossing a portal. Rooms go first so that the building's envelope belongs
+// to its rooms, where rays hit it, not to the outdoors. A box face never
+// runs between two solid voxels unless a box met another there: a wall lying
+// on a face would be hit on the far side of the portal, in the neighbour,
+// from the wrong side (a thin wall split down its middle left 15 % of the
+// light out). Returns each voxel's box.
+std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& air, const std::vector<uint32_t>& owner,
+                                   const std::vector<uint16_t>& distance, const Grid& grid,
                                    std::vector<std::array<uint32_t, 6>>& boxes, std::vector<uint32_t>& boxRegion) {
   std::vector<uint32_t> box(grid.count(), kNone);
-  auto same = [&](uint32_t r, uint32_t x0, uint32_t x1, uint32_t y0, uint32_t y1, uint32_t z0, uint32_t z1) {
-    for (uint32_t z = z0; z < z1; ++z)
-      for (uint32_t y = y0; y < y1; ++y)
-        for (uint32_t x = x0; x < x1; ++x) {
-          const uint64_t v = x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z));
-          if ((region[v] != r && !solid[v]) || box[v] != kNone) return false;
+  auto voxelAt = [&](uint32_t x, uint32_t y, uint32_t z) { return x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z)); };
+  // Whether every voxel of the box b is free for a box of region r and, if
+  // `mostlyAir`, more than half of them are r's air.
+  auto fits = [&](const std::array<uint32_t, 6>& b, uint32_t r, bool mostlyAir) {
+    uint64_t own = 0, all = 0;
+    for (uint32_t z = b[2]; z < b[5]; ++z)
+      for (uint32_t y = b[1]; y < b[4]; ++y)
+        for (uint32_t x = b[0]; x < b[3]; ++x, ++all) {
+          const uint64_t v = voxelAt(x, y, z);
+          if (box[v] != kNone || (air[v] != kNone && air[v] != r)) return false;
+          own += air[v] == r;
         }
-    return true;
+    return !mostlyAir || 2 * own > all;
   };
-  for (uint64_t v = 0; v < grid.count(); ++v) {
-    if (box[v] != kNone) continue;
+  auto grow = [&](uint32_t id, bool mostlyAir) {
+    std::array<uint32_t, 6>& b = boxes[id];
+    std::array<bool, 6> open{true, true, true, true, true, true};
+    while (std::find(open.begin(), open.end(), true) != open.end()) {
+      for (int face = 0; face < 6; ++face) {
+        if (!open[face]) continue;
+        // A face stays shut once shut: its layer only widens, and what blocked it stays.
+        const int axis = face / 2;
+        const bool up = face % 2 == 1;
+        std::array<uint32_t, 6> layer = b;
+        if (up ? b[axis + 3] >= grid.n[axis] : b[axis] == 0) {
+          open[face] = false;
+          continue;
+        }
+        if (up)
+          layer[axis] = b[axis + 3], layer[axis + 3] = b[axis + 3] + 1;
+        else
+          layer[axis + 3] = b[axis], layer[axis] = b[axis] - 1;
+        if (!fits(layer, boxRegion[id], mostlyAir)) {
+          open[face] = false;
+          continue;
+        }
+        for (uint32_t z = layer[2]; z < layer[5]; ++z)
+          for (uint32_t y = layer[1]; y < layer[4]; ++y)
+            for (uint32_t x = layer[0]; x < layer[3]; ++x) box[voxelAt(x, y, z)] = id;
+        (up ? b[axis + 3] : b[axis]) = up ? b[axis + 3] + 1 : b[axis] - 1;
+      }
+    }
+  };
+  auto startBox = [&](uint64_t v, uint32_t r) {
     const auto c = grid.coordinates(v);
-    uint32_t r = region[v];
-    uint32_t x1 = c[0] + 1, y1 = c[1] + 1, z1 = c[2] + 1;
-    while (x1 < grid.n[0] && same(r, x1, x1 + 1, c[1], y1, c[2], z1)) ++x1;
-    while (y1 < grid.n[1] && same(r, c[0], x1, y1, y1 + 1, c[2], z1)) ++y1;
-    while (z1 < grid.n[2] && same(r, c[0], x1, c[1], y1, z1, z1 + 1)) ++z1;
     const auto id = uint32_t(boxes.size());
+    boxes.push_back({c[0], c[1], c[2], c[0] + 1, c[1] + 1, c[2] + 1});
     boxRegion.push_back(r);
-    boxes.push_back({c[0], c[1], c[2], x1, y1, z1});
-    for (uint32_t z = c[2]; z < z1; ++z)
-      for (uint32_t y = c[1]; y < y1; ++y)
-        for (uint32_t x = c[0]; x < x1; ++x) box[x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z))] = id;
-  }
+    box[v] = id;
+    // First over the room's air (stopping at its walls, not at the first
+    // doorway a face reaches), then on through its walls.
+    grow(id, true);
+    grow(id, false);
+  };
+  // Air voxels in the order boxes start from them (rooms' air, deepest
+  // first, then the outdoors', deepest first; each in index order): a
+  // counting sort on that rank.
+  uint16_t deepest = 0;
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (air[v] != kNone) deepest = std::max(deepest, distance[v]);
+  auto rank = [&](uint64_t v) { return size_t(air[v] == 0 ? deepest + 1 : 0) + (deepest - distance[v]); };
+  std::vector<uint64_t> start(2 * (size_t(deepest) + 1) + 1, 0);
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (air[v] != kNone) ++start[rank(v) + 1];
+  for (size_t k = 1; k < start.size(); ++k) start[k] += start[k - 1];
+  std::vector<uint32_t> order(start.back());
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (air[v] != kNone) order[start[rank(v)]++] = uint32_t(v);
+  for (uint32_t v : order)
+    if (box[v] == kNone) startBox(v, air[v]);
+  // Wall voxels no box could take (boxes met around them): boxes of their own.
+  for (uint64_t v = 0; v < grid.count(); ++v)
+    if (box[v] == kNone) startBox(v, owner[v]);
   return box;
 }
 
@@ -420,13 +479,15 @@ FoundRooms findRooms(const ImportedScene& scene, const std::string& source, cons
                               options.openingWidth, rooms.voxelSize));
   describeRooms(region, solid, distance, grid, rooms);
   describeShelteredAir(region, solid, distance, grid, coreDistance, minCoreVoxels, rooms);
+  // Each region's air: its free voxels a core reached (kNone elsewhere).
+  const std::vector<uint32_t> air = region;
   // Solid voxels and pockets no core reached (inside thick walls) join the region beside them.
   growLabels(grid, region, [](uint64_t) { return true; });
 
   report(options, "boxes", 0.0);
   std::vector<std::array<uint32_t, 6>> boxes;
   std::vector<uint32_t> boxRegion;
-  rooms.voxelCell = cutIntoBoxes(region, solid, grid, boxes, boxRegion);
+  rooms.voxelCell = cutIntoBoxes(air, region, distance, grid, boxes, boxRegion);
   std::vector<uint32_t> boxesInRegion(rooms.rooms + 1, 0);
   for (size_t k = 0; k < boxes.size(); ++k) {
     const auto& b = boxes[k];
