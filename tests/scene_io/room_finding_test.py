@@ -7,7 +7,9 @@ building fails with one line naming it.
 
 Usage: room_finding_test.py BIN_DIR [--preset NAME] [--floors N]   (default demo; the image check runs on demo only)
 Prints the figures; exits 1 when a target is missed."""
+import itertools
 import json
+import math
 import shutil
 import sqlite3
 import struct
@@ -38,16 +40,28 @@ def indoor(name):
     return name != "sky" and not name.startswith("facade")
 
 
-def locate(cells, p):
-    for i, (name, lo, hi) in cells.items():
-        if all(lo[k] <= p[k] < hi[k] for k in range(3)):
-            return i
-    return None
+class CellIndex:
+    """The cells overlapping each 1 m bucket of space: a point's cell is looked up among a few, not all."""
+    def __init__(self, cells):
+        self.cells = cells
+        self.buckets = {}
+        for i, (name, lo, hi) in cells.items():
+            ranges = [range(math.floor(lo[k]), math.floor(hi[k]) + 1) for k in range(3)]
+            for key in itertools.product(*ranges):
+                self.buckets.setdefault(key, []).append(i)
+
+    def locate(self, p):
+        for i in self.buckets.get(tuple(math.floor(p[k]) for k in range(3)), ()):
+            name, lo, hi = self.cells[i]
+            if all(lo[k] <= p[k] < hi[k] for k in range(3)):
+                return i
+        return None
 
 
 def compare(truth_store, found_store):
     truth, truth_portals = cells_and_portals(truth_store)
     found, found_portals = cells_and_portals(found_store)
+    index = CellIndex(found)
     # A generated room is found when 90 % of the points of a 0.25 m lattice inside it (0.3 m in from its walls,
     # below 2.5 m) lie in one region that no other generated room shares.
     dominant = {}
@@ -60,7 +74,7 @@ def compare(truth_store, found_store):
             z = lo[2] + 0.3
             while z < hi[2] - 0.3:
                 for y in (lo[1] + 0.5, lo[1] + 1.5, lo[1] + 2.4):
-                    c = locate(found, (x, y, z))
+                    c = index.locate((x, y, z))
                     if c is not None:
                         r = region_of(found[c][0])
                         votes[r] = votes.get(r, 0) + 1
@@ -85,20 +99,21 @@ def compare(truth_store, found_store):
         return dominant[cell][0] if cell in dominant else 0
     openings = [(a, b, poly) for a, b, poly in truth_portals if indoor(truth[a][0]) or indoor(truth[b][0])]
     openings = [o for o in openings if region_side(o[0]) != region_side(o[1])]
+    # The found portals' boxes by the pair of regions they join.
+    joining = {}
+    for fa, fb, fpoly in found_portals:
+        pair = frozenset((region_of(found[fa][0]), region_of(found[fb][0])))
+        joining.setdefault(pair, []).append(([min(p[k] for p in fpoly) for k in range(3)],
+                                             [max(p[k] for p in fpoly) for k in range(3)]))
     found_openings = 0
     for a, b, poly in openings:
         centre = [sum(p[k] for p in poly) / len(poly) for k in range(3)]
         extent = [max(p[k] for p in poly) - min(p[k] for p in poly) for k in range(3)]
         normal = extent.index(min(extent))
-        want = {region_side(a), region_side(b)}
-        for fa, fb, fpoly in found_portals:
-            if {region_of(found[fa][0]), region_of(found[fb][0])} != want:
-                continue
-            lo = [min(p[k] for p in fpoly) - (0.6 if k == normal else 0.11) for k in range(3)]
-            hi = [max(p[k] for p in fpoly) + (0.6 if k == normal else 0.11) for k in range(3)]
-            if all(lo[k] <= centre[k] <= hi[k] for k in range(3)):
-                found_openings += 1
-                break
+        margin = [0.6 if k == normal else 0.11 for k in range(3)]
+        if any(all(lo[k] - margin[k] <= centre[k] <= hi[k] + margin[k] for k in range(3))
+               for lo, hi in joining.get(frozenset((region_side(a), region_side(b))), ())):
+            found_openings += 1
     rooms = sum(1 for r in owners if r != 0)
     return {"generated_rooms": len(generated_rooms), "generated_indoor_cells": len(dominant), "regions": rooms, "rooms_found": rooms_found,
             "openings": len(openings), "openings_found": found_openings,

@@ -299,24 +299,29 @@ void describeRooms(const std::vector<uint32_t>& region, const std::vector<uint8_
 // from the wrong side (a thin wall split down its middle left 15 % of the
 // light out). Returns each voxel's box.
 std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& air, const std::vector<uint32_t>& owner,
-                                   const std::vector<uint16_t>& distance, const Grid& grid,
+                                   const std::vector<uint16_t>& distance, uint16_t coreDistance, const Grid& grid,
                                    std::vector<std::array<uint32_t, 6>>& boxes, std::vector<uint32_t>& boxRegion) {
   std::vector<uint32_t> box(grid.count(), kNone);
+  std::vector<uint8_t> undone;   // voxels of the small boxes undone (below)
   auto voxelAt = [&](uint32_t x, uint32_t y, uint32_t z) { return x + grid.n[0] * (uint64_t(y) + grid.n[1] * uint64_t(z)); };
-  // Whether every voxel of the box b is free for a box of region r and, if
-  // `mostlyAir`, more than half of them are r's air.
-  auto fits = [&](const std::array<uint32_t, 6>& b, uint32_t r, bool mostlyAir) {
+  // How a box grows: over its region's air (more than half of each layer),
+  // through walls (any voxel but another region's air), or through walls
+  // and openings (also another region's air left by an undone small box).
+  enum class Over { Air, Walls, Openings };
+  // Whether every voxel of the box b is free for a box of region r growing `over`.
+  auto fits = [&](const std::array<uint32_t, 6>& b, uint32_t r, Over over) {
     uint64_t own = 0, all = 0;
     for (uint32_t z = b[2]; z < b[5]; ++z)
       for (uint32_t y = b[1]; y < b[4]; ++y)
         for (uint32_t x = b[0]; x < b[3]; ++x, ++all) {
           const uint64_t v = voxelAt(x, y, z);
-          if (box[v] != kNone || (air[v] != kNone && air[v] != r)) return false;
+          if (box[v] != kNone) return false;
+          if (air[v] != kNone && air[v] != r && !(over == Over::Openings && undone[v])) return false;
           own += air[v] == r;
         }
-    return !mostlyAir || 2 * own > all;
+    return over != Over::Air || 2 * own > all;
   };
-  auto grow = [&](uint32_t id, bool mostlyAir) {
+  auto grow = [&](uint32_t id, Over over) {
     std::array<uint32_t, 6>& b = boxes[id];
     std::array<bool, 6> open{true, true, true, true, true, true};
     while (std::find(open.begin(), open.end(), true) != open.end()) {
@@ -334,7 +339,7 @@ std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& air, const std::
           layer[axis] = b[axis + 3], layer[axis + 3] = b[axis + 3] + 1;
         else
           layer[axis + 3] = b[axis], layer[axis] = b[axis] - 1;
-        if (!fits(layer, boxRegion[id], mostlyAir)) {
+        if (!fits(layer, boxRegion[id], over)) {
           open[face] = false;
           continue;
         }
@@ -351,10 +356,7 @@ std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& air, const std::
     boxes.push_back({c[0], c[1], c[2], c[0] + 1, c[1] + 1, c[2] + 1});
     boxRegion.push_back(r);
     box[v] = id;
-    // First over the room's air (stopping at its walls, not at the first
-    // doorway a face reaches), then on through its walls.
-    grow(id, true);
-    grow(id, false);
+    return id;
   };
   // Air voxels in the order boxes start from them (rooms' air, deepest
   // first, then the outdoors', deepest first; each in index order): a
@@ -371,10 +373,43 @@ std::vector<uint32_t> cutIntoBoxes(const std::vector<uint32_t>& air, const std::
   for (uint64_t v = 0; v < grid.count(); ++v)
     if (air[v] != kNone) order[start[rank(v)]++] = uint32_t(v);
   for (uint32_t v : order)
-    if (box[v] == kNone) startBox(v, air[v]);
-  // Wall voxels no box could take (boxes met around them): boxes of their own.
+    if (box[v] == kNone) {
+      // First over the room's air (stopping at its walls, not at the first
+      // doorway a face reaches), then on through its walls.
+      const uint32_t id = startBox(v, air[v]);
+      grow(id, Over::Air);
+      grow(id, Over::Walls);
+    }
+  // Where two regions' fronts met at random (in a door or a window, the
+  // border runs diagonally), and in a wall's cavity that some region's air
+  // leaked into, the boxes above leave slivers. Small boxes and those two
+  // voxels thin or less are undone, and the others grow on into their
+  // voxels, as into a wall's: an opening's air goes to whichever room's box
+  // reaches it first.
+  const uint64_t smallBox = uint64_t(coreDistance) * coreDistance * coreDistance;
+  undone.assign(grid.count(), 0);
+  std::vector<uint32_t> kept(boxes.size(), kNone);
+  std::vector<std::array<uint32_t, 6>> largeBoxes;
+  std::vector<uint32_t> largeRegion;
+  for (uint32_t id = 0; id < boxes.size(); ++id) {
+    const auto& b = boxes[id];
+    const uint32_t thinnest = std::min({b[3] - b[0], b[4] - b[1], b[5] - b[2]});
+    if (uint64_t(b[3] - b[0]) * (b[4] - b[1]) * (b[5] - b[2]) < smallBox || thinnest <= 2) continue;
+    kept[id] = uint32_t(largeBoxes.size());
+    largeBoxes.push_back(b);
+    largeRegion.push_back(boxRegion[id]);
+  }
+  for (uint64_t v = 0; v < grid.count(); ++v) {
+    if (box[v] == kNone) continue;   // a wall's voxel no box took
+    box[v] = kept[box[v]];
+    undone[v] = box[v] == kNone;
+  }
+  boxes = std::move(largeBoxes);
+  boxRegion = std::move(largeRegion);
+  for (uint32_t id = 0; id < boxes.size(); ++id) grow(id, Over::Openings);
+  // Voxels no large box could take (boxes met around them): boxes of their own.
   for (uint64_t v = 0; v < grid.count(); ++v)
-    if (box[v] == kNone) startBox(v, owner[v]);
+    if (box[v] == kNone) grow(startBox(v, owner[v]), Over::Openings);
   return box;
 }
 
@@ -487,7 +522,7 @@ FoundRooms findRooms(const ImportedScene& scene, const std::string& source, cons
   report(options, "boxes", 0.0);
   std::vector<std::array<uint32_t, 6>> boxes;
   std::vector<uint32_t> boxRegion;
-  rooms.voxelCell = cutIntoBoxes(air, region, distance, grid, boxes, boxRegion);
+  rooms.voxelCell = cutIntoBoxes(air, region, distance, coreDistance, grid, boxes, boxRegion);
   std::vector<uint32_t> boxesInRegion(rooms.rooms + 1, 0);
   for (size_t k = 0; k < boxes.size(); ++k) {
     const auto& b = boxes[k];
