@@ -16,11 +16,16 @@
 //     (breadth-first over free voxels from all cores at once, ties to the
 //     lower voxel index: deterministic); then solid voxels and unreached
 //     pockets join the region next to them, so every voxel has a region.
-//  5. Each region is cut into boxes (greedy: grow along x, then y, then z),
-//     the cells. Two boxes meeting on a face are joined by one portal: the
-//     whole face they share. (Bounding only the voxel faces with free space
-//     beside them let a third of the photons out: a ray grazing a wall
-//     crosses faces between voxels its triangles only touch.)
+//  5. Each region is cut into few large boxes, the cells (a cell is a box):
+//     one grows from each room's deepest air voxel, first over the room's
+//     air, then through its walls, floor and ceiling up to the next
+//     region's air; rooms before outdoors, so rays hit a room's envelope
+//     inside its own cell. Slivers left where regions' fronts meet in an
+//     opening are undone and taken by the large boxes. Two boxes meeting on
+//     a face are joined by one portal: the whole face they share. (Bounding
+//     only the voxel faces with free space beside them let a third of the
+//     photons out: a ray grazing a wall crosses faces between voxels its
+//     triangles only touch.)
 //
 // Cells are named "room-R-B" (region R from 1, box B) and "outdoors-B".
 // Each room's air (the free voxels its core reached: not the inside of a
