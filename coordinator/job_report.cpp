@@ -151,6 +151,7 @@ nlohmann::json statisticsOf(JobStore& store, const JobRecord& job, wire::JobSpec
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
+                       {"light_sampling", spec.getLightSampling() == wire::LightSampling::SCAN ? "scan" : "tree"},
                        {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
                        {"aov", spec.getAov() == wire::Aov::CELLS     ? "cells"
                                : spec.getAov() == wire::Aov::PORTALS ? "portals"

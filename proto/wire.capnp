@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 20;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture)
+const protocolVersion :UInt32 = 21;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture); 21: JobSpec.lightSampling (light tree or scan)
 
 enum Phase {
   photons @0;
@@ -141,6 +141,7 @@ struct JobSpec {
   daylight @24 :Daylight;  # absent: no daylight
   analysis @25 :Analysis;  # present: a lighting analysis (illuminance at sensors), not an image
   luminance @26 :LuminanceImage;  # present: the image in cd/m^2 (--aov luminance), with its false-colour picture
+  lightSampling @27 :LightSampling;  # how a shading point chooses a light (a spec from before the light tree reads as scan)
 }
 
 # A render's image in photometric units (common/job/job_settings.h
@@ -218,6 +219,11 @@ struct JobCamera {
   upZ @8 :Float32;
   fovY @9 :Float32;        # full vertical angle, degrees; 0 (in a Submit): the store camera's
   cell @10 :UInt32;        # the cell containing the eye (set by the coordinator)
+}
+
+enum LightSampling {
+  scan @0;                 # every candidate light weighed at each shading point
+  tree @1;                 # one descent of a light tree over the candidates
 }
 
 enum Irradiance {

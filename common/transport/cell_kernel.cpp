@@ -105,7 +105,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       lights_.push_back(light);
     }
   }
-  lightSampler_.emplace(lights_, std::move(candidates));
+  lightSampler_.emplace(lights_, std::move(candidates), parameters.lightSampling);
 }
 
 bool CellKernel::emitsHere(uint32_t light) const {

@@ -56,8 +56,13 @@ std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t
   return ids;
 }
 
-LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates)
+LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates,
+                           LightSampling sampling)
     : candidates_(std::move(candidates)) {
+  if (sampling == LightSampling::Tree) {
+    tree_.emplace(lights, candidates_);
+    return;
+  }
   prepared_.reserve(candidates_.size());
   for (uint32_t id : candidates_) {
     const AreaLight& light = lights[id];
@@ -80,6 +85,10 @@ LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uin
 }
 
 LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u) const {
+  return tree_ ? tree_->choose(point, normal, u) : scan(point, normal, u);
+}
+
+LightChoice LightSampler::scan(const Vec3& point, const Vec3& normal, float u) const {
   thread_local std::vector<double> cumulative;
   cumulative.assign(candidates_.size(), 0.0);
   double total = 0;
