@@ -122,7 +122,7 @@ struct JobSpec {
   aov @13 :Aov;            # what the image shows
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
   irradiance @15 :Irradiance;  # what a final-gather hit reads
-  renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
+  renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid or auto, else accel)
   camera @17 :JobCamera;   # absent (in a Submit): the store's camera; always present once resolved
   # Progressive rendering (docs/architecture.md, "Render passes"): the render
   # phase runs passes of `spp` samples per pixel, each with its own seed,

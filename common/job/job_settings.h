@@ -106,9 +106,13 @@ constexpr uint32_t kAnalysisLightSamples = 4;
 struct JobSettings {
   std::string store;                 // scene store directory (absolute once submitted)
   std::string output;                // image path (.png or .exr)
-  std::string accel = "grid";        // per-cell accelerator of the photon pass
-  // Render leases' structure; "" (automatic): bvh with the grid, else the
-  // accel. Render rays are many per triangle: bvh traces camera rays
+  // Per-cell accelerator of the photon pass. auto (each cell's structure
+  // chosen by the cost model) is the fastest photon pass of grid, bvh and
+  // auto on every preset of `portico bench pipeline`
+  // (docs/pipeline-benchmark.md).
+  std::string accel = "auto";
+  // Render leases' structure; "" (automatic): bvh with grid or auto, else
+  // the accel. Render rays are many per triangle: bvh traces camera rays
   // 1.3-1.9x as fast as kd:sah and builds 2.5x as fast
   // (docs/accelerator-benchmarks.md).
   std::string renderAccel;

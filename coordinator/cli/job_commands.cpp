@@ -285,8 +285,8 @@ void addLightingOptions(CLI::App& command, JobSettings& o, const std::string& sa
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
   command.add_option("--render-accel", o.renderAccel,
-                     "accelerator of the render phase (default: bvh with the default --accel grid, else the "
-                     "--accel)");
+                     "accelerator of the render phase (default: bvh with --accel auto, the default, or grid; else "
+                     "the --accel)");
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
   command.add_option("--photons", o.photons,
