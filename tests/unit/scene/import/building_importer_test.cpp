@@ -1174,3 +1174,107 @@ TEST(BuildingImportPhotometric, BadPhotometricInputGivesOneLineErrors) {
 
 }  // namespace
 }  // namespace portico
+
+// ---------------------------------------------------------------- finishes
+
+namespace portico {
+namespace {
+
+const Material* finishNamed(const SceneStore& store, const std::string& name) {
+  for (const Material& material : store.materials())
+    if (material.name == name) return &material;
+  return nullptr;
+}
+
+// building.json's "finish" (docs/materials.md): the glossy reference scene.
+TEST(BuildingImportFinish, BuildingJsonFinishesMakePlasticAndMetal) {
+  TempDirectory temp;
+  importBuilding({referenceJson("glossy_cabinet")}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  const Material* floor = finishNamed(store, "floor");
+  const Material* cabinet = finishNamed(store, "cabinet");
+  ASSERT_TRUE(floor && cabinet);
+  EXPECT_EQ(floor->finish, Finish::Plastic);
+  EXPECT_EQ(floor->roughness, 0.3f);
+  EXPECT_EQ(floor->specular, Vec3(1.0f));
+  EXPECT_EQ(floor->albedo, Vec3(0.725f, 0.71f, 0.68f));
+  EXPECT_EQ(cabinet->finish, Finish::Metal);
+  EXPECT_EQ(cabinet->specular, Vec3(0.95f, 0.64f, 0.54f));
+  EXPECT_EQ(cabinet->albedo, Vec3(0.0f));
+  EXPECT_EQ(finishNamed(store, "ceiling")->finish, Finish::Matte);
+}
+
+TEST(BuildingImportFinish, BadFinishesGiveOneLineErrorsNamingTheObject) {
+  TempDirectory temp;
+  BrokenBuilding building(temp);
+  const std::string path = (temp.path() / "building.json").string();
+  const std::string floor = R"("albedo": [0.5, 0.5, 0.5], "emission": null)";
+  EXPECT_EQ(building.importError({{floor, R"("finish": {"type": "plastic"})"}}),
+            path + ": objects[0] ('floor'): a plastic finish coats the object's \"albedo\"; give one");
+  EXPECT_EQ(building.importError({{floor, floor + R"(, "finish": {"type": "metal"})"}}),
+            path + ": objects[0] ('floor'): a metal has no diffuse part; give its \"colour\" in the finish, not \"albedo\"");
+  EXPECT_EQ(building.importError({{floor, R"("finish": {"type": "velvet"})"}}),
+            path + ": objects[0] ('floor'): finish type 'velvet' is not plastic, metal or mirror");
+  EXPECT_EQ(building.importError({{floor, R"("finish": {"type": "metal", "roughness": 1.5})"}}),
+            path + ": objects[0] ('floor'): finish roughness 1.5 must be from 0 to 1");
+  EXPECT_EQ(building.importError({{floor, R"("finish": {"type": "mirror", "roughness": 0.2})"}}),
+            path + ": objects[0] ('floor') finish: unknown key \"roughness\" (known: type, colour; keys starting "
+                   "with '_' are ignored)");
+}
+
+// An MTL's Ks/Ns (a Phong lobe) and Pm/Pr (PBR) become finishes.
+TEST(BuildingImportFinish, MtlSpecularAndPbrKeysMakeFinishes) {
+  TempDirectory temp;
+  writeText(temp.path() / "f.mtl",
+            "newmtl varnish\nKd 0.5 0.4 0.3\nKs 0.5 0.5 0.25\nNs 98\n\n"
+            "newmtl brass\nKd 0.9 0.7 0.3\nPm 1\nPr 0.2\n\nnewmtl wall\nKd 0.5 0.5 0.5\n");
+  writeText(temp.path() / "f.obj",
+            "mtllib f.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl varnish\nf 1 2 3\nusemtl brass\nf 1 3 4\n"
+            "usemtl wall\nf 1 2 4\n");
+  importBuilding({temp / "f.obj"}, temp / "store");
+  const SceneStore store = SceneStore::open(temp / "store");
+  const Material* varnish = finishNamed(store, "varnish");
+  const Material* brass = finishNamed(store, "brass");
+  ASSERT_TRUE(varnish && brass);
+  EXPECT_EQ(varnish->finish, Finish::Plastic);
+  EXPECT_EQ(varnish->specular, Vec3(1.0f, 1.0f, 0.5f));
+  EXPECT_NEAR(varnish->roughness, std::sqrt(std::sqrt(2.0f / 100.0f)), 1e-6f);
+  EXPECT_EQ(brass->finish, Finish::Metal);
+  EXPECT_EQ(brass->specular, Vec3(0.9f, 0.7f, 0.3f));
+  EXPECT_NEAR(brass->roughness, 0.2f, 1e-6f);
+  EXPECT_EQ(finishNamed(store, "wall")->finish, Finish::Matte);
+}
+
+// glTF's metallicRoughness: a metal of the base colour; below metallic 0.5 a
+// plastic tinted by KHR_materials_specular; roughness 1 (the default) matte.
+TEST(BuildingImportFinish, GltfMetallicRoughnessMakesFinishes) {
+  TempDirectory temp;
+  const std::string plain = R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.25, 0.5, 0.75, 1]}}])";
+  const auto importWith = [&](const std::string& material, const std::string& name) {
+    std::string text = gltfTriangle(R"("translation": [0, 0, 0])");
+    text.replace(text.find(plain), plain.size(), material);
+    writeText(temp.path() / (name + ".gltf"), text);
+    importBuilding({temp / (name + ".gltf")}, temp / name);
+    return SceneStore::open(temp / name).materials().at(0);
+  };
+  const Material metal = importWith(
+      R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.5, 1], "metallicFactor": 1,
+          "roughnessFactor": 0.25}}])",
+      "metal");
+  EXPECT_EQ(metal.finish, Finish::Metal);
+  EXPECT_EQ(metal.specular, Vec3(0.9f, 0.6f, 0.5f));
+  EXPECT_EQ(metal.roughness, 0.25f);
+  const Material plastic = importWith(
+      R"("materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.3, 0.4, 1], "metallicFactor": 0,
+          "roughnessFactor": 0.5}, "extensions": {"KHR_materials_specular": {"specularColorFactor": [1, 0.5, 0.5]}}}],
+          "extensionsUsed": ["KHR_materials_specular"])",
+      "plastic");
+  EXPECT_EQ(plastic.finish, Finish::Plastic);
+  EXPECT_EQ(plastic.albedo, Vec3(0.2f, 0.3f, 0.4f));
+  EXPECT_EQ(plastic.specular, Vec3(1.0f, 0.5f, 0.5f));
+  EXPECT_EQ(plastic.roughness, 0.5f);
+  EXPECT_EQ(importWith(plain, "matte").finish, Finish::Matte);
+}
+
+}  // namespace
+}  // namespace portico
