@@ -29,11 +29,6 @@ constexpr uint32_t PixelPattern = 10;
 // A point on the sun's disc, where the direction dimensions are taken.
 constexpr uint32_t SunU = 11;
 constexpr uint32_t SunV = 12;
-// A glossy surface: which part a photon or gather ray goes on by, and the
-// microfacet normal its glossy part draws.
-constexpr uint32_t LobeChoice = 13;
-constexpr uint32_t LobeU = 14;
-constexpr uint32_t LobeV = 15;
 }  // namespace dim
 
 // SplitMix64 finaliser: a bijective 64-bit mixer with full avalanche.

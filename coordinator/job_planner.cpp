@@ -175,7 +175,8 @@ JobSettings resolveJobSettings(JobSettings settings, const SceneStore& scene) {
   if (settings.accel.empty()) settings.accel = defaults.accel;
   // Render leases may build another structure: they trace many rays per
   // triangle, where one that costs more to build and less to trace pays.
-  if (settings.renderAccel.empty()) settings.renderAccel = settings.accel == "grid" ? "bvh" : settings.accel;
+  if (settings.renderAccel.empty())
+    settings.renderAccel = settings.accel == "grid" || settings.accel == "auto" ? "bvh" : settings.accel;
   if (settings.lightHops == kAutomaticLightHops) {
     // Lights a couple of rooms away matter; a couple of voxels away is no
     // distance at all: voxel cells sample every light.

@@ -151,6 +151,7 @@ nlohmann::json statisticsOf(JobStore& store, const JobRecord& job, wire::JobSpec
                        {"light_samples", spec.getLightSamples()}, {"photon_k", spec.getPhotonK()},
                        {"photon_radius", spec.getPhotonRadius()}, {"gather", spec.getGather()},
                        {"light_hops", spec.getLightHops()},
+                       {"light_sampling", spec.getLightSampling() == wire::LightSampling::SCAN ? "scan" : "tree"},
                        {"irradiance", spec.getIrradiance() == wire::Irradiance::KNN ? "knn" : "precomputed"},
                        {"aov", spec.getAov() == wire::Aov::CELLS     ? "cells"
                                : spec.getAov() == wire::Aov::PORTALS ? "portals"
@@ -179,7 +180,6 @@ nlohmann::json statisticsOf(JobStore& store, const JobRecord& job, wire::JobSpec
                    {"shadow", get(counters, "rays.shadow")},
                    {"gather", get(counters, "rays.gather")},
                    {"gather_short", get(counters, "rays.gather_short")},
-                   {"glossy", get(counters, "rays.glossy")},
                    {"shadow_blocked", get(counters, "rays.shadow_blocked")},
                    {"shadow_reached", get(counters, "rays.shadow_reached")},
                    {"escaped", get(counters, "rays.escaped")},

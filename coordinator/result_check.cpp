@@ -28,7 +28,7 @@ namespace {
 struct ResultCounters {
   int64_t emitted = 0, absorbed = 0, escaped = 0, deposits = 0, copies = 0;
   int64_t camera = 0, rayCrossings = 0, invalid = 0, filmOutOfRange = 0;
-  int64_t emission = 0, shadow = 0, gather = 0, glossy = 0, finished = 0, sensorsMeasured = 0;
+  int64_t emission = 0, shadow = 0, gather = 0, finished = 0, sensorsMeasured = 0;
 };
 
 ResultCounters readCounters(wire::Result::Reader result) {
@@ -48,7 +48,6 @@ ResultCounters readCounters(wire::Result::Reader result) {
     else if (name == "rays.emission") c.emission = value;
     else if (name == "rays.shadow") c.shadow = value;
     else if (name == "rays.gather") c.gather = value;
-    else if (name == "rays.glossy") c.glossy = value;
     else if (name == "rays.finished") c.finished = value;
     else if (name == "sensors.measured") c.sensorsMeasured = value;
     else if (name == kFilmOutOfRangeCounter) c.filmOutOfRange = value;
@@ -114,16 +113,16 @@ void checkResultCounts(const LeaseExpectation* expected, int phase, wire::Result
     throw BadResultError(
         fmt::format("it measured {} sensors, its lease asked for {}", c.sensorsMeasured, expected->sensors));
   // Every ray it started (its camera samples, the rays it received, and the
-  // emission, shadow, gather and glossy rays it spawned) ended once: in it, or
+  // emission, shadow and gather rays it spawned) ended once: in it, or
   // handed on. Rays it traced on in cells it holds (rays.forwarded) left
   // its crossings and ended there, so they count once too.
-  const int64_t started = c.camera + c.emission + expected->raysIn + c.shadow + c.gather + c.glossy;
+  const int64_t started = c.camera + c.emission + expected->raysIn + c.shadow + c.gather;
   const int64_t handedOn = raysHandedOn(result);
   if (started != c.finished + c.invalid + handedOn)
     throw BadResultError(fmt::format("its rays do not add up: {} camera + {} emission + {} received + {} shadow + {} "
-                                     "gather + {} glossy != {} finished + {} invalid + {} handed on",
-                                     c.camera, c.emission, expected->raysIn, c.shadow, c.gather, c.glossy,
-                                     c.finished, c.invalid, handedOn));
+                                     "gather != {} finished + {} invalid + {} handed on",
+                                     c.camera, c.emission, expected->raysIn, c.shadow, c.gather, c.finished,
+                                     c.invalid, handedOn));
 }
 
 void checkFilmValue(wire::PixelSum::Reader pixel, uint64_t pixelCount) {

@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 21;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture); 21: Ray.glossy and emissionWeight (paths through glossy surfaces)
+const protocolVersion :UInt32 = 21;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture); 21: JobSpec.lightSampling (light tree or scan)
 
 enum Phase {
   photons @0;
@@ -36,8 +36,6 @@ struct Ray {
   r @12 :Float32;          # power, throughput or contribution
   g @13 :Float32;
   b @14 :Float32;
-  glossy @15 :UInt8;                  # glossy bounces (low 7 bits) and a mirror's mark (top bit)
-  emissionWeight @16 :Float32 = 1.0;  # the MIS weight of the emitted light it meets
 }
 
 # Photons for one cell's table: those that landed in it, and copies of those
@@ -124,7 +122,7 @@ struct JobSpec {
   aov @13 :Aov;            # what the image shows
   lightHops @14 :Int32 = 2;  # sample lights of cells within this many portals (-1: every light; -2: 2 for room cells, every light for voxel cells)
   irradiance @15 :Irradiance;  # what a final-gather hit reads
-  renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid, else accel)
+  renderAccel @16 :Text;   # accelerator of render leases ("" in a Submit: bvh with grid or auto, else accel)
   camera @17 :JobCamera;   # absent (in a Submit): the store's camera; always present once resolved
   # Progressive rendering (docs/architecture.md, "Render passes"): the render
   # phase runs passes of `spp` samples per pixel, each with its own seed,
@@ -143,6 +141,7 @@ struct JobSpec {
   daylight @24 :Daylight;  # absent: no daylight
   analysis @25 :Analysis;  # present: a lighting analysis (illuminance at sensors), not an image
   luminance @26 :LuminanceImage;  # present: the image in cd/m^2 (--aov luminance), with its false-colour picture
+  lightSampling @27 :LightSampling;  # how a shading point chooses a light (a spec from before the light tree reads as scan)
 }
 
 # A render's image in photometric units (common/job/job_settings.h
@@ -220,6 +219,11 @@ struct JobCamera {
   upZ @8 :Float32;
   fovY @9 :Float32;        # full vertical angle, degrees; 0 (in a Submit): the store camera's
   cell @10 :UInt32;        # the cell containing the eye (set by the coordinator)
+}
+
+enum LightSampling {
+  scan @0;                 # every candidate light weighed at each shading point
+  tree @1;                 # one descent of a light tree over the candidates
 }
 
 enum Irradiance {

@@ -76,19 +76,52 @@ void CellCache::evict(Entry* victim) {
     maps_.erase(*victim->mapKey);
 }
 
-void CellCache::makeRoom(uint64_t bytes) {
-  bool evicted = false;
-  for (auto it = recency_.end(); it != recency_.begin() && held_ + bytes > budget_;) {
+uint64_t CellCache::evictUntil(const std::function<bool(uint64_t evicted)>& enough) {
+  uint64_t evicted = 0;
+  for (auto it = recency_.end(); it != recency_.begin() && !enough(evicted);) {
     --it;
     Entry* entry = *it;
     if (entry->pinnedEpoch == epoch_) continue;   // the lease in progress uses it
     it = std::next(it);
+    evicted += entry->bytes;
     evict(entry);
-    evicted = true;
   }
+  return evicted;
+}
+
+void CellCache::makeRoom(uint64_t bytes) {
+  bool trimmed = false;
   // Give freed pages back to the system, so that the worker's resident
   // size follows what the cache holds.
-  if (evicted) ::malloc_trim(0);
+  if (evictUntil([&](uint64_t) { return held_ + bytes <= budget_; }) > 0) {
+    ::malloc_trim(0);
+    trimmed = true;
+  }
+  if (residentLimit_ == 0) return;
+  uint64_t resident = residentBytes();
+  while (resident + bytes > residentLimit_) {
+    if (!trimmed) {
+      // The heap's free pages first: they cost a page fault when used again,
+      // a reload costs the cell.
+      ::malloc_trim(0);
+      trimmed = true;
+    } else {
+      const uint64_t excess = resident + bytes - residentLimit_;
+      if (evictUntil([&](uint64_t evicted) { return evicted >= excess; }) == 0) {
+        // What is left is the lease's own: it goes ahead, over the limit,
+        // and says so (once: a budget this tight says it on every load).
+        if (!saidOverLimit_)
+          spdlog::warn("--memory is too small for this lease: {} MiB resident and {} MiB to load exceed the {} MiB "
+                       "a load may bring the worker to (--memory less a lease's buffers), and only the lease's own "
+                       "cells and photon maps are left to evict",
+                       resident >> 20, bytes >> 20, residentLimit_ >> 20);
+        saidOverLimit_ = true;
+        return;
+      }
+      ::malloc_trim(0);
+    }
+    resident = residentBytes();
+  }
 }
 
 LoadedCell& CellCache::cell(const std::string& directory, uint32_t cellId, const std::string& acceleratorSpec,

@@ -57,9 +57,19 @@ struct CacheStatistics {
 // estimate that learns from the cells loaded so far), so the worker's peak
 // stays near the budget instead of budget + one cell + build scratch.
 // Entries used by the current lease are pinned and never evicted under it.
+//
+// The entries' own count is not all a worker holds: freed memory the heap
+// keeps (a photon map's assembly leaves twice the map's size of freed
+// arrays resident), the lease's messages and the code. With a resident
+// limit, making room also brings the process's measured resident size
+// plus what is about to be loaded under that limit: the heap's free pages
+// are given back first, then entries evicted until it fits.
 class CellCache {
  public:
-  explicit CellCache(uint64_t budgetBytes) : budget_(budgetBytes) {}
+  // budgetBytes: what the entries may hold. residentLimitBytes: the
+  // process's resident size that a load may bring it to (0: unchecked).
+  explicit CellCache(uint64_t budgetBytes, uint64_t residentLimitBytes = 0)
+      : budget_(budgetBytes), residentLimit_(residentLimitBytes) {}
 
   const SceneStore& scene(const std::string& directory);
   // A new lease: what the previous one pinned may go again.
@@ -78,12 +88,14 @@ class CellCache {
   const IndirectLight* indirectLight(const PhotonMapKey& key);
   const IndirectLight& storeIndirectLight(const PhotonMapKey& key, std::unique_ptr<IndirectLight> light);
   // Evicts unpinned entries, least recently used first, until `bytes` more
-  // fit in the budget (or nothing unpinned is left).
+  // fit in the budget and, with a resident limit, in it beside the
+  // process's resident size (or nothing unpinned is left).
   void makeRoom(uint64_t bytes);
 
   CacheStatistics takeStatistics();
   uint64_t bytesHeld() const { return held_; }
   uint64_t budget() const { return budget_; }
+  uint64_t residentLimit() const { return residentLimit_; }
 
  private:
   using CellKey = std::tuple<std::string, uint32_t, std::string>;
@@ -101,9 +113,14 @@ class CellCache {
   void touch(Entry& entry);
   void insert(Entry& entry);
   void evict(Entry* victim);
+  // Evicts unpinned entries, least recently used first, until `enough`
+  // (given the bytes evicted so far) holds; returns the bytes evicted.
+  uint64_t evictUntil(const std::function<bool(uint64_t evicted)>& enough);
   void buildAccelerator(LoadedCell& cell, const std::string& spec);
 
   uint64_t budget_;
+  uint64_t residentLimit_;
+  bool saidOverLimit_ = false;
   uint64_t held_ = 0;
   bool texturesCharged_ = false;   // the texture module's memory taken from budget_
   std::string texturesRefused_;     // why textured stores cannot be traced (budget too small), or empty

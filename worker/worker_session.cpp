@@ -41,20 +41,26 @@ int64_t steadyMilliseconds() {
 
 // --memory bounds the whole worker: the cache gets what is left after the
 // process's own footprint (code, libraries, Embree and TBB) and room for a
-// lease's messages and kernel buffers.
-uint64_t cacheBudgetFor(const WorkerOptions& options) {
+// lease's messages and kernel buffers; and a load may bring the measured
+// resident size up to --memory less that room (CellCache::makeRoom).
+CellCache cacheFor(const WorkerOptions& options) {
   const uint64_t resident = residentBytes();
   const uint64_t leaseBuffers = uint64_t(12) << 20;
-  if (options.memoryBytes < resident + leaseBuffers + (uint64_t(4) << 20))
+  const uint64_t leastForCells = uint64_t(4) << 20;
+  if (options.memoryBytes < resident + leaseBuffers + leastForCells)
     throw std::runtime_error(fmt::format("--memory {} MiB is too small: the worker itself takes {} MiB, a lease's "
-                                         "buffers {} MiB, and cells need room",
-                                         options.memoryBytes >> 20, resident >> 20, leaseBuffers >> 20));
-  return options.memoryBytes - resident - leaseBuffers;
+                                         "buffers {} MiB, and cells need {} MiB at least",
+                                         options.memoryBytes >> 20, resident >> 20, leaseBuffers >> 20,
+                                         leastForCells >> 20));
+  const uint64_t budget = options.memoryBytes - resident - leaseBuffers;
+  spdlog::info("--memory {} MiB: the worker itself {} MiB, a lease's buffers {} MiB, cells and photon maps {} MiB",
+               options.memoryBytes >> 20, resident >> 20, leaseBuffers >> 20, budget >> 20);
+  return CellCache(budget, options.memoryBytes - leaseBuffers);
 }
 
 WorkerSession::WorkerSession(WorkerOptions options)
     : options_(std::move(options)),
-      cache_(cacheBudgetFor(options_)),
+      cache_(cacheFor(options_)),
       chooser_(options_.calibrationPath.empty() ? CostModel::loadDefault() : CostModel::load(options_.calibrationPath)),
       leaseFinishedFd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   if (leaseFinishedFd_ < 0) throw std::runtime_error("cannot create an eventfd");

@@ -41,6 +41,8 @@ const char* toString(JobSettings::Irradiance irradiance) {
   return irradiance == JobSettings::Irradiance::Knn ? "knn" : "precomputed";
 }
 
+const char* toString(LightSampling sampling) { return sampling == LightSampling::Scan ? "scan" : "tree"; }
+
 const char* toString(JobSettings::Aov aov) {
   switch (aov) {
     case JobSettings::Aov::Cells: return "cells";

@@ -19,6 +19,11 @@ namespace portico {
 // for voxel cells (scene import --grid).
 constexpr int kAutomaticLightHops = -2;
 
+// How a shading point chooses among its candidate lights
+// (common/transport/light_sampler.h): one descent of a light tree, or a
+// scan weighing every candidate (the way before the tree, kept to compare).
+enum class LightSampling : uint8_t { Tree, Scan };
+
 // Render passes at most of a job with a target error or a time limit and no
 // --max-passes: a bound for a target never reached (64 passes of the
 // default 16 spp are 1024 samples per pixel).
@@ -101,9 +106,13 @@ constexpr uint32_t kAnalysisLightSamples = 4;
 struct JobSettings {
   std::string store;                 // scene store directory (absolute once submitted)
   std::string output;                // image path (.png or .exr)
-  std::string accel = "grid";        // per-cell accelerator of the photon pass
-  // Render leases' structure; "" (automatic): bvh with the grid, else the
-  // accel. Render rays are many per triangle: bvh traces camera rays
+  // Per-cell accelerator of the photon pass. auto (each cell's structure
+  // chosen by the cost model) is the fastest photon pass of grid, bvh and
+  // auto on every preset of `portico bench pipeline`
+  // (docs/pipeline-benchmark.md).
+  std::string accel = "auto";
+  // Render leases' structure; "" (automatic): bvh with grid or auto, else
+  // the accel. Render rays are many per triangle: bvh traces camera rays
   // 1.3-1.9x as fast as kd:sah and builds 2.5x as fast
   // (docs/accelerator-benchmarks.md).
   std::string renderAccel;
@@ -122,6 +131,7 @@ struct JobSettings {
   // less time.
   uint32_t lightSamples = 1;
   int lightHops = kAutomaticLightHops;   // sample lights of cells within this many portals (-1: all)
+  LightSampling lightSampling = LightSampling::Tree;
   // Photons per density estimate: 128 rather than 64 lowers the reference
   // scenes' block RMSE (cornell_closed 0.91 -> 0.75 %, two_rooms 2.09 ->
   // 1.88 %) for ~10 % more render time (docs/image-quality.md).
@@ -191,6 +201,7 @@ std::string cameraChoiceProblem(const JobSettings& settings);
 std::string luminanceProblem(const JobSettings& settings);
 
 const char* toString(JobSettings::Irradiance irradiance);
+const char* toString(LightSampling sampling);
 const char* toString(JobSettings::Aov aov);
 
 }  // namespace portico

@@ -18,6 +18,8 @@ void toWire(const JobSettings& settings, wire::JobSpec::Builder spec) {
   spec.setExposure(settings.exposure);
   spec.setGather(settings.gather);
   spec.setLightHops(settings.lightHops);
+  spec.setLightSampling(settings.lightSampling == LightSampling::Scan ? wire::LightSampling::SCAN
+                                                                     : wire::LightSampling::TREE);
   spec.setIrradiance(settings.irradiance == JobSettings::Irradiance::Knn ? wire::Irradiance::KNN
                                                                           : wire::Irradiance::PRECOMPUTED);
   spec.setAov(settings.aov == JobSettings::Aov::Cells     ? wire::Aov::CELLS
@@ -84,6 +86,7 @@ JobSettings jobSettingsFromWire(wire::JobSpec::Reader spec) {
   settings.exposure = spec.getExposure();
   settings.gather = spec.getGather();
   settings.lightHops = spec.getLightHops();
+  settings.lightSampling = spec.getLightSampling() == wire::LightSampling::SCAN ? LightSampling::Scan : LightSampling::Tree;
   settings.irradiance = spec.getIrradiance() == wire::Irradiance::KNN ? JobSettings::Irradiance::Knn
                                                                        : JobSettings::Irradiance::Precomputed;
   settings.aov = spec.getAov() == wire::Aov::CELLS     ? JobSettings::Aov::Cells

@@ -8,8 +8,6 @@
 namespace portico {
 
 inline constexpr uint16_t kToSkyBit = 0x8000, kDepthBits = 0x7fff;
-// A glossy path's bounces and its mirror mark share one byte.
-inline constexpr uint8_t kAfterMirrorBit = 0x80, kGlossyBounceBits = 0x7f;
 // A secondary gather's mark travels in the depth the wire keeps.
 static_assert((kSecondaryGatherDepth & kDepthBits) == kSecondaryGatherDepth);
 
@@ -31,8 +29,6 @@ inline void toWire(const RayState& ray, wire::Ray::Builder out) {
   out.setR(ray.weight.x);
   out.setG(ray.weight.y);
   out.setB(ray.weight.z);
-  out.setGlossy(static_cast<uint8_t>((ray.glossyBounces & kGlossyBounceBits) | (ray.afterMirror ? kAfterMirrorBit : 0)));
-  out.setEmissionWeight(ray.emissionWeight);
 }
 
 inline RayState fromWire(wire::Ray::Reader in) {
@@ -47,9 +43,6 @@ inline RayState fromWire(wire::Ray::Reader in) {
   ray.tMin = in.getTMin();
   ray.tMax = in.getTMax();
   ray.weight = {in.getR(), in.getG(), in.getB()};
-  ray.glossyBounces = in.getGlossy() & kGlossyBounceBits;
-  ray.afterMirror = (in.getGlossy() & kAfterMirrorBit) != 0;
-  ray.emissionWeight = in.getEmissionWeight();
   return ray;
 }
 

@@ -61,14 +61,6 @@ uint32_t stateKey(const RayState& ray, uint64_t salt) {
 uint32_t glassKey(const RayState& ray) { return stateKey(ray, 0x6a09e667f3bcc909ull); }
 // The key of a short gather hit's random numbers (CellKernel::traceShortGather).
 uint32_t gatherKey(const RayState& ray) { return stateKey(ray, 0xbb67ae8584caa73bull); }
-// The key of a glossy surface's random numbers for the ray that hit it.
-uint32_t glossyKey(const RayState& ray) { return stateKey(ray, 0x3c6ef372fe94f82bull); }
-
-// The power heuristic's weight of the strategy with pdf `chosen` (Veach 1997).
-float powerHeuristic(float chosen, float other) {
-  const double a = double(chosen) * chosen, b = double(other) * other;
-  return a + b > 0 ? static_cast<float>(a / (a + b)) : 0.0f;
-}
 }  // namespace
 
 CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const JobSettings& parameters,
@@ -113,10 +105,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
       lights_.push_back(light);
     }
   }
-  lightSampler_.emplace(lights_, std::move(candidates));
-  coatings_.resize(scene.materials().size(), nullptr);
-  for (const Material& material : scene.materials())
-    if (material.finish == Finish::Plastic) coatings_[material.id] = &coatingTable(ggxAlpha(material.roughness), material.ior);
+  lightSampler_.emplace(lights_, std::move(candidates), parameters.lightSampling);
 }
 
 bool CellKernel::emitsHere(uint32_t light) const {
@@ -391,9 +380,8 @@ void CellKernel::tracePhoton(RayState photon, KernelOutputs& out) {
     }
     const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive,
                                       photon.origin + photon.direction * event.t);
-    const PhotonScatter scatter =
-        scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material, &albedo, coatings_[material.id]},
-                      seed, parameters_.maxPhotonBounces);
+    const PhotonScatter scatter = scatterPhoton(photon, {mesh, event.primitive, event.t, event.u, event.v, material, &albedo},
+                                                seed, parameters_.maxPhotonBounces);
     if (scatter.deposited) deposit(scatter.deposit, out);
     if (!scatter.bounced) {
       ++out.counters.photonsAbsorbed;
@@ -419,8 +407,13 @@ void CellKernel::traceCameraRay(const RayState& ray, KernelOutputs& out) {
         ++out.counters.raysFinished;
         // Out of the building: the sky shows, and the sun's disc (its
         // share: seenByThisRay).
-        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current))
-          addToFilm(current.pixel, current.weight * skySeen(current), out);
+        if (daylight_ && parameters_.aov == JobSettings::Aov::Radiance && emissionSeenByThisRay(current)) {
+          const SkyModel& sky = daylight_->sky();
+          Vec3 radiance = sky.radiance(current.direction);
+          if (sky.hasSun() && insideSunDisc(current.direction, sky.sunDirection()))
+            radiance += sky.sunIrradiance() * (1.0f / kSunDiscSolidAngle);
+          addToFilm(current.pixel, current.weight * radiance, out);
+        }
         return;
       case CellEvent::Kind::Portal:
         ++out.counters.rayCrossings;
@@ -474,31 +467,21 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
   const Vec3 point = interiorHitPoint(mesh, hit.primitive, hit.u, hit.v);
   // Emission is added where the ray met it (traceCameraRay), not here.
   const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, hit.primitive, point);
-  const bool glossy = material.glossy();
-  if (!glossy && !(maxComponent(albedo) > 0)) return;
-  const SurfaceBsdf bsdf = bsdfAt(material, albedo, normal, ray.direction);
-  // A matte surface's BRDF is the constant albedo / pi.
-  const Reflectance reflectance = glossy ? Reflectance(bsdf) : Reflectance(albedo * (1.0f / kPi));
+  if (!(maxComponent(albedo) > 0)) return;
+  const Vec3 brdf = albedo * (1.0f / kPi);
 
-  // A mirror reflects no light sample (its lobe is one direction): its
-  // glossy ray sees the lights.
-  if (!bsdf.mirror()) {
-    sampleLights(ray, point, normal, reflectance, out);
-    // The sun's numbers are the camera path's direction dimensions at bounce
-    // 0, which a camera ray (aimed by its pixel sample) leaves unused.
-    if (daylight_ && daylight_->sky().hasSun())
-      sampleSun(ray, point, normal, reflectance,
-                randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
-                randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV), out);
-  }
+  sampleLights(ray, point, normal, brdf, out);
+  // The sun's numbers are the camera path's direction dimensions at bounce
+  // 0, which a camera ray (aimed by its pixel sample) leaves unused.
+  if (daylight_ && daylight_->sky().hasSun())
+    sampleSun(ray, point, normal, brdf,
+              randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionU),
+              randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, 0, dim::DirectionV), out);
 
-  if (glossy) continueGlossy(ray, point, normal, bsdf, Vec3(1.0f), true, out);
-  if (!bsdf.hasDiffuse()) return;
   if (parameters_.gather > 0) {
     // Final gathering: cosine-distributed rays whose landing points take a
     // photon-map estimate, in whatever cell they land. With pdf cos/pi the
-    // Lambertian weight (albedo/pi) cos / pdf is just the albedo (a
-    // plastic's: pi times its diffuse part, SurfaceBsdf::diffuseWeight).
+    // Lambertian weight (albedo/pi) cos / pdf is just the albedo.
     const uint32_t count = parameters_.gather;
     const Vec3 weight = ray.weight * albedo / float(count);
     const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
@@ -516,62 +499,17 @@ void CellKernel::shade(const RayState& ray, const CellEvent& hit, KernelOutputs&
       gather.pixel = ray.pixel;
       gather.origin = origin;
       gather.direction = sampleCosineHemisphere(normal, direction.u, direction.v);
-      gather.weight = glossy ? ray.weight * bsdf.diffuseWeight(gather.direction) / float(count) : weight;
+      gather.weight = weight;
       ++out.counters.gatherRays;
       traceGatherRay(gather, out);
     }
   } else if (photons_ && photons_->size() > 0) {
     // Indirect light: the density of photons that arrived after at least one bounce.
     addToFilm(ray.pixel,
-              ray.weight * photons_->radiance(point, normal, bsdf.diffuseAlbedo(), parameters_.photonK,
+              ray.weight * photons_->radiance(point, normal, albedo, parameters_.photonK,
                                               parameters_.photonRadius),
               out);
   }
-}
-
-void CellKernel::continueGlossy(const RayState& ray, const Vec3& point, const Vec3& normal, const SurfaceBsdf& bsdf,
-                                const Vec3& extraWeight, bool lightSampled, KernelOutputs& out) {
-  if (ray.glossyBounces >= kMaxGlossyBounces) return;
-  // Its numbers: keyed by the ray's state, the same wherever it was traced.
-  const uint32_t key = glossyKey(ray);
-  const SurfaceBsdf::Sample sample =
-      bsdf.sampleGlossy(randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, key, dim::LobeU),
-                        randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, key, dim::LobeV));
-  if (!(maxComponent(sample.weight) > 0)) return;
-  RayState next;
-  next.kind = ray.kind;
-  next.depth = ray.depth;
-  next.pathId = ray.pathId;
-  next.pixel = ray.pixel;
-  next.origin = insideCell(offsetAlongNormal(point, normal));
-  next.direction = sample.direction;
-  next.weight = ray.weight * sample.weight * extraWeight;
-  next.glossyBounces = static_cast<uint8_t>(ray.glossyBounces + 1);
-  // A mirror's direction is no light sample's: what it meets counts whole,
-  // as it does where no light was sampled (a gather path's surfaces).
-  next.afterMirror = bsdf.mirror() || !lightSampled;
-  if (lightSampled && sample.pdf > 0) {
-    // The light samples' pdf of the same direction (lightSamples of them).
-    const float lightPdf = lightSampler_->pdfAlong(next.origin, normal, sample.direction) *
-                           float(std::max(1u, parameters_.lightSamples));
-    next.emissionWeight = powerHeuristic(sample.pdf, lightPdf);
-  }
-  ++out.counters.glossyRays;
-  if (next.kind == RayKind::Camera)
-    traceCameraRay(next, out);
-  else
-    traceGatherRay(next, out);
-}
-
-Vec3 CellKernel::reflected(const Reflectance& reflectance, const Vec3& direction, float lightPdf) {
-  if (!reflectance.bsdf) return reflectance.constant;
-  const SurfaceBsdf& bsdf = *reflectance.bsdf;
-  Vec3 f = bsdf.diffuseWeight(direction) * (1.0f / kPi);
-  if (bsdf.hasGlossy() && !bsdf.mirror()) {
-    const float weight = lightPdf < kInfinity ? powerHeuristic(lightPdf, bsdf.glossyPdf(direction)) : 1.0f;
-    f += bsdf.glossy(direction) * weight;
-  }
-  return f;
 }
 
 Vec3 CellKernel::insideCell(const Vec3& point) const {
@@ -585,21 +523,13 @@ Vec3 CellKernel::insideCell(const Vec3& point) const {
   return inside;
 }
 
-Vec3 CellKernel::skySeen(const RayState& ray) const {
-  const SkyModel& sky = daylight_->sky();
-  Vec3 radiance = sky.radiance(ray.direction) * ray.emissionWeight;
-  if (sky.hasSun() && seesPointEmitters(ray) && insideSunDisc(ray.direction, sky.sunDirection()))
-    radiance += sky.sunIrradiance() * (1.0f / kSunDiscSolidAngle);
-  return radiance;
-}
-
 void CellKernel::addEmission(const RayState& ray, const CellEvent& hit, KernelOutputs& out) {
   const Material& material = materialAt(hit.primitive);
   if (!material.emissive()) return;
   bool front;
   hitNormalFacing(tracer_.cell().mesh(), hit.primitive, ray.direction, front);
   // Emitters are one-sided: only their front shows their radiance.
-  if (front) addToFilm(ray.pixel, ray.weight * material.emission * ray.emissionWeight, out);
+  if (front) addToFilm(ray.pixel, ray.weight * material.emission, out);
 }
 
 bool CellKernel::seeLuminaire(const RayState& ray, float end, KernelOutputs& out) {
@@ -613,8 +543,7 @@ bool CellKernel::seeLuminaire(const RayState& ray, float end, KernelOutputs& out
   }
   if (!seen) return false;
   ++out.counters.raysFinished;
-  if (emissionSeenByThisRay(ray) && seesPointEmitters(ray))
-    addToFilm(ray.pixel, ray.weight * seen->openingRadiance(ray.direction), out);
+  if (emissionSeenByThisRay(ray)) addToFilm(ray.pixel, ray.weight * seen->openingRadiance(ray.direction), out);
   return true;
 }
 
@@ -646,8 +575,6 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
     case CellEvent::Kind::Leave:
       ++out.counters.raysEscaped;
       ++out.counters.raysFinished;
-      // Past a glossy surface nothing sampled the sky: the path sees it.
-      if (ray.glossyBounces > 0 && daylight_) addToFilm(ray.pixel, ray.weight * skySeen(ray), out);
       return;
     case CellEvent::Kind::Portal:
       ++out.counters.rayCrossings;
@@ -655,28 +582,13 @@ void CellKernel::traceGatherRay(const RayState& gathered, KernelOutputs& out) {
       return;
     case CellEvent::Kind::Surface: {
       ++out.counters.raysFinished;   // it lands: its estimate is read now or with the pending ones
-      // Emission is not gathered: direct light is sampled with shadow rays,
-      // except past a glossy surface, where nothing sampled it.
+      // Emission is not gathered: direct light is sampled with shadow rays.
       const Material& material = materialAt(event.primitive);
-      if (ray.glossyBounces > 0) addEmission(ray, event, out);
-      if (!material.glossy() && (!photons_ || photons_->size() == 0 || !(maxComponent(material.albedo) > 0))) return;
+      if (!photons_ || photons_->size() == 0 || !(maxComponent(material.albedo) > 0)) return;
       bool front;
       const Vec3 normal = hitNormalFacing(tracer_.cell().mesh(), event.primitive, ray.direction, front);
       const Vec3 point = ray.origin + ray.direction * event.t;
-      Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive, point);
-      if (material.glossy()) {
-        // The photon map holds the diffuse part's light; the glossy part's
-        // is followed, by a ray drawn from it with probability its share
-        // (Russian roulette: a gather ray landing on a plastic floor
-        // mostly stops there).
-        const SurfaceBsdf bsdf = bsdfAt(material, albedo, normal, ray.direction);
-        const float share = bsdf.glossyShare();
-        if (share > 0 &&
-            randomUniform(parameters_.seed, RandomStream::Camera, ray.pathId, glossyKey(ray), dim::LobeChoice) < share)
-          continueGlossy(ray, point, normal, bsdf, Vec3(1.0f / share), false, out);
-        albedo = bsdf.diffuseAlbedo();
-        if (!photons_ || photons_->size() == 0 || !(maxComponent(albedo) > 0)) return;
-      }
+      const Vec3 albedo = surfaceAlbedo(scene_.directory(), tracer_.cell(), material, event.primitive, point);
       const PendingGather gather{point,     normal,          ray.weight, albedo, ray.pathId,
                                  ray.pixel, gatherKey(ray), event.t,    isSecondaryGather(ray)};
       if (!irradiance_) {
@@ -875,7 +787,7 @@ void CellKernel::addShadowRay(const RayState& ray, const Vec3& origin, const Vec
   traceShadowRay(shadow, out);
 }
 
-void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf,
+void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                               KernelOutputs& out) {
   // The pixel's spp x samples light choices and points on lights form
   // stratified patterns (pixel_pattern.h); this sample takes its own.
@@ -890,7 +802,7 @@ void CellKernel::sampleLights(const RayState& ray, const Vec3& point, const Vec3
   }
 }
 
-void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf,
+void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                              float choiceNumber, const PatternPoint& onLight, uint32_t samples, KernelOutputs& out) {
   // Direct light: a shadow ray to a point on a light chosen by the light
   // sampler; a daylight opening is a light of the sky's radiance beyond it.
@@ -914,14 +826,11 @@ void CellKernel::sampleLight(const RayState& ray, const Vec3& point, const Vec3&
   const Vec3 radiance = sky ? daylight_->sky().radiance(direction) : light.radiance;
   // Area sampling: pdf = 1 / area, converted to solid angle by d^2 / cos.
   const float geometry = cosSurface * cosLight * light.area() / distance2;
-  const Vec3 f = brdf.bsdf ? reflected(brdf, direction, choice.probability * float(samples) * distance2 /
-                                                            (cosLight * light.area()))
-                           : brdf.constant;
   addShadowRay(ray, origin, direction, distance,
-               ray.weight * f * radiance * (geometry / (choice.probability * float(samples))), sky, out);
+               ray.weight * brdf * radiance * (geometry / (choice.probability * float(samples))), sky, out);
 }
 
-void CellKernel::samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf,
+void CellKernel::samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                                   const AreaLight& light, float probability, KernelOutputs& out) {
   // Illuminance from a point: E = I(direction) cos / d^2, no area to sample.
   const Vec3 origin = insideCell(offsetAlongNormal(point, normal));
@@ -934,12 +843,11 @@ void CellKernel::samplePointLight(const RayState& ray, const Vec3& point, const 
   if (cosSurface <= 0) return;
   const Vec3 intensity = light.intensityToward(-direction);
   if (!(maxComponent(intensity) > 0)) return;
-  addShadowRay(ray, origin, direction, distance,
-               ray.weight * reflected(brdf, direction, kInfinity) * intensity * (cosSurface / (distance2 * probability)),
+  addShadowRay(ray, origin, direction, distance, ray.weight * brdf * intensity * (cosSurface / (distance2 * probability)),
                false, out);
 }
 
-void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf, float u,
+void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float u,
                            float v, KernelOutputs& out) {
   // A direction over the sun's disc: it reaches the point only through the
   // opening the ray towards it leaves by, the nearest it passes through,
@@ -956,9 +864,8 @@ void CellKernel::sampleSun(const RayState& ray, const Vec3& point, const Vec3& n
     if (t && (!nearest || *t < *nearest)) nearest = t;
   }
   if (!nearest) return;
-  addShadowRay(ray, origin, direction, *nearest,
-               ray.weight * reflected(brdf, direction, kInfinity) * daylight_->sky().sunIrradiance() * cosSurface, true,
-               out);
+  addShadowRay(ray, origin, direction, *nearest, ray.weight * brdf * daylight_->sky().sunIrradiance() * cosSurface,
+               true, out);
 }
 
 bool CellKernel::passOrReflect(RayState& ray, const CellEvent& hit, const Material& glass) const {

@@ -25,7 +25,6 @@
 #include "common/transport/photon_record.h"
 #include "common/transport/pixel_pattern.h"
 #include "common/transport/ray_state.h"
-#include "common/transport/surface_bsdf.h"
 #include "common/transport/trace_counters.h"
 
 namespace portico {
@@ -126,17 +125,11 @@ class CellKernel {
   // Whether this camera ray adds the emitted light it meets: the two
   // estimates split the emitted light by where it is met, so each adds
   // its own share and none is counted twice.
-  // A glossy path's later rays add what they meet (weighed by emissionWeight).
-  static bool emissionSeenByThisRay(const RayState& ray) {
-    return isEmissionRay(ray) || ray.depth > 0 || ray.glossyBounces > 0;
-  }
+  static bool emissionSeenByThisRay(const RayState& ray) { return isEmissionRay(ray) || ray.depth > 0; }
   static bool isEmissionRay(const RayState& ray) {
     return ray.kind == RayKind::Camera && (ray.pathId & kEmissionPath) != 0;
   }
   void addEmission(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
-  // The sky (and the sun's disc, seesPointEmitters) a ray leaving the
-  // building sees, times its emissionWeight.
-  Vec3 skySeen(const RayState& ray) const;
   // A camera ray meeting a luminaire's luminous opening (openingsHere_)
   // before `end` ends there: the opening is opaque to the camera, and
   // shows its luminance I / A_projected (its emitted light: the ray's
@@ -160,50 +153,19 @@ class CellKernel {
   void addToFilm(uint32_t pixel, const Vec3& radiance, KernelOutputs& out);
   void shade(const RayState& ray, const CellEvent& hit, KernelOutputs& out);
   void cross(RayState ray, const CellEvent& event, KernelOutputs& out);
-  // What a shading point reflects of light arriving from a direction: a
-  // constant BRDF (a matte surface, a sensor), or a glossy surface's BSDF,
-  // whose glossy part light sampling shares with the glossy path it
-  // continues on (multiple importance sampling, power heuristic).
-  struct Reflectance {
-    Reflectance(const Vec3& brdf) : constant(brdf) {}   // NOLINT: a constant BRDF is a Reflectance
-    explicit Reflectance(const SurfaceBsdf& surface) : bsdf(&surface) {}
-    Vec3 constant;
-    const SurfaceBsdf* bsdf = nullptr;
-  };
-  // f along `direction` (unit, towards the light) for a light sample drawn
-  // with solid-angle pdf lightPdf (infinite: a point or the sun, which the
-  // glossy path never meets).
-  static Vec3 reflected(const Reflectance& reflectance, const Vec3& direction, float lightPdf);
   // A camera hit's lightSamples shadow rays, drawn from its pixel's patterns.
-  void sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf,
-                    KernelOutputs& out);
+  void sampleLights(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, KernelOutputs& out);
   // One shadow ray, to the lamp `choice` picks, at `onLight` on it; its
   // light is divided by `samples`.
-  void sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf, float choice,
+  void sampleLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float choice,
                    const PatternPoint& onLight, uint32_t samples, KernelOutputs& out);
   // The shadow ray to point luminaire `light`, chosen with `probability`
   // (times the samples its light is divided by).
-  void samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf,
+  void samplePointLight(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf,
                         const AreaLight& light, float probability, KernelOutputs& out);
   // (u, v): the point on the sun's disc.
-  void sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Reflectance& brdf, float u, float v,
+  void sampleSun(const RayState& ray, const Vec3& point, const Vec3& normal, const Vec3& brdf, float u, float v,
                  KernelOutputs& out);
-  // A camera or gather path's next ray by the glossy part of the surface it
-  // hit at `point` (a camera path: traced as a camera ray, shaded where it
-  // lands; a gather path: landing as a gather ray), at most
-  // kMaxGlossyBounces deep. The emitted light it meets is weighed against
-  // this point's light samples (lightSampled; else counted whole).
-  void continueGlossy(const RayState& ray, const Vec3& point, const Vec3& normal, const SurfaceBsdf& bsdf,
-                      const Vec3& extraWeight, bool lightSampled, KernelOutputs& out);
-  static constexpr uint8_t kMaxGlossyBounces = 8;
-  // A surface's BSDF at a hit, seen from the ray's origin.
-  SurfaceBsdf bsdfAt(const Material& material, const Vec3& albedo, const Vec3& normal, const Vec3& rayDirection) const {
-    return SurfaceBsdf(material, albedo, normal, -rayDirection, coatings_[material.id]);
-  }
-  // Whether this ray adds the emitted light it meets by a glossy path's
-  // rule: the sun's disc and luminaire openings only after a mirror (light
-  // sampling covers them at rough surfaces); area lights by its weight.
-  static bool seesPointEmitters(const RayState& ray) { return ray.glossyBounces == 0 || ray.afterMirror; }
   // toSky: the light is the sky beyond the opening at `distance`.
   void addShadowRay(const RayState& ray, const Vec3& origin, const Vec3& direction, float distance,
                     const Vec3& contribution, bool toSky, KernelOutputs& out);
@@ -212,8 +174,6 @@ class CellKernel {
   // random in proportion to the pane's reflectance, with its weight times
   // the tint when it passes.
   bool passOrReflect(RayState& ray, const CellEvent& hit, const Material& glass) const;
-  // Per material: a plastic's coating table (coatingTable), else null.
-  std::vector<const CoatingTable*> coatings_;
   const Material& materialAt(uint32_t primitive) const {
     return scene_.materials()[tracer_.cell().material(primitive)];
   }

@@ -56,8 +56,13 @@ std::vector<uint32_t> LightSampler::lightsNear(const SceneStore& scene, uint32_t
   return ids;
 }
 
-LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates)
+LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uint32_t> candidates,
+                           LightSampling sampling)
     : candidates_(std::move(candidates)) {
+  if (sampling == LightSampling::Tree) {
+    tree_.emplace(lights, candidates_);
+    return;
+  }
   prepared_.reserve(candidates_.size());
   for (uint32_t id : candidates_) {
     const AreaLight& light = lights[id];
@@ -74,36 +79,40 @@ LightSampler::LightSampler(const std::vector<AreaLight>& lights, std::vector<uin
       for (int k = 0; k < c.cornerCount; ++k) c.reach = std::max(c.reach, length(c.corners[k] - c.center));
     }
     c.luminousPower = luminance(light.power());
-    c.area = light.area();
     if (light.isPoint()) c.point = &light;
     prepared_.push_back(c);
   }
 }
 
-double LightSampler::weight(const Candidate& light, const Vec3& point, const Vec3& normal) {
-  const Vec3 toPoint = point - light.center;
-  if (light.point) {
-    // Its light reaches the side of the point's tangent plane it lies on.
-    const float d2 = dot(toPoint, toPoint);
-    if (!(dot(normal, toPoint) < 0 && d2 > 0)) return 0;
-    const float intensity = luminance(light.point->intensityToward(toPoint / std::sqrt(d2)));
-    return intensity / std::max(double(d2), kNearestPointLight * kNearestPointLight);
-  }
-  // A point behind the light's plane sees only its dark back.
-  const bool lightFacesPoint = dot(light.normal, toPoint) > 0;
-  bool pointFacesLight = false;   // any part of the light above the point's tangent plane
-  for (int k = 0; k < light.cornerCount; ++k) pointFacesLight |= dot(normal, light.corners[k] - point) > 0;
-  if (!(lightFacesPoint && pointFacesLight)) return 0;
-  const double d2 = std::max(double(dot(toPoint, toPoint)), double(light.reach) * light.reach);
-  return light.luminousPower / d2;
+LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u) const {
+  return tree_ ? tree_->choose(point, normal, u) : scan(point, normal, u);
 }
 
-LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u) const {
+LightChoice LightSampler::scan(const Vec3& point, const Vec3& normal, float u) const {
   thread_local std::vector<double> cumulative;
   cumulative.assign(candidates_.size(), 0.0);
   double total = 0;
   for (size_t i = 0; i < prepared_.size(); ++i) {
-    total += weight(prepared_[i], point, normal);
+    const Candidate& light = prepared_[i];
+    const Vec3 toPoint = point - light.center;
+    if (light.point) {
+      // Its light reaches the side of the point's tangent plane it lies on.
+      const float d2 = dot(toPoint, toPoint);
+      if (dot(normal, toPoint) < 0 && d2 > 0) {
+        const float intensity = luminance(light.point->intensityToward(toPoint / std::sqrt(d2)));
+        total += intensity / std::max(double(d2), kNearestPointLight * kNearestPointLight);
+      }
+      cumulative[i] = total;
+      continue;
+    }
+    // A point behind the light's plane sees only its dark back.
+    const bool lightFacesPoint = dot(light.normal, toPoint) > 0;
+    bool pointFacesLight = false;   // any part of the light above the point's tangent plane
+    for (int k = 0; k < light.cornerCount; ++k) pointFacesLight |= dot(normal, light.corners[k] - point) > 0;
+    if (lightFacesPoint && pointFacesLight) {
+      const double d2 = std::max(double(dot(toPoint, toPoint)), double(light.reach) * light.reach);
+      total += light.luminousPower / d2;
+    }
     cumulative[i] = total;
   }
   if (!(total > 0)) return {};
@@ -113,40 +122,6 @@ LightChoice LightSampler::choose(const Vec3& point, const Vec3& normal, float u)
   // The first entry whose running total exceeds target has nonzero weight.
   const double previous = chosen ? cumulative[chosen - 1] : 0.0;
   return {candidates_[chosen], static_cast<float>((cumulative[chosen] - previous) / total)};
-}
-
-float LightSampler::pdfAlong(const Vec3& point, const Vec3& normal, const Vec3& direction) const {
-  // The nearest candidate area light the ray meets from its front.
-  size_t nearest = prepared_.size();
-  float nearestT = kInfinity, nearestCos = 0;
-  for (size_t i = 0; i < prepared_.size(); ++i) {
-    const Candidate& light = prepared_[i];
-    if (light.point) continue;
-    const float cosLight = -dot(light.normal, direction);
-    if (cosLight <= 0) continue;
-    const float t = dot(light.corners[0] - point, light.normal) / -cosLight;
-    if (!(t > 0 && t < nearestT)) continue;
-    // Where it meets the light's plane, in the light's (s, t) coordinates.
-    const Vec3 offset = point + direction * t - light.corners[0];
-    const Vec3 e1 = light.corners[1] - light.corners[0], e2 = light.corners[2] - light.corners[0];
-    const float e11 = dot(e1, e1), e12 = dot(e1, e2), e22 = dot(e2, e2);
-    const float o1 = dot(offset, e1), o2 = dot(offset, e2);
-    const float det = e11 * e22 - e12 * e12;
-    if (!(det > 0)) continue;
-    const float s = (o1 * e22 - o2 * e12) / det, v = (o2 * e11 - o1 * e12) / det;
-    const bool inside = light.cornerCount == 3 ? (s >= 0 && v >= 0 && s + v <= 1) : (s >= 0 && v >= 0 && s <= 1 && v <= 1);
-    if (!inside) continue;
-    nearest = i;
-    nearestT = t;
-    nearestCos = cosLight;
-  }
-  if (nearest == prepared_.size()) return 0;
-  double total = 0;
-  for (const Candidate& light : prepared_) total += weight(light, point, normal);
-  if (!(total > 0)) return 0;
-  const double chosen = weight(prepared_[nearest], point, normal) / total;
-  // Area sampling: 1 / area, as solid angle d^2 / (cos area).
-  return static_cast<float>(chosen * double(nearestT) * nearestT / (double(nearestCos) * prepared_[nearest].area));
 }
 
 }  // namespace portico

@@ -16,7 +16,6 @@
 #include "common/transport/photon_map.h"
 #include "common/transport/ray_state.h"
 #include "common/transport/sampling.h"
-#include "common/transport/surface_bsdf.h"
 #include "common/transport/surface_point.h"
 
 namespace portico {
@@ -65,8 +64,6 @@ struct PhotonHit {
   const Material& material;
   // The albedo at the hit when the material is textured; null: material.albedo.
   const Vec3* albedo = nullptr;
-  // A plastic's coating (null: looked up in coatingTable's shared cache).
-  const CoatingTable* coating = nullptr;
 };
 
 // What the photon did at a surface.
@@ -84,23 +81,11 @@ struct PhotonScatter {
 // survivor carries power * albedo / p, so the expected power is unchanged,
 // and leaves in a cosine-distributed direction, unless it has made
 // maxBounces - 1 bounces.
-//
-// A glossy surface (plastic, metal) stores the photon only where it has a
-// diffuse part (Jensen 2001; pbrt-v4's SPPM): its estimates read the diffuse
-// part only. The photon goes on by the glossy part with probability
-// glossyShare() (a microfacet reflection drawn from its visible normals),
-// else by the diffuse part, then survives Russian roulette on the weight
-// the part gives it.
-PhotonScatter scatterGlossyPhoton(RayState& photon, const PhotonHit& hit, const Vec3& albedo, uint64_t seed,
-                                  uint32_t maxBounces);
-
 inline PhotonScatter scatterPhoton(RayState& photon, const PhotonHit& hit, uint64_t seed, uint32_t maxBounces) {
   PhotonScatter scatter;
   const Material& material = hit.material;
   const Vec3 albedo = hit.albedo ? *hit.albedo : material.albedo;
-  if (material.emissive()) return scatter;
-  if (material.glossy()) return scatterGlossyPhoton(photon, hit, albedo, seed, maxBounces);
-  if (!(maxComponent(albedo) > 0)) return scatter;
+  if (material.emissive() || !(maxComponent(albedo) > 0)) return scatter;
   const Vec3 point = interiorHitPoint(hit.mesh, hit.primitive, hit.u, hit.v);
   const Vec3 geometric = normalize(hit.mesh.geometricNormal(hit.primitive));
   const Vec3 normal = dot(geometric, photon.direction) < 0 ? geometric : -geometric;

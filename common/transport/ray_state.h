@@ -31,14 +31,6 @@ struct RayState {
   // where it leaves the building the photon starts, and where something
   // outdoors is in its way it is absorbed there.
   bool toSky = false;
-  // A camera or gather path that went on by a glossy surface's lobe
-  // (surface_bsdf.h): how many glossy bounces it made, whether the last
-  // was a mirror's, and the weight of the emitted light it meets, which
-  // light sampling at that surface also estimated (multiple importance
-  // sampling, CellKernel::continueGlossy).
-  uint8_t glossyBounces = 0;
-  bool afterMirror = false;
-  float emissionWeight = 1.0f;
 };
 
 // The depth bit of a short gather's own gather ray (CellKernel): read
@@ -53,8 +45,7 @@ inline bool isSecondaryGather(const RayState& ray) {
 inline bool isValid(const RayState& ray) {
   const float len = length(ray.direction);
   return ray.kind <= RayKind::Gather && isFinite(ray.origin) && isFinite(ray.weight) && std::isfinite(len) &&
-         std::abs(len - 1.0f) < 1e-3f && !(ray.tMin < 0) && !(ray.tMax < ray.tMin) && ray.emissionWeight >= 0.0f &&
-         ray.emissionWeight <= 1.0f;
+         std::abs(len - 1.0f) < 1e-3f && !(ray.tMin < 0) && !(ray.tMax < ray.tMin);
 }
 
 }  // namespace portico

@@ -10,10 +10,22 @@
 #include <cmath>
 
 #include "common/math.h"
-#include "common/transport/fresnel.h"
 #include "common/scene/store/scene_types.h"
 
 namespace portico {
+
+// Unpolarised Fresnel reflectance of a dielectric interface entered at
+// cosine cosIncident (either side: a thin pane is symmetric) with relative
+// index eta. Total internal reflection cannot happen from outside a pane.
+inline float fresnelDielectric(float cosIncident, float eta) {
+  const float cosI = std::clamp(std::abs(cosIncident), 0.0f, 1.0f);
+  const float sin2T = (1.0f - cosI * cosI) / (eta * eta);
+  if (sin2T >= 1.0f) return 1.0f;
+  const float cosT = std::sqrt(1.0f - sin2T);
+  const float parallel = (eta * cosI - cosT) / (eta * cosI + cosT);
+  const float perpendicular = (cosI - eta * cosT) / (cosI + eta * cosT);
+  return 0.5f * (parallel * parallel + perpendicular * perpendicular);
+}
 
 struct GlassResponse {
   float reflectance = 0;   // R', the same for every channel

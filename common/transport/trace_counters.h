@@ -43,7 +43,6 @@ struct TraceCounters {
   int64_t shadowRays = 0;
   int64_t gatherRays = 0;
   int64_t shortGathers = 0;       // gather hits lit by shadow rays and a gather ray of their own
-  int64_t glossyRays = 0;         // camera and gather paths' rays on from a glossy surface (surface_bsdf.h)
   int64_t shadowBlocked = 0;
   int64_t shadowReached = 0;
   int64_t rayCrossings = 0;       // camera and shadow rays handed to a neighbour cell
@@ -53,7 +52,7 @@ struct TraceCounters {
   // Render rays (camera, emission, shadow, gather) that ended in this lease:
   // shaded, read, blocked, reached their light or the sky, escaped. With the
   // rays handed on, they balance the rays started (result_check.h):
-  // camera + emission + received + shadow + gather + glossy = finished + invalid + handed on.
+  // camera + emission + received + shadow + gather = finished + invalid + handed on.
   int64_t raysFinished = 0;
   int64_t nonFiniteContributions = 0;
   int64_t filmOutOfRange = 0;     // contributions refused: a pixel's sum would leave the film's range
@@ -66,7 +65,6 @@ struct TraceCounters {
             {"rays.camera", cameraRays},           {"rays.emission", emissionRays},
             {"sensors.measured", sensorsMeasured},
             {"rays.gather", gatherRays},           {"rays.gather_short", shortGathers},
-            {"rays.glossy", glossyRays},
             {"rays.shadow", shadowRays},           {"rays.shadow_blocked", shadowBlocked},
             {"rays.shadow_reached", shadowReached}, {"rays.crossings", rayCrossings},
             {"rays.escaped", raysEscaped},         {"rays.traced", raySegments},

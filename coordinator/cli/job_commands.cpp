@@ -285,8 +285,8 @@ void addLightingOptions(CLI::App& command, JobSettings& o, const std::string& sa
                      "per-cell accelerator: grid[:res=N], hgrid, kd:median, kd:sah, kd:bbox, embree, brute, or auto "
                      "(chosen per cell by a calibrated cost model; `portico bench calibrate`)")->capture_default_str();
   command.add_option("--render-accel", o.renderAccel,
-                     "accelerator of the render phase (default: bvh with the default --accel grid, else the "
-                     "--accel)");
+                     "accelerator of the render phase (default: bvh with --accel auto, the default, or grid; else "
+                     "the --accel)");
   // Bounded as the coordinator bounds them (coordinator/job_limits.h): a
   // wrong value is refused here, in one line, before anything starts.
   command.add_option("--photons", o.photons,
@@ -305,6 +305,14 @@ void addLightingOptions(CLI::App& command, JobSettings& o, const std::string& sa
                      "sample the lights of cells within this many portals of a shading point (-1: every light; "
                      "default: 2 with room cells, every light with --grid voxel cells)")
       ->check(wholeNumber(-1, limits::kMaxLightHops));
+  command
+      .add_option_function<std::string>(
+          "--light-sampler",
+          [&o](const std::string& name) { o.lightSampling = name == "scan" ? LightSampling::Scan : LightSampling::Tree; },
+          "how a shading point chooses among those lights: tree (one descent of a light tree, ~2 log2(n) of them "
+          "looked at) or scan (every one weighed; docs/many-lights.md)")
+      ->check(CLI::IsMember({"tree", "scan"}))
+      ->default_str(toString(o.lightSampling));
   command.add_option("--photon-k", o.photonK, "photons per density estimate")
       ->capture_default_str()
       ->check(wholeNumber(1, limits::kMaxPhotonK));

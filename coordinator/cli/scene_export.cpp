@@ -26,12 +26,6 @@ void writeMtl(const SceneStore& store, const std::string& path) {
   for (const Material& m : store.materials()) {
     out.print("# {}\nnewmtl {}\nKd {} {} {}\n", m.name, materialName(m), m.albedo.x, m.albedo.y, m.albedo.z);
     if (m.emissive()) out.print("Ke {} {} {}\n", m.emission.x, m.emission.y, m.emission.z);
-    // A finish as the importer reads it back (docs/materials.md): a metal
-    // as Pm 1 of colour Kd, a plastic as its tint Ks; Pr the roughness.
-    if (m.finish == Finish::Metal)
-      out.print("Kd {} {} {}\nPm 1\nPr {}\n", m.specular.x, m.specular.y, m.specular.z, m.roughness);
-    else if (m.finish == Finish::Plastic)
-      out.print("Ks {} {} {}\nPm 0\nPr {}\n", m.specular.x, m.specular.y, m.specular.z, m.roughness);
   }
 }
 

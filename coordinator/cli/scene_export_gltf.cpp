@@ -14,7 +14,6 @@
 #include <fstream>
 #include <map>
 #include <memory>
-#include <set>
 #include <stdexcept>
 #include <vector>
 
@@ -95,19 +94,6 @@ json materialOf(const Material& m, const std::string& name) {
                   {"metallicFactor", 0.0f},
                   {"roughnessFactor", 1.0f}}},
                 {"extras", {{"portico_material", m.id}, {"hidden_from_camera", m.hiddenFromCamera}}}};
-  // A finish (docs/materials.md) as the importer reads it back: a metal's
-  // colour as a metallic base colour, a plastic's tint as
-  // KHR_materials_specular's colour, its roughness as glTF's.
-  if (m.glossy()) {
-    json& pbr = material["pbrMetallicRoughness"];
-    pbr["roughnessFactor"] = m.roughness;
-    if (m.finish == Finish::Metal) {
-      pbr["baseColorFactor"] = {m.specular.x, m.specular.y, m.specular.z, 1.0f};
-      pbr["metallicFactor"] = 1.0f;
-    } else {
-      material["extensions"]["KHR_materials_specular"]["specularColorFactor"] = vec3(m.specular);
-    }
-  }
   if (m.emissive()) {
     const float strength = std::max(1.0f, maxComponent(m.emission));
     material["emissiveFactor"] = vec3(m.emission * (1.0f / strength));
@@ -226,11 +212,8 @@ ExportSummary exportStoreGltf(const std::string& directory, const std::string& p
   document["scenes"] = {{{"name", store.meta().count("name") ? store.meta().at("name") : std::string("building")},
                          {"nodes", sceneNodes},
                          {"extras", sceneExtras(store)}}};
-  std::set<std::string> extensions;
   for (const json& material : document["materials"])
-    if (material.contains("extensions"))
-      for (const auto& [name, value] : material["extensions"].items()) extensions.insert(name);
-  if (!extensions.empty()) document["extensionsUsed"] = extensions;
+    if (material.contains("extensions")) document["extensionsUsed"] = {"KHR_materials_emissive_strength"};
   // glTF forbids empty top-level arrays (a store without triangles has no meshes).
   for (const char* key : {"bufferViews", "accessors", "meshes", "materials"})
     if (document[key].empty()) document.erase(key);

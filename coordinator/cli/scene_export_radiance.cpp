@@ -13,10 +13,8 @@
 #include "common/scene/import/quad_light.h"
 #include "common/scene/store/cell_geometry.h"
 #include "common/scene/store/scene_store.h"
-#include "common/transport/sampling.h"
 #include "common/transport/sky_model.h"
 #include "common/transport/sun_disc.h"
-#include "common/transport/surface_bsdf.h"
 #include "coordinator/cli/export_groups.h"
 
 namespace portico::cli {
@@ -78,17 +76,6 @@ uint32_t writeMaterials(const SceneStore& store, fmt::ostream& out) {
                 radianceGlassTransmissivity(m.transmittance.z, m.ior), m.ior);
     } else if (m.emissive()) {
       out.print("void light {}\n0\n0\n3 {} {} {}\n", materialName(m), m.emission.x, m.emission.y, m.emission.z);
-    } else if (m.mirror()) {
-      out.print("void mirror {}\n0\n0\n3 {} {} {}\n", materialName(m), m.specular.x, m.specular.y, m.specular.z);
-    } else if (m.finish == Finish::Metal) {
-      // Radiance's roughness is the facets' RMS slope, about GGX's alpha.
-      out.print("void metal {}\n0\n0\n5 {} {} {} 1 {}\n", materialName(m), m.specular.x, m.specular.y, m.specular.z,
-                ggxAlpha(m.roughness));
-    } else if (m.finish == Finish::Plastic) {
-      // Specularity: the coating's reflectance at normal incidence.
-      const float r0 = ((m.ior - 1.0f) / (m.ior + 1.0f)) * ((m.ior - 1.0f) / (m.ior + 1.0f));
-      out.print("void plastic {}\n0\n0\n5 {} {} {} {} {}\n", materialName(m), m.albedo.x, m.albedo.y, m.albedo.z,
-                r0 * luminance(m.specular), ggxAlpha(m.roughness));
     } else {
       out.print("void plastic {}\n0\n0\n5 {} {} {} 0 0\n", materialName(m), m.albedo.x, m.albedo.y, m.albedo.z);
     }

@@ -23,7 +23,7 @@ from .clip import distribute
 from .geometry_only import convert_geometry_only
 from .closing import CLOSING_ALBEDO, CLOSING_MATERIAL, close_spaces
 from .glazing import outdoor_cells, window_panes
-from .ifc_model import finish_json, read_ifc
+from .ifc_model import read_ifc
 from .lights_cameras import fixture_lamps, space_cameras, space_panels
 from .output_files import rounded as _rounded, site_json as _site_json, slug as _slug, write_obj as _write_obj
 
@@ -209,8 +209,7 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", clo
     objects = []
     groups = [(e.mesh.corners(), e.material_of_triangle) for e in model.elements]
     material_names = [m[0] for m in model.materials] + ["ground", "sky", CLOSING_MATERIAL]
-    material_keys = [finish_json(m) for m in model.materials] + [{"albedo": list(a)} for a in
-                                                                  (GROUND_ALBEDO, SKY_ALBEDO, CLOSING_ALBEDO)]
+    material_albedo = [m[1] for m in model.materials] + [GROUND_ALBEDO, SKY_ALBEDO, CLOSING_ALBEDO]
     closing_triangles = np.concatenate(closings) if closings else np.zeros((0, 3, 3))
     if len(closing_triangles):
         groups.append((closing_triangles, np.full(len(closing_triangles), len(model.materials) + 2)))
@@ -225,7 +224,7 @@ def convert(ifc_path, out_dir, lights="auto", glazing=True, outdoors="open", clo
             name = f"{names[c]}-{_slug(material_names[m])}-{m}"
             path = os.path.join("meshes", f"{c:04d}-{m:03d}.obj")
             _write_obj(os.path.join(out_dir, path), triangles[material[source] == m])
-            objects.append({"obj": path, "name": name, "cell": names[c], **material_keys[m]})
+            objects.append({"obj": path, "name": name, "cell": names[c], "albedo": list(material_albedo[m])})
     objects += _pane_objects(panes, lines, owner, cells, names, out_dir)
     for i, lamp in enumerate(lamps):
         path = os.path.join("meshes", f"lamp-{i:04d}.obj")

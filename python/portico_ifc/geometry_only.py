@@ -22,7 +22,6 @@ import time
 import numpy as np
 
 from .glazing import panes_on_glass
-from .ifc_model import finish_json
 from .lights_cameras import fixture_lamps
 from .output_files import rounded, site_json, slug, write_obj
 
@@ -46,7 +45,7 @@ def convert_geometry_only(model, ifc_path, out_dir, lights, glazing, reason, sta
     for m in np.unique(material):
         path = os.path.join("meshes", f"{m:03d}-{slug(model.materials[m][0])}.obj")
         write_obj(os.path.join(out_dir, path), corners[material == m])
-        objects.append({"obj": path, "name": f"{slug(model.materials[m][0])}-{m}", **finish_json(model.materials[m])})
+        objects.append({"obj": path, "name": f"{slug(model.materials[m][0])}-{m}", "albedo": list(model.materials[m][1])})
     panes, paneless = panes_on_glass(model.glazings, model.openings)
     tint = sorted({p.transmittance for p in panes})
     for t, transmittance in enumerate(tint):

@@ -26,8 +26,6 @@ SEALING_TYPES = ("IfcWall", "IfcSlab", "IfcRoof", "IfcCovering", "IfcColumn", "I
 SKIPPED_TYPES = ("IfcDoor", "IfcWindow", "IfcOpeningElement", "IfcSpace", "IfcSite", "IfcAnnotation",
                  "IfcGrid", "IfcVirtualElement")
 DEFAULT_ALBEDO = (0.6, 0.6, 0.6)
-# A glossy style's roughness when it gives no SpecularHighlight.
-DEFAULT_GLOSSY_ROUGHNESS = 0.3
 # A style named as glass but not transparent (Transparency 0 or absent)
 # still is glass: this transparency (clear float glass passes about 90 %).
 NAMED_GLASS_TRANSPARENCY = 0.9
@@ -127,7 +125,7 @@ class IfcModel:
     spaces: list = field(default_factory=list)
     openings: list = field(default_factory=list)
     fixtures: list = field(default_factory=list)
-    materials: list = field(default_factory=list)     # [(name, (r, g, b), finish)]: _MaterialTable's entries
+    materials: list = field(default_factory=list)     # [(name, (r, g, b))]
     glazings: list = field(default_factory=list)
     unfilled_openings: list = field(default_factory=list)  # Openings (kind "unfilled"): voids no door or window fills
     unglazed_windows: list = field(default_factory=list)   # names of windows without a transparent part
@@ -246,68 +244,13 @@ class _MaterialTable:
     def __init__(self):
         self.entries, self.index = [], {}
 
-    def add(self, name, rgb, finish=()):
-        """finish: () matte, else (type, colour, roughness) as _style_finish gives it."""
+    def add(self, name, rgb):
         rgb = tuple(round(min(1.0, max(0.0, float(c))), 4) for c in rgb)
-        key = (name, rgb, finish)
+        key = (name, rgb)
         if key not in self.index:
             self.index[key] = len(self.entries)
             self.entries.append(key)
         return self.index[key]
-
-
-def finish_json(material):
-    """A material entry's building.json keys: its "albedo", and its
-    "finish" where it has one (a metal or mirror has no albedo)."""
-    name, rgb, finish = material if len(material) == 3 else (*material, ())
-    if not finish:
-        return {"albedo": list(rgb)}
-    kind, colour, roughness = finish
-    if kind == "plastic":
-        return {"albedo": list(rgb), "finish": {"type": "plastic", "specular": list(colour), "roughness": roughness}}
-    if kind == "mirror":
-        return {"finish": {"type": "mirror", "colour": list(colour)}}
-    return {"finish": {"type": "metal", "colour": list(colour), "roughness": roughness}}
-
-
-def _highlight_roughness(highlight):
-    """IfcSpecularHighlightSelect as a perceptual roughness: IfcSpecularRoughness
-    is one (0 smooth to 1 rough); an IfcSpecularExponent n is a Phong lobe,
-    whose Beckmann alpha sqrt(2 / (n + 2)) is taken as GGX's (roughness^2)."""
-    if highlight is None:
-        return DEFAULT_GLOSSY_ROUGHNESS
-    value = float(highlight.wrappedValue)
-    if highlight.is_a("IfcSpecularRoughness"):
-        return round(min(1.0, max(0.0, value)), 4)
-    return round(min(1.0, (2.0 / (max(value, 0.0) + 2.0)) ** 0.25), 4)
-
-
-def _style_finish(model, material, rgb):
-    """The finish of a style whose IfcSurfaceStyleRendering says METAL,
-    MIRROR or PLASTIC (docs/materials.md): a metal or mirror of the surface
-    colour, a plastic whose coating is tinted by SpecularColour (normalised
-    to its brightest channel); its SpecularHighlight the roughness. Any other
-    reflectance method stays matte, as before."""
-    style = _style_of(model, material)
-    for shading in getattr(style, "Styles", None) or ():
-        if not shading.is_a("IfcSurfaceStyleRendering"):
-            continue
-        method = (shading.ReflectanceMethod or "").upper()
-        roughness = _highlight_roughness(shading.SpecularHighlight)
-        colour = tuple(round(min(1.0, max(0.0, float(c))), 4) for c in rgb)
-        if method == "METAL":
-            return ("metal", colour, roughness)
-        if method == "MIRROR":
-            return ("mirror", colour, 0.0)
-        if method == "PLASTIC":
-            tint = (1.0, 1.0, 1.0)
-            specular = shading.SpecularColour
-            if specular is not None and hasattr(specular, "Red"):
-                tint = (specular.Red, specular.Green, specular.Blue)
-            top = max(tint)
-            tint = tuple(round(c / top, 4) for c in tint) if top > 0 else (1.0, 1.0, 1.0)
-            return ("plastic", tint, roughness)
-    return ()
 
 
 def _style_albedo(material):
@@ -393,12 +336,9 @@ def _glass_transmittance(model, material):
     return transmittance if max(transmittance) > 0 else None
 
 
-def _triangle_materials(model, geometry, materials, count):
+def _triangle_materials(geometry, materials, count):
     """(count,) indices into `materials` of each triangle's style."""
-    ids = []
-    for m in geometry.materials:
-        rgb = _style_albedo(m)
-        ids.append(materials.add(m.name, rgb, _style_finish(model, m, rgb)))
+    ids = [materials.add(m.name, _style_albedo(m)) for m in geometry.materials]
     per_triangle = np.asarray(geometry.material_ids, dtype=np.int64)
     if ids and len(per_triangle) == count:
         lookup = np.asarray(ids, dtype=np.int64)
@@ -425,7 +365,7 @@ def _read_window(model, product, geometry, mesh, materials, result):
     result.glazings.append(Glazing(name, product.GlobalId, Mesh(mesh.vertices, mesh.triangles[is_glass]), transmittance))
     if (~is_glass).any():
         frame = Mesh(mesh.vertices, mesh.triangles[~is_glass])
-        of_triangle = _triangle_materials(model, geometry, materials, len(mesh.triangles))[~is_glass]
+        of_triangle = _triangle_materials(geometry, materials, len(mesh.triangles))[~is_glass]
         result.elements.append(Element(product.is_a(), name, product.GlobalId, frame, of_triangle))
 
 
@@ -492,7 +432,7 @@ def read_ifc(path, glazing=True):
             lo, hi = mesh.bounds()
             result.fixtures.append(Fixture(name, lo, hi, _fixture_watts(product), _fixture_lumens(product),
                                            _fixture_kelvin(product)))
-        of_triangle = _triangle_materials(model, geometry, materials, len(triangles))
+        of_triangle = _triangle_materials(geometry, materials, len(triangles))
         result.elements.append(Element(product.is_a(), name, product.GlobalId, mesh, of_triangle,
                                        sealing=any(product.is_a(t) for t in SEALING_TYPES)))
     # An opening element IfcOpenShell cannot tessellate (some exporters write

@@ -5,8 +5,7 @@
 // The Cornell box is also imported with --grid 3 (its OBJ meshes cut into 27
 // voxel cells, triangles sticking out of them): uniform cells must render
 // the same picture as the room's own cell, within the same bounds.
-// textured_floor checks albedo textures (OBJ map_Kd) against Mitsuba's bitmap;
-// glossy_cabinet and mirror_room the glossy finishes (docs/materials.md).
+// textured_floor checks albedo textures (OBJ map_Kd) against Mitsuba's bitmap.
 // A scene lit by daylight gives its sun and sky in render_args.txt.
 #include <gtest/gtest.h>
 
@@ -84,9 +83,7 @@ INSTANTIATE_TEST_SUITE_P(Mitsuba, ReferenceScene,
                                            ReferenceCase{"cornell_closed", 3, 1e-3},
                                            ReferenceCase{"ifc_fzk_wohnen", 0, 1.4e-2},
                                            ReferenceCase{"textured_floor", 0, 4e-4},
-                                           ReferenceCase{"daylight_window", 0, 1.1e-2},
-                                           ReferenceCase{"glossy_cabinet", 0, 4.5e-2},
-                                           ReferenceCase{"mirror_room", 0, 1.2e-2}),
+                                           ReferenceCase{"daylight_window", 0, 1.1e-2}),
                          [](const auto& info) {
                            return info.param.name + (info.param.grid ? "_grid" + std::to_string(info.param.grid) : "");
                          });

@@ -474,49 +474,80 @@ TEST_F(Resilience, AWorkerWithoutTheStoresFileSystemFetchesCellsOverTheWire) {
   EXPECT_GT(stats["cells"]["bytes_read"].get<int64_t>(), 0);
 }
 
-// Two floors of the tower: ~480 MB of cells against 46 MiB per worker.
-TEST_F(Resilience, WorkersStayWithinTheirMemoryBudgetOnABuildingTenTimesLarger) {
-  const fs::path dir = dir_ / "budget";
-  const fs::path tower = dir_ / "tower";
-  ASSERT_EQ(runCommand({kBin + "portico", "scene", "generate", "--preset", "tower", "--floors", "2", tower.string()},
-                       dir_ / "tower.log"),
-            0)
-      << readFile(dir_ / "tower.log");
-  uint64_t storeBytes = 0;
-  for (const auto& entry : fs::recursive_directory_iterator(tower))
-    if (entry.is_regular_file()) storeBytes += entry.file_size();
-  const uint64_t budget = uint64_t(46) << 20;
-  ASSERT_GE(storeBytes, 10 * budget);
-  LocalCluster cluster(dir, 2, {{"--memory", "46MiB"}, {"--memory", "46MiB"}});
-  const uint64_t job = cluster.submit(tower, dir / "image.exr", 100000, 1);
-  const auto status = cluster.wait(job);
-  ASSERT_EQ(status.value("state", ""), "done") << status.dump(2);
+// Two floors of the tower (~480 MB of cells), generated once for the
+// tests that hold workers to their --memory.
+fs::path twoFloorTower() {
+  static const fs::path tower = [] {
+    const fs::path store = makeTempDirectory("resilience-tower") / "tower";
+    const fs::path log = store.parent_path() / "tower.log";
+    if (runCommand({kBin + "portico", "scene", "generate", "--preset", "tower", "--floors", "2", store.string()}, log) != 0)
+      throw std::runtime_error("cannot generate the tower: " + readFile(log));
+    return store;
+  }();
+  return tower;
+}
+
+// Renders two tower floors with two workers at --memory `mib` MiB and
+// checks from the job's statistics that it completes, conserves every
+// photon, and that each worker's peak (VmHWM, sent with its Results; at
+// most the process's own peak to date, from /proc) lies between `least`
+// and `most` times its --memory. Returns the statistics.
+nlohmann::json renderWithinMemory(const fs::path& dir, uint64_t mib, uint64_t photons, double least, double most) {
+  const uint64_t budget = mib << 20;
+  const std::string memory = std::to_string(mib) + "MiB";
+  LocalCluster cluster(dir, 2, {{"--memory", memory}, {"--memory", memory}});
+  const auto status = cluster.wait(cluster.submit(twoFloorTower(), dir / "image.exr", photons, 1));
+  EXPECT_EQ(status.value("state", ""), "done") << status.dump(2);
   const auto stats = nlohmann::json::parse(readFile(dir / "image.exr.json"));
   expectConservation(stats);
-  // The job's own statistics report each worker's peak (VmHWM, with its
-  // Results) and budget: they agree with /proc and keep the budget.
   const auto& workers = stats["memory"]["workers"];
-  ASSERT_EQ(workers.size(), 2u) << stats["memory"].dump(2);
+  EXPECT_EQ(workers.size(), 2u) << stats["memory"].dump(2);
   for (const auto& [name, w] : workers.items()) {
     const uint64_t reported = w.value("peak_rss_bytes", uint64_t(0));
-    std::cout << name << ": peak RSS " << (reported >> 20) << " MiB, budget " << (budget >> 20) << " MiB, store "
-              << (storeBytes >> 20) << " MiB\n";
+    std::cout << name << ": peak RSS " << (reported >> 20) << " MiB of --memory " << mib << " MiB ("
+              << double(reported) / double(budget) << " x)\n";
     EXPECT_EQ(w.value("budget_bytes", uint64_t(0)), budget);
-    EXPECT_GT(reported, uint64_t(8) << 20);
-    EXPECT_LE(double(reported), 1.25 * double(budget));
+    EXPECT_GT(double(reported), least * double(budget)) << name;
+    EXPECT_LE(double(reported), most * double(budget)) << name;
   }
   for (size_t w = 0; w < 2; ++w) {
-    // What the job reported is at most the process's peak to date.
     const uint64_t peak = testing_support::peakResidentBytes(cluster.worker(w).pid());
     EXPECT_GT(peak, 0u);
-    EXPECT_LE(double(peak), 1.25 * double(budget));
+    EXPECT_LE(double(peak), most * double(budget));
+    // It said at start how it shares its --memory out.
+    EXPECT_NE(readFile(dir / ("worker-" + std::to_string(w) + ".log"))
+                  .find("--memory " + std::to_string(mib) + " MiB: the worker itself"),
+              std::string::npos);
   }
   EXPECT_GT(stats["memory"].value("coordinator_peak_rss_bytes", 0), 0);
+  return stats;
+}
+
+// Two floors of the tower: ~480 MB of cells against 46 MiB per worker.
+TEST_F(Resilience, WorkersStayWithinTheirMemoryBudgetOnABuildingTenTimesLarger) {
+  uint64_t storeBytes = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(twoFloorTower()))
+    if (entry.is_regular_file()) storeBytes += entry.file_size();
+  ASSERT_GE(storeBytes, uint64_t(10 * 46) << 20);
+  const auto stats = renderWithinMemory(dir_ / "budget", 46, 100000, 0.2, 1.25);
   // Every cell with work was loaded; each load of a cell read its file.
   EXPECT_GT(stats["cells"].value("bytes_read", int64_t(0)), int64_t(storeBytes / 4));
   EXPECT_EQ(stats["cells"].value("loaded", 0),
             stats["cells"].value("distinct_loaded", 0) + stats["cells"].value("reloads", 0));
   EXPECT_GT(stats["disk"].value("photon_file_bytes", 0), 0);
+}
+
+// --memory bounds the whole worker, at the small end too: two floors of
+// the tower at 128 MiB per worker, with photon maps of up to ~400 K
+// photons whose assembly takes ~200 bytes a photon of scratch beside the
+// map. A load or an assembly first makes room for what it adds beside the
+// worker's measured resident size (CellCache::makeRoom); counting only
+// the cache's entries, the workers peaked at 1.26-1.37 x their --memory
+// here, the freed scratch of each assembly kept resident by the heap.
+// Most of the budget is used (at least 0.6 x): the cells do not fit, and a
+// bound met by holding nothing would prove little.
+TEST_F(Resilience, EveryWorkerPeaksWithinATenthOfItsMemoryAt128MiB) {
+  renderWithinMemory(dir_ / "budget-128", 128, 2000000, 0.6, 1.1);
 }
 
 }  // namespace

@@ -50,35 +50,20 @@ bool isBuildingJson(const std::string& path) {
 
 Bounds3 padded(const Bounds3& box) { return Bounds3(box.lo - Vec3(kCellPadding), box.hi + Vec3(kCellPadding)); }
 
-// Materials, one per distinct (albedo, emission, texture, glass, finish); the first name wins.
+// Materials, one per distinct (albedo, emission, texture, glass); the first name wins.
 class MaterialTable {
  public:
   uint32_t add(const std::string& name, const Vec3& albedo, const Vec3& emission, std::vector<ImportedMaterial>& out,
                const std::string& albedoTexture = {}, const Vec3& transmittance = Vec3(0), float ior = 1.5f) {
-    ImportedMaterial material;
-    material.name = name;
-    material.albedo = albedo;
-    material.emission = emission;
-    material.albedoTexture = albedoTexture;
-    material.transmittance = transmittance;
-    material.ior = ior;
-    return add(material, out);
-  }
-  uint32_t add(const ImportedMaterial& material, std::vector<ImportedMaterial>& out) {
-    const Vec3& a = material.albedo;
-    const Vec3& e = material.emission;
-    const Vec3& t = material.transmittance;
-    const Vec3& s = material.specular;
-    const std::array<float, 15> colours{a.x, a.y, a.z, e.x, e.y, e.z, t.x, t.y, t.z, material.ior,
-                                        float(material.finish), s.x, s.y, s.z, material.roughness};
-    auto [it, inserted] =
-        ids_.emplace(std::make_pair(colours, material.albedoTexture), static_cast<uint32_t>(out.size()));
-    if (inserted) out.push_back(material);
+    const std::array<float, 10> colours{albedo.x,        albedo.y,        albedo.z,        emission.x, emission.y,
+                                       emission.z,      transmittance.x, transmittance.y, transmittance.z, ior};
+    auto [it, inserted] = ids_.emplace(std::make_pair(colours, albedoTexture), static_cast<uint32_t>(out.size()));
+    if (inserted) out.push_back(ImportedMaterial{name, albedo, emission, false, albedoTexture, transmittance, ior});
     return it->second;
   }
 
  private:
-  std::map<std::pair<std::array<float, 15>, std::string>, uint32_t> ids_;
+  std::map<std::pair<std::array<float, 10>, std::string>, uint32_t> ids_;
 };
 
 void appendPart(const MeshFilePart& part, ImportedObject& object) {
@@ -131,24 +116,8 @@ void addPartsWithFileMaterials(const LoadedMeshFile& mesh, const std::string& la
     // A texture needs the part's uvs; a part without them keeps the colour.
     const bool textured = !source.diffuseTexture.empty() && !part.uvs.empty();
     if (textured) object.uvs = part.uvs;
-    ImportedMaterial material;
-    material.name = source.name;
-    material.albedo = albedo;
-    material.emission = emission;
-    material.albedoTexture = textured ? source.diffuseTexture : std::string();
-    material.transmittance = transmittance;
-    // Emitters and glass keep no finish; a metal has no diffuse part.
-    if (!glass && !(maxComponent(emission) > 0.0f) && source.finish != Finish::Matte) {
-      material.finish = source.finish;
-      material.specular = source.specular;
-      material.roughness = source.roughness;
-      if (source.finish == Finish::Metal) {
-        material.albedo = Vec3(0.0f);
-        material.albedoTexture.clear();
-      }
-    }
-    if (material.albedoTexture.empty()) object.uvs.clear();
-    object.material = materials.add(material, scene.materials);
+    object.material = materials.add(source.name, albedo, emission, scene.materials,
+                                    textured ? source.diffuseTexture : std::string(), transmittance);
     if (maxComponent(emission) > 0.0f) addEmitter(object, emission, scene);
     scene.objects.push_back(std::move(object));
   }
@@ -298,21 +267,6 @@ ImportedScene sceneFromBuildingJson(const std::string& path, const ImportOptions
       for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
       object.material = materials.add(entry.name, Vec3(0.0f), Vec3(0.0f), scene.materials, std::string(), entry.glass->transmittance,
                                       entry.glass->ior);
-      scene.objects.push_back(std::move(object));
-    } else if (entry.finish) {
-      // One material: a plastic over the albedo, or a metal without one.
-      ImportedObject object;
-      object.label = entry.label();
-      object.cell = cell;
-      for (const MeshFilePart& part : mesh.parts) appendPart(part, object);
-      ImportedMaterial material;
-      material.name = entry.name;
-      material.albedo = entry.albedo.value_or(Vec3(0.0f));
-      material.finish = entry.finish->finish;
-      material.specular = entry.finish->specular;
-      material.roughness = entry.finish->roughness;
-      material.ior = entry.finish->ior;
-      object.material = materials.add(material, scene.materials);
       scene.objects.push_back(std::move(object));
     } else if (!entry.albedo) {
       try {
@@ -479,8 +433,6 @@ ImportSummary importBuilding(const std::vector<std::string>& inputs, const std::
     const uint32_t id = writer.addMaterial(material.name, material.albedo, material.emission, material.hiddenFromCamera);
     if (!material.albedoTexture.empty()) writer.setMaterialTexture(id, material.albedoTexture);
     if (maxComponent(material.transmittance) > 0.0f) writer.setMaterialGlass(id, material.transmittance, material.ior);
-    if (material.finish != Finish::Matte)
-      writer.setMaterialFinish(id, material.finish, material.specular, material.roughness, material.ior);
   }
   if (rooms)
     writeRoomCells(scene, *rooms, writer);

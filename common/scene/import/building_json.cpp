@@ -251,62 +251,6 @@ BuildingObject::Glass readGlass(const Reader& reader, const json& entry, const s
   return glass;
 }
 
-// An object's "finish": {"type": "plastic", "specular", "roughness", "ior"}
-// over its albedo, or {"type": "metal" or "mirror", "colour", "roughness"}
-// in place of one.
-BuildingObject::Surface readFinish(const Reader& reader, const json& entry, const std::string& what,
-                                   const BuildingObject& object) {
-  if (!entry.is_object())
-    reader.fail(what + ": \"finish\" must be an object with \"type\" (plastic, metal or mirror)");
-  const std::string type = reader.string(reader.required(entry, "type", what + " finish"), what + " finish.type");
-  BuildingObject::Surface surface;
-  const auto unit = [&](const char* key, float& value) {
-    if (const json* given = reader.member(entry, key)) {
-      value = reader.number(*given, fmt::format("{} finish.{}", what, key));
-      if (!(value >= 0.0f && value <= 1.0f))
-        reader.fail(fmt::format("{}: finish {} {} must be from 0 to 1", what, key, value));
-    }
-  };
-  const auto colour = [&](const char* key, Vec3& value) {
-    if (const json* given = reader.member(entry, key)) {
-      value = reader.vec3(*given, fmt::format("{} finish.{}", what, key));
-      if (std::min({value.x, value.y, value.z}) < 0.0f || maxComponent(value) > 1.0f)
-        reader.fail(fmt::format("{}: finish {} [{}, {}, {}] must lie within [0, 1]", what, key, value.x, value.y,
-                                value.z));
-    }
-  };
-  if (object.emission || object.lumens || object.glass)
-    reader.fail(what + ": a \"finish\" is for reflecting surfaces; give no \"emission\", \"lumens\" or \"glass\" with it");
-  if (type == "plastic") {
-    reader.requireKnownKeys(entry, what + " finish", {"type", "specular", "roughness", "ior"});
-    if (!object.albedo) reader.fail(what + ": a plastic finish coats the object's \"albedo\"; give one");
-    surface.roughness = 0.1f;
-    colour("specular", surface.specular);
-    unit("roughness", surface.roughness);
-    if (const json* ior = reader.member(entry, "ior")) {
-      surface.ior = reader.number(*ior, what + " finish.ior");
-      if (!(surface.ior >= 1.0f && surface.ior <= 4.0f))
-        reader.fail(fmt::format("{}: finish ior {} must be from 1 to 4", what, surface.ior));
-    }
-  } else if (type == "metal" || type == "mirror") {
-    if (type == "metal")
-      reader.requireKnownKeys(entry, what + " finish", {"type", "colour", "roughness"});
-    else
-      reader.requireKnownKeys(entry, what + " finish", {"type", "colour"});
-    if (object.albedo)
-      reader.fail(fmt::format("{}: a {} has no diffuse part; give its \"colour\" in the finish, not \"albedo\"", what,
-                              type));
-    surface.finish = Finish::Metal;
-    surface.specular = Vec3(0.9f);
-    surface.roughness = type == "metal" ? 0.3f : 0.0f;
-    colour("colour", surface.specular);
-    if (type == "metal") unit("roughness", surface.roughness);
-  } else {
-    reader.fail(fmt::format("{}: finish type '{}' is not plastic, metal or mirror", what, type));
-  }
-  return surface;
-}
-
 std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, const fs::path& baseDirectory,
                                         const std::optional<std::vector<BuildingCell>>& cells) {
   const json& list = reader.required(root, "objects", "the file");
@@ -331,7 +275,7 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
     if (object.name.empty()) object.name = meshPath.stem().string();
     what = object.label();
     reader.requireKnownKeys(entry, what, {"obj", "mesh", "name", "cell", "albedo", "emission", "lumens",
-                                          "colour_temperature", "colour", "glass", "finish"});
+                                          "colour_temperature", "colour", "glass"});
 
     if (const json* cell = reader.member(entry, "cell")) {
       object.cell = reader.string(*cell, what + ".cell");
@@ -354,7 +298,6 @@ std::vector<BuildingObject> readObjects(const Reader& reader, const json& root, 
     if (object.lumens && emission && !emission->is_null())
       reader.fail(what + ": give \"emission\" (radiance) or \"lumens\", not both");
     if (const json* glass = reader.member(entry, "glass")) object.glass = readGlass(reader, *glass, what, object);
-    if (const json* finish = reader.member(entry, "finish")) object.finish = readFinish(reader, *finish, what, object);
     objects.push_back(std::move(object));
   }
   return objects;

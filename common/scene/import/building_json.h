@@ -41,15 +41,6 @@ struct BuildingObject {
     float ior = 1.5f;
   };
   std::optional<Glass> glass;
-  // "finish": a plastic coating over `albedo`, or a metal (mirror) instead
-  // of it (Material::finish; docs/materials.md).
-  struct Surface {
-    Finish finish = Finish::Plastic;
-    Vec3 specular{1.0f, 1.0f, 1.0f};
-    float roughness = 0.0f;
-    float ior = 1.5f;
-  };
-  std::optional<Surface> finish;
   // "objects[3] ('light')": how messages name the object.
   std::string label() const;
 };

@@ -25,9 +25,6 @@ struct ImportedMaterial {
   std::string albedoTexture;       // the image file (copied into the store), or empty
   Vec3 transmittance;              // thin glass when above 0 (Material::transmittance)
   float ior = 1.5f;
-  Finish finish = Finish::Matte;   // Material::finish, specular, roughness
-  Vec3 specular;
-  float roughness = 0.0f;
 };
 
 // One object of a building.json, or one part of a mesh file.

@@ -77,45 +77,6 @@ std::string diffuseTexture(const aiScene& scene, const aiMaterial& source, const
   return resolved.lexically_normal().string();
 }
 
-// The finish a file's material asks for (MeshFileMaterial::finish). Assimp
-// reports glTF's metallicRoughness (and KHR_materials_specular) and an MTL's
-// Pm, Pr as metallic and roughness factors, an MTL's Ks and Ns as the
-// specular colour and shininess.
-void readFinish(const aiMaterial& source, MeshFileMaterial& material) {
-  float metallic = 0, roughness = 1;
-  const bool hasMetallic = source.Get(AI_MATKEY_METALLIC_FACTOR, metallic) == aiReturn_SUCCESS;
-  const bool hasRoughness = source.Get(AI_MATKEY_ROUGHNESS_FACTOR, roughness) == aiReturn_SUCCESS;
-  aiColor3D specular(0, 0, 0);
-  const bool hasSpecular = source.Get(AI_MATKEY_COLOR_SPECULAR, specular) == aiReturn_SUCCESS;
-  float specularFactor = 1, shininess = 0;
-  source.Get(AI_MATKEY_SPECULAR_FACTOR, specularFactor);
-  const bool hasShininess = source.Get(AI_MATKEY_SHININESS, shininess) == aiReturn_SUCCESS && shininess > 0;
-  const Vec3 specularColour = min(max(Vec3(specular.r, specular.g, specular.b) * specularFactor, Vec3(0.0f)), Vec3(1.0f));
-  if (maxComponent(material.transmittance) > 0 || !std::isfinite(metallic) || !std::isfinite(roughness)) return;
-  if (hasMetallic || hasRoughness) {
-    // glTF's default (and a fully rough surface) is roughness 1: matte, so
-    // files that give no PBR parameters import as before.
-    if (!(roughness < 1.0f)) return;
-    material.roughness = std::clamp(roughness, 0.0f, 1.0f);
-    if (metallic >= 0.5f) {
-      material.finish = Finish::Metal;
-      material.specular = min(max(material.diffuse, Vec3(0.0f)), Vec3(1.0f));
-    } else {
-      material.finish = Finish::Plastic;
-      material.specular = hasSpecular ? specularColour : Vec3(1.0f);
-    }
-    return;
-  }
-  if (hasSpecular && maxComponent(specularColour) > 0) {
-    // An MTL's Phong lobe: a coating whose tint is Ks over its brightest
-    // channel and whose roughness follows Ns (Beckmann's alpha
-    // sqrt(2 / (Ns + 2)) as GGX's, taken as perceptual roughness squared).
-    material.finish = Finish::Plastic;
-    material.specular = specularColour / maxComponent(specularColour);
-    material.roughness = hasShininess ? std::sqrt(std::sqrt(2.0f / (shininess + 2.0f))) : 0.5f;
-  }
-}
-
 // `fileStrength`: the material's KHR_materials_emissive_strength as the file
 // gives it, applied where Assimp does not report an intensity itself.
 MeshFileMaterial readMaterial(const aiScene& scene, const aiMaterial& source, size_t index, float fileStrength,
@@ -149,7 +110,6 @@ MeshFileMaterial readMaterial(const aiScene& scene, const aiMaterial& source, si
     if (!(filter.r > 0 || filter.g > 0 || filter.b > 0)) filter = aiColor3D(1, 1, 1);
     material.transmittance = Vec3(filter.r, filter.g, filter.b) * (1.0f - std::max(opacity, 0.0f));
   }
-  readFinish(source, material);
   return material;
 }
 

@@ -20,7 +20,6 @@
 #include <vector>
 
 #include "common/math.h"
-#include "common/scene/store/scene_types.h"
 
 namespace portico {
 
@@ -36,14 +35,6 @@ struct MeshFileMaterial {
   // Light let through (thin glass when above 0): MTL (1 - d) or Tr times
   // Tf, glTF KHR_materials_transmission's factor times the base colour.
   Vec3 transmittance{0.0f};
-  // A glossy finish (Material::finish; docs/materials.md): glTF's
-  // metallicRoughness below roughness 1 (metallic >= 0.5: a metal of the
-  // base colour, else a plastic over it, KHR_materials_specular's colour
-  // times factor its tint), an MTL's Pm/Pr, or its Ks (a plastic, Ns its
-  // roughness). Matte otherwise.
-  Finish finish = Finish::Matte;
-  Vec3 specular{1.0f};
-  float roughness = 1.0f;
 };
 
 // One placed mesh of the file: an Assimp mesh under one node, transformed.

@@ -19,7 +19,7 @@ ImportedScene sceneFromStore(const std::string& directory) {
   for (const Material& m : store.materials())
     scene.materials.push_back(ImportedMaterial{m.name, m.albedo, m.emission, m.hiddenFromCamera,
                                                m.textured() ? directory + "/" + m.albedoTexture : std::string(),
-                                               m.transmittance, m.ior, m.finish, m.specular, m.roughness});
+                                               m.transmittance, m.ior});
   for (const CellInfo& info : store.cells()) {
     scene.cells.push_back(ImportedCell{info.name, info.bounds});
     scene.bounds.extend(info.bounds);

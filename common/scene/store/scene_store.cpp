@@ -99,8 +99,7 @@ class CatalogueReader {
   }
 
   // Version 1 stores have no hidden_from_camera column: nothing is hidden;
-  // stores before version 5 no textures, before version 6 no glass, before
-  // version 10 no finishes (every material matte).
+  // stores before version 5 no textures, before version 6 no glass.
   std::vector<Material> materials(int version) {
     std::vector<Material> materials;
     sql::Statement& row = db_.prepare(fmt::format(
@@ -130,23 +129,6 @@ class CatalogueReader {
             file.find("..") != std::string::npos)
           fail(fmt::format("material {}'s texture '{}' is not a file under textures/", id, file));
         materials[static_cast<size_t>(id)].albedoTexture = file;
-      }
-    }
-    if (version >= 10) {
-      sql::Statement& finish =
-          db_.prepare("SELECT material, finish, specular_r, specular_g, specular_b, roughness FROM material_finishes");
-      while (finish.step()) {
-        const int64_t id = finish.columnInt(0);
-        if (id < 0 || static_cast<uint64_t>(id) >= materials.size())
-          fail(fmt::format("material_finishes names material {}, but there are {} materials", id, materials.size()));
-        Material& material = materials[static_cast<size_t>(id)];
-        material.finish = finish.columnText(1) == "metal" ? Finish::Metal : Finish::Plastic;
-        material.specular = columnVec3(finish, 2);
-        material.roughness = static_cast<float>(finish.columnDouble(5));
-        if (!isFinite(material.specular) || std::min({material.specular.x, material.specular.y, material.specular.z}) < 0 ||
-            maxComponent(material.specular) > 1 || !(material.roughness >= 0 && material.roughness <= 1))
-          fail(fmt::format("material {}'s finish has specular {} {} {} or roughness {} outside [0, 1]", id,
-                           material.specular.x, material.specular.y, material.specular.z, material.roughness));
       }
     }
     return materials;

@@ -94,9 +94,6 @@ class SceneStoreWriter {
   void setMaterialTexture(uint32_t material, const std::string& sourceImage);
   // Makes material `id` thin glass (Material::transmittance, ior).
   void setMaterialGlass(uint32_t id, const Vec3& transmittance, float ior);
-  // Gives material `id` a plastic or metal finish (Material::finish,
-  // specular, roughness; a plastic's coating index is `ior`).
-  void setMaterialFinish(uint32_t id, Finish finish, const Vec3& specular, float roughness, float ior = 1.5f);
   // Portals must be added before the cells they touch are written.
   uint32_t addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon);
   uint32_t addLight(const AreaLight& light);  // id assigned

@@ -32,10 +32,7 @@ namespace portico::scene_schema {
 //   9: point_lights.opening_width/length/height (a luminaire's luminous
 //      opening, metres, LM-63 signs: what cameras see). Version 8 is still
 //      read, every opening 0 0 0 (a point no camera sees).
-//  10: table material_finishes (a material's plastic or metal finish:
-//      specular colour, roughness; docs/materials.md). Versions 1 to 9 are
-//      still read, every material matte.
-constexpr int kVersion = 10;
+constexpr int kVersion = 9;
 constexpr int kOldestReadableVersion = 1;
 
 constexpr std::string_view kDatabaseFile = "scene.db";
@@ -79,11 +76,6 @@ CREATE TABLE materials(
 CREATE TABLE material_textures(
   material INTEGER PRIMARY KEY REFERENCES materials(id),
   albedo_texture TEXT NOT NULL);
-CREATE TABLE material_finishes(
-  material INTEGER PRIMARY KEY REFERENCES materials(id),
-  finish TEXT NOT NULL CHECK (finish IN ('plastic', 'metal')),
-  specular_r REAL NOT NULL, specular_g REAL NOT NULL, specular_b REAL NOT NULL,
-  roughness REAL NOT NULL);
 CREATE TABLE lights(
   id INTEGER PRIMARY KEY,
   cell INTEGER NOT NULL REFERENCES cells(id),

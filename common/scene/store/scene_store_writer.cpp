@@ -163,24 +163,6 @@ void SceneStoreWriter::setMaterialGlass(uint32_t id, const Vec3& transmittance, 
   impl_->materials[id].ior = ior;
 }
 
-void SceneStoreWriter::setMaterialFinish(uint32_t id, Finish finish, const Vec3& specular, float roughness, float ior) {
-  impl_->requireUncommitted();
-  if (id >= impl_->materials.size()) impl_->fail(fmt::format("a finish for material {}, which was not added", id));
-  Material& material = impl_->materials[id];
-  const std::string what = fmt::format("material {} ('{}')", id, material.name);
-  if (finish == Finish::Matte) impl_->fail(fmt::format("{}: a finish is plastic or metal", what));
-  if (material.glass()) impl_->fail(fmt::format("{}: glass has no {} finish", what, finishName(finish)));
-  if (!isFinite(specular) || std::min({specular.x, specular.y, specular.z}) < 0.0f || maxComponent(specular) > 1.0f)
-    impl_->fail(fmt::format("{}: specular {} must be finite and within [0, 1]", what, formatVec(specular)));
-  if (!(roughness >= 0.0f && roughness <= 1.0f))
-    impl_->fail(fmt::format("{}: roughness {} must be from 0 to 1", what, roughness));
-  if (!(ior >= 1.0f && ior <= 4.0f)) impl_->fail(fmt::format("{}: ior {} must be from 1 to 4", what, ior));
-  material.finish = finish;
-  material.specular = specular;
-  material.roughness = roughness;
-  material.ior = ior;
-}
-
 uint32_t SceneStoreWriter::addPortal(uint32_t cellA, uint32_t cellB, const std::vector<Vec3>& polygon) {
   impl_->requireUncommitted();
   const auto id = static_cast<uint32_t>(impl_->portals.size());
@@ -416,13 +398,6 @@ void SceneStoreWriter::Impl::writeCatalogue(const fs::path& databasePath) const 
     for (int c = 0; c < 3; ++c) insert.bind(10 + c, double{material.transmittance[c]});
     insert.bind(13, double{material.ior});
     insert.run();
-    if (material.glossy()) {
-      sql::Statement& finish = db.prepare("INSERT INTO material_finishes VALUES (?, ?, ?, ?, ?, ?)");
-      finish.bind(1, int64_t{material.id}).bind(2, std::string(finishName(material.finish)));
-      for (int c = 0; c < 3; ++c) finish.bind(3 + c, double{material.specular[c]});
-      finish.bind(6, double{material.roughness});
-      finish.run();
-    }
     if (material.textured())
       db.prepare("INSERT INTO material_textures VALUES (?, ?)")
           .bind(1, int64_t{material.id})

@@ -13,12 +13,6 @@
 
 namespace portico {
 
-enum class Finish : uint8_t { Matte, Plastic, Metal };
-// Its name in scene.db and building.json.
-inline const char* finishName(Finish finish) {
-  return finish == Finish::Plastic ? "plastic" : finish == Finish::Metal ? "metal" : "matte";
-}
-
 struct Material {
   uint32_t id = 0;
   std::string name;
@@ -38,21 +32,8 @@ struct Material {
   // of its Fresnel reflection. A glass material has no diffuse albedo.
   Vec3 transmittance;
   float ior = 1.5f;
-  // The surface's finish (common/transport/surface_bsdf.h, docs/materials.md):
-  // Matte is the ideal diffuse surface of `albedo`. Plastic is a rough
-  // dielectric coating of index `ior` over a diffuse base of `albedo`, its
-  // reflection tinted by `specular` (Mitsuba's roughplastic). Metal is a
-  // rough conductor whose reflectance at normal incidence is `specular`
-  // (its complex index from Gulbrandsen's fit, white at grazing) and has
-  // no diffuse part; roughness 0 makes it a perfect mirror.
-  Finish finish = Finish::Matte;
-  Vec3 specular;
-  // Perceptual roughness in [0, 1] (glTF's): the GGX alpha is its square.
-  float roughness = 0.0f;
   bool emissive() const { return maxComponent(emission) > 0.0f; }
   bool glass() const { return maxComponent(transmittance) > 0.0f; }
-  bool glossy() const { return finish != Finish::Matte; }
-  bool mirror() const { return finish == Finish::Metal && roughness == 0.0f; }
 };
 
 enum class LightShape : uint8_t { Parallelogram, Triangle, Point };

@@ -10,6 +10,7 @@
 #include "coordinator/cli/bench/bench_calibrate.h"
 #include "coordinator/cli/bench/bench_cluster.h"
 #include "coordinator/cli/bench/bench_coordinator.h"
+#include "coordinator/cli/bench/bench_lights.h"
 #include "coordinator/cli/bench/bench_paper.h"
 #include "coordinator/cli/bench/bench_pipeline.h"
 #include "coordinator/cli/bench/bench_quality.h"
@@ -70,6 +71,37 @@ void addQuality(CLI::App& bench, CommandTable& table) {
   benchQualityCommand->add_option("--csv", o->csv, "write one row per setting");
   benchQualityCommand->add_option("--plot", o->plot, "write a PNG: block RMSE and worst block against seconds");
   table.add(benchQualityCommand, [o] { return runBenchQuality(*o); });
+}
+
+void addLights(CLI::App& bench, CommandTable& table) {
+  auto o = std::make_shared<BenchLightsOptions>();
+  auto* command = bench.add_subcommand(
+      "lights", "render phase and error of one view with the light tree and the scan, interleaved (docs/many-lights.md)");
+  command->add_option("STORE", o->store, "scene store")->required()->check(CLI::ExistingDirectory);
+  command->add_option("--camera", o->camera, "store camera of the view (portico scene info lists them)")->required();
+  command->add_option("--reference", o->reference, "converged EXR of the same view, photons and size (default: render one)");
+  command->add_option("--keep-reference", o->keepReference, "where to keep the reference rendered here");
+  command->add_option("--reference-spp", o->referenceSpp, "samples per pixel of the reference rendered here")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 1u << 16));
+  command->add_option("--reference-sampler", o->referenceSampler, "light sampler of the reference rendered here")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"tree", "scan"}));
+  command->add_option("--photons", o->photons, "photons of every run")->capture_default_str();
+  command->add_option("--seed", o->seed, "seed of every run (the same photons in each)")->capture_default_str();
+  command->add_option("--spp", o->spp, "samples per pixel of the measured runs")->capture_default_str();
+  command->add_option("--tree-spp", o->treeSpp, "samples per pixel of the tree's runs (default: --spp)");
+  command->add_option("--gather", o->gather, "final-gather rays per hit")->capture_default_str();
+  command->add_option("--width", o->width, "image width")->capture_default_str();
+  command->add_option("--height", o->height, "image height")->capture_default_str();
+  command->add_option("--workers", o->workers, "workers of each render")->capture_default_str();
+  command->add_option("--memory", o->memory, "cache budget per worker")->capture_default_str()->check(workerMemory());
+  command->add_option("--accel", o->accel, "accelerator of the photon pass")->capture_default_str();
+  command->add_option("--runs", o->runs, "runs per sampler, interleaved (medians reported)")
+      ->capture_default_str()
+      ->check(CLI::Range(1u, 100u));
+  command->add_option("--csv", o->csv, "write one row per run");
+  table.add(command, [o] { return runBenchLights(*o); });
 }
 
 void addPipeline(CLI::App& bench, CommandTable& table) {
@@ -311,6 +343,7 @@ void addBenchCommands(CLI::App& app, CommandTable& table) {
   addQuality(*bench, table);
   addAnalyze(*bench, table);
   addPipeline(*bench, table);
+  addLights(*bench, table);
   addPaper(*bench, table);
   addCalibrate(*bench, table);
   addCluster(*bench, table);

@@ -16,7 +16,7 @@ struct BenchPipelineOptions {
   uint64_t photons = 0;     // 0: the paper's workload, kPaperPhotonsPerLight per light of the building
   uint64_t seed = 1;        // the photon pass's seed
   std::string modes = "embree-incore-2t,portico-1w,portico-2w";
-  std::string accel = "grid";
+  std::string accel = "auto";   // portico's default (JobSettings::accel)
   std::string memory = "8GiB";  // per portico worker
   uint32_t runs = 1;
   std::string csv;

@@ -7,14 +7,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <optional>
-#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include "common/util/child_process.h"
 #include "coordinator/cli/bench/bench_plot.h"
+#include "coordinator/cli/bench/image_score.h"
 #include "common/util/csv_field.h"
 #include "coordinator/cli/bench/mitsuba_ladder.h"
 
@@ -44,41 +43,16 @@ void runChild(const std::vector<std::string>& argv, const fs::path& log, const s
 
 struct Rung {
   std::string settings;
-  double seconds = 0, meanError = 0, worstBlock = 0, blockRmse = 0, relativeMse = 0;
-  std::optional<double> flip;   // unset where flip-evaluator is not installed
+  double seconds = 0;
+  ImageScore score;
 };
 
 constexpr const char* kCsvHeader = "settings,seconds,mean_err,worst_block,rel_rmse_blocks,rel_mse,flip\n";
 
-// portico-compare's line: "... X % off; ... block RMSE Y %; relMSE R; worst
-// block at (..): a vs b (Z %); FLIP F" (or "FLIP skipped: why").
-void parseComparison(const std::string& text, Rung& rung) {
-  static const std::regex pattern(
-      R"(([0-9.]+) % off.*block RMSE ([0-9.]+) %; relMSE ([0-9.e+-]+).*\(([0-9.]+) %\))");
-  std::smatch match;
-  if (!std::regex_search(text, match, pattern))
-    throw std::runtime_error("portico-compare printed no comparison: " + text);
-  rung.meanError = std::stod(match[1]) / 100;
-  rung.blockRmse = std::stod(match[2]) / 100;
-  rung.relativeMse = std::stod(match[3]);
-  rung.worstBlock = std::stod(match[4]) / 100;
-  static const std::regex flip(R"(; FLIP ([0-9.]+))");
-  if (std::regex_search(text, match, flip)) rung.flip = std::stod(match[1]);
-}
-
-// Scores `image` against the reference with portico-compare, which exits 1
-// when a block is over the reference test's limit: a rung of a ladder may
-// well be; its line is what counts here.
-void score(const std::string& compare, const fs::path& image, const fs::path& reference, const fs::path& log,
-           Rung& rung) {
-  ChildProcess comparison({compare, image.string(), reference.string()}, log.string());
-  comparison.wait();
-  parseComparison(readFile(log), rung);
-}
-
 std::string csvRow(const Rung& r) {
-  return fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f},{:.5g},{}\n", csvField(r.settings), r.seconds, r.meanError,
-                     r.worstBlock, r.blockRmse, r.relativeMse, r.flip ? fmt::format("{:.4f}", *r.flip) : "");
+  const ImageScore& s = r.score;
+  return fmt::format("{},{:.3f},{:.4f},{:.4f},{:.4f},{:.5g},{}\n", csvField(r.settings), r.seconds, s.meanError,
+                     s.worstBlock, s.blockRmse, s.relativeMse, s.flip ? fmt::format("{:.4f}", *s.flip) : "");
 }
 
 }  // namespace
@@ -106,11 +80,11 @@ int runBenchQuality(const BenchQualityOptions& options) {
     std::vector<std::string> argv{portico, "render", (work / "store").string(), "-o", image.string(),
                                   "--workers", std::to_string(options.workers)};
     for (const std::string& word : splitOn(ladder[i], ' ')) argv.push_back(word);
-    Rung rung{ladder[i]};
+    Rung rung{ladder[i], 0.0, {}};
     const auto started = std::chrono::steady_clock::now();
     runChild(argv, work / fmt::format("render-{}.log", i), "portico render " + ladder[i]);
     rung.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    score(compare, image, reference, work / fmt::format("compare-{}.log", i), rung);
+    rung.score = scoreImage(compare, image, reference, work / fmt::format("compare-{}.log", i));
     std::cout << csvRow(rung) << std::flush;
     rungs.push_back(rung);
   }
@@ -121,8 +95,8 @@ int runBenchQuality(const BenchQualityOptions& options) {
     const std::string python = options.mitsubaPython.empty() ? defaultMitsubaPython() : options.mitsubaPython;
     for (const MitsubaRender& render :
          renderWithMitsuba(options.sceneDirectory, options.mitsubaSpp, options.workers, python, work / "mitsuba")) {
-      Rung rung{fmt::format("mitsuba path --spp {}", render.spp), render.seconds};
-      score(compare, render.image, reference, work / fmt::format("compare-mitsuba-{}.log", render.spp), rung);
+      Rung rung{fmt::format("mitsuba path --spp {}", render.spp), render.seconds, {}};
+      rung.score = scoreImage(compare, render.image, reference, work / fmt::format("compare-mitsuba-{}.log", render.spp));
       std::cout << csvRow(rung) << std::flush;
       mitsubaRungs.push_back(rung);
     }
@@ -142,15 +116,15 @@ int runBenchQuality(const BenchQualityOptions& options) {
     rmse.label = "block RMSE", rmse.color = {31, 119, 180};
     worst.label = "worst block", worst.color = {214, 39, 40}, worst.dashed = true;
     for (const Rung& r : rungs) {
-      rmse.x.push_back(r.seconds), rmse.y.push_back(r.blockRmse);
-      worst.x.push_back(r.seconds), worst.y.push_back(r.worstBlock);
+      rmse.x.push_back(r.seconds), rmse.y.push_back(r.score.blockRmse);
+      worst.x.push_back(r.seconds), worst.y.push_back(r.score.worstBlock);
     }
     panel.series = {rmse, worst};
     if (!mitsubaRungs.empty()) {
       PlotSeries mitsuba;
       mitsuba.label = "Mitsuba", mitsuba.color = {44, 160, 44};
       panel.xLabel = "seconds (portico: command, Mitsuba: render)";
-      for (const Rung& r : mitsubaRungs) mitsuba.x.push_back(r.seconds), mitsuba.y.push_back(r.blockRmse);
+      for (const Rung& r : mitsubaRungs) mitsuba.x.push_back(r.seconds), mitsuba.y.push_back(r.score.blockRmse);
       panel.series.push_back(mitsuba);
     }
     writePlotPng(options.plot, {panel});

@@ -44,13 +44,15 @@ std::string readWholeFile(const std::filesystem::path& path) {
 
 std::vector<std::string> renderArguments(const PipelineRunSpec& spec, const std::string& output) {
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-  return {self, "render", spec.store, "-o", output,
-          "--workers", std::to_string(spec.workers),
-          "--photons", std::to_string(spec.photons),
-          "--seed", std::to_string(spec.seed),
-          "--spp", std::to_string(spec.spp), "--gather", std::to_string(spec.gather),
-          "--width", std::to_string(spec.width), "--height", std::to_string(spec.height),
-          "--accel", spec.accel, "--memory", spec.memory, "--log-level", "warn"};
+  std::vector<std::string> arguments{self, "render", spec.store, "-o", output,
+                                     "--workers", std::to_string(spec.workers),
+                                     "--photons", std::to_string(spec.photons),
+                                     "--seed", std::to_string(spec.seed),
+                                     "--spp", std::to_string(spec.spp), "--gather", std::to_string(spec.gather),
+                                     "--width", std::to_string(spec.width), "--height", std::to_string(spec.height),
+                                     "--accel", spec.accel, "--memory", spec.memory, "--log-level", "warn"};
+  arguments.insert(arguments.end(), spec.moreArguments.begin(), spec.moreArguments.end());
+  return arguments;
 }
 
 // Waits for the child, stopping it (and failing the run) at the timeout: a
@@ -128,6 +130,7 @@ PipelineRunStats runPipeline(const PipelineRunSpec& spec, const std::filesystem:
   PipelineRunStats stats = parsePipelineStatistics(nlohmann::json::parse(in));
   stats.wallSeconds = wall;
   stats.cpuSeconds = cpu;
+  if (!spec.keepImage.empty()) std::filesystem::rename(output, spec.keepImage);
   cleanUp();
   return stats;
 }

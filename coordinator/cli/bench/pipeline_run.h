@@ -38,6 +38,8 @@ struct PipelineRunSpec {
   std::string accel = "grid";
   std::string memory = "8GiB";   // per worker
   double timeoutSeconds = 0;     // 0: none; else the child is stopped and the run fails
+  std::vector<std::string> moreArguments;   // after the above (--camera NAME, --light-sampler scan, ...)
+  std::filesystem::path keepImage;          // non-empty: the image is moved here rather than removed
 };
 
 // The statistics of one finished job (job_report.cpp's keys), and the child's cost.

@@ -39,8 +39,11 @@ TEST(JobSettings, EveryAutomaticValueIsResolvedOnceFromTheScene) {
   EXPECT_EQ(resolved.width, rooms.camera().width);
   EXPECT_EQ(resolved.height, rooms.camera().height);
   EXPECT_EQ(resolved.lightHops, 2);   // room cells
-  EXPECT_EQ(resolved.accel, "grid");
+  EXPECT_EQ(resolved.accel, "auto");        // the fastest photon pass (docs/pipeline-benchmark.md)
   EXPECT_EQ(resolved.renderAccel, "bvh");
+  JobSettings grid;
+  grid.accel = "grid";
+  EXPECT_EQ(resolveJobSettings(grid, rooms).renderAccel, "bvh");
   EXPECT_EQ(resolveJobSettings(resolved, rooms), resolved);   // nothing left to resolve
   EXPECT_NO_THROW(validateJobSettings(resolved, rooms));
 

@@ -20,37 +20,43 @@ TEST(LightSampler, ProbabilitiesMatchSelectionFrequencies) {
   std::vector<AreaLight> lights{ceilingLight(0, {0, 3, 0}, 1, 10), ceilingLight(1, {4, 3, 0}, 1, 10),
                                 ceilingLight(2, {0, 3, 8}, 0.5f, 40)};
   ASSERT_LT(lights[0].normal().y, 0);
-  LightSampler sampler(lights, LightSampler::allLights(lights));
-  const Vec3 point(1, 0, 1), normal(0, 1, 0);
-  std::vector<int> counts(3, 0);
-  std::vector<float> probability(3, 0);
-  const int n = 100000;
-  for (int i = 0; i < n; ++i) {
-    const LightChoice c = sampler.choose(point, normal, (i + 0.5f) / n);
-    ASSERT_GT(c.probability, 0);
-    counts[c.light]++;
-    probability[c.light] = c.probability;
+  for (LightSampling sampling : {LightSampling::Scan, LightSampling::Tree}) {
+    SCOPED_TRACE(toString(sampling));
+    LightSampler sampler(lights, LightSampler::allLights(lights), sampling);
+    const Vec3 point(1, 0, 1), normal(0, 1, 0);
+    std::vector<int> counts(3, 0);
+    std::vector<float> probability(3, 0);
+    const int n = 100000;
+    for (int i = 0; i < n; ++i) {
+      const LightChoice c = sampler.choose(point, normal, (i + 0.5f) / n);
+      ASSERT_GT(c.probability, 0);
+      counts[c.light]++;
+      probability[c.light] = c.probability;
+    }
+    float total = 0;
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(counts[i] / double(n), probability[i], 1e-3) << i;
+      total += probability[i];
+    }
+    EXPECT_NEAR(total, 1.0f, 1e-5f);
+    EXPECT_GT(probability[0], probability[1]);   // nearer light gets more samples
   }
-  float total = 0;
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(counts[i] / double(n), probability[i], 1e-3) << i;
-    total += probability[i];
-  }
-  EXPECT_NEAR(total, 1.0f, 1e-5f);
-  EXPECT_GT(probability[0], probability[1]);   // nearer light gets more samples
 }
 
 TEST(LightSampler, LightsThatCannotContributeAreNeverChosen) {
   // Light 1 is below the shading point's floor plane and faces down, away.
   std::vector<AreaLight> lights{ceilingLight(0, {0, 3, 0}, 1, 10), ceilingLight(1, {0, -2, 0}, 1, 10)};
-  LightSampler sampler(lights, LightSampler::allLights(lights));
-  for (int i = 0; i < 1000; ++i) {
-    const LightChoice c = sampler.choose({0, 0, 0}, {0, 1, 0}, i / 1000.0f);
-    EXPECT_EQ(c.light, 0u);
-    EXPECT_FLOAT_EQ(c.probability, 1.0f);
+  for (LightSampling sampling : {LightSampling::Scan, LightSampling::Tree}) {
+    SCOPED_TRACE(toString(sampling));
+    LightSampler sampler(lights, LightSampler::allLights(lights), sampling);
+    for (int i = 0; i < 1000; ++i) {
+      const LightChoice c = sampler.choose({0, 0, 0}, {0, 1, 0}, i / 1000.0f);
+      EXPECT_EQ(c.light, 0u);
+      EXPECT_FLOAT_EQ(c.probability, 1.0f);
+    }
+    // A point above every light sees only their dark backs.
+    EXPECT_EQ(sampler.choose({0, 10, 0}, {0, 1, 0}, 0.3f).probability, 0.0f);
   }
-  // A point above every light sees only their dark backs.
-  EXPECT_EQ(sampler.choose({0, 10, 0}, {0, 1, 0}, 0.3f).probability, 0.0f);
 }
 
 }  // namespace
@@ -142,13 +148,14 @@ TEST(AreaLightShape, ParallelogramPointsAreTheBilinearMap) {
 }
 
 // A triangle light beside a quad light of twice its area and the same
-// radiance: half the quad's power, so half its weight from a point equally far.
+// radiance: half the quad's power, so half its weight from a point equally
+// far (the scan's weights: power over squared distance).
 TEST(LightSampler, TriangleLightsWeighByTheirPower) {
   std::vector<AreaLight> lights{ceilingLight(0, {-2, 3, 0}, 1, 10), ceilingLight(1, {2, 3, 0}, 1, 10)};
   lights[1].shape = LightShape::Triangle;
   lights[1].corner = Vec3(2, 3, 0) - (lights[1].edge1 + lights[1].edge2) * (1.0f / 3.0f);   // centroid at (2, 3, 0)
   ASSERT_NEAR(length(lights[1].center() - Vec3(2, 3, 0)), 0.0f, 1e-6f);
-  LightSampler sampler(lights, LightSampler::allLights(lights));
+  LightSampler sampler(lights, LightSampler::allLights(lights), LightSampling::Scan);
   const LightChoice quad = sampler.choose({0, 0, 0}, {0, 1, 0}, 0.1f);
   const LightChoice triangle = sampler.choose({0, 0, 0}, {0, 1, 0}, 0.9f);
   ASSERT_EQ(quad.light, 0u);

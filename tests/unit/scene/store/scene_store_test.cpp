@@ -48,7 +48,6 @@ struct TinyScene {
   AreaLight light;
   Camera camera;
   bool whiteIsGlass = false;   // material 0 thin glass
-  bool finishes = false;       // material 0 plastic, and a material 2 a mirror
   std::optional<SiteLocation> site;   // where it stands
   std::vector<Camera> extraCameras;   // named cameras beside the default
 
@@ -99,13 +98,6 @@ struct TinyScene {
     writer.addMaterial("white", Vec3(0.8f, 0.8f, 0.8f));
     writer.addMaterial("lamp", Vec3(0), Vec3(12, 11, 9.5f), /*hiddenFromCamera=*/true);
     if (whiteIsGlass) writer.setMaterialGlass(0, Vec3(0.7f, 0.8f, 0.9f), 1.52f);
-    if (finishes) {
-      writer.setMaterialFinish(0, Finish::Plastic, Vec3(1.0f, 0.9f, 0.8f), 0.3f, 1.45f);
-      writer.addMaterial("mirror", Vec3(0.0f));
-      writer.setMaterialFinish(2, Finish::Metal, Vec3(0.95f, 0.64f, 0.54f), 0.0f);
-      const std::string error = errorOf([&] { writer.setMaterialFinish(2, Finish::Metal, Vec3(0.5f), 1.5f); });
-      EXPECT_NE(error.find("material 2 ('mirror'): roughness 1.5 must be from 0 to 1"), std::string::npos) << error;
-    }
     for (size_t i = 0; i < portalCells.size(); ++i)
       writer.addPortal(portalCells[i].first, portalCells[i].second, portalPolygons[i]);
     writer.addLight(light);
@@ -614,39 +606,6 @@ TEST(SceneStore, RefusesASiteOffTheEarthNamingTheValue) {
   EXPECT_NE(read.find("table site: longitude 200 must be"), std::string::npos) << read;
 }
 
-// Finishes (schema 10) round-trip; a version 9 store has none (every
-// material matte), and a finish edited out of range is refused on reading.
-TEST(SceneStore, RoundTripsFinishesAndReadsAVersionNineStoreAsMatte) {
-  TempDirectory temp;
-  TinyScene scene;
-  scene.finishes = true;
-  scene.write(temp / "store");
-  {
-    const SceneStore store = SceneStore::open(temp / "store");
-    const Material& floor = store.materials()[0];
-    EXPECT_EQ(floor.finish, Finish::Plastic);
-    expectSameVec3(floor.specular, Vec3(1.0f, 0.9f, 0.8f));
-    EXPECT_EQ(floor.roughness, 0.3f);
-    EXPECT_EQ(floor.ior, 1.45f);
-    EXPECT_EQ(store.materials()[1].finish, Finish::Matte);
-    EXPECT_TRUE(store.materials()[2].mirror());
-    expectSameVec3(store.materials()[2].specular, Vec3(0.95f, 0.64f, 0.54f));
-  }
-  {
-    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    db.exec("UPDATE material_finishes SET roughness = 2 WHERE material = 2");
-  }
-  const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
-  EXPECT_NE(error.find("material 2's finish has specular"), std::string::npos) << error;
-  {
-    sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    db.exec("DROP TABLE material_finishes");
-    db.setUserVersion(9);
-  }
-  for (const Material& material : SceneStore::open(temp / "store").materials())
-    EXPECT_EQ(material.finish, Finish::Matte) << material.name;
-}
-
 TEST(SceneStore, RefusesGlassThatMakesLight) {
   TempDirectory temp;
   SceneStoreWriter writer(temp / "store");
@@ -696,7 +655,6 @@ TEST(SceneStore, KeepsALuminairesOpeningAndReadsVersionEightsAsPoints) {
     db.exec("ALTER TABLE point_lights ADD COLUMN opening_width REAL NOT NULL DEFAULT -1");
     db.exec("ALTER TABLE point_lights ADD COLUMN opening_length REAL NOT NULL DEFAULT 1");
     db.exec("ALTER TABLE point_lights ADD COLUMN opening_height REAL NOT NULL DEFAULT 0");
-    db.exec("DROP TABLE material_finishes");
     db.setUserVersion(9);
   }
   const std::string error = errorOf([&] { SceneStore::open(temp / "store"); });
@@ -710,8 +668,7 @@ TEST(SceneStore, OpensAVersionOneStoreWithNothingHidden) {
   TinyScene().write(temp / "store");
   {
     sql::Database db(temp / "store/scene.db", sql::Database::Mode::ReadWriteCreate);
-    EXPECT_EQ(db.userVersion(), 10);
-    db.exec("DROP TABLE material_finishes");
+    EXPECT_EQ(db.userVersion(), 9);
     db.exec("DROP TABLE point_lights");
     db.exec("DROP TABLE light_distributions");
     db.exec("DROP TABLE site");
