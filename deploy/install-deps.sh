@@ -6,10 +6,10 @@
 #   deploy/install-deps.sh --slurm    also Slurm (slurmctld, slurmd, srun, sbatch) and MUNGE,
 #                                     for deploy/slurm/ and its test (tests/deploy/slurm_test.sh)
 #   deploy/install-deps.sh --fuzz     also clang and libFuzzer, for tests/fuzz (docs/fuzzing.md)
-#   deploy/install-deps.sh --mitsuba  also Mitsuba 3 and Dr.Jit (PyPI) in a virtual environment at
-#                                     $MITSUBA_VENV (default ~/.local/share/portico/mitsuba-venv) and
+#   deploy/install-deps.sh --peers    also Mitsuba 3 and Dr.Jit (PyPI) in a virtual environment at
+#                                     $MITSUBA_VENV (default ~/.local/share/portico/mitsuba-venv) with
 #                                     Debian's libllvm19, for `portico bench quality --mitsuba`
-#                                     (python/portico_mitsuba; docs/image-quality.md)
+#                                     (docs/image-quality.md; --mitsuba: the same)
 set -euo pipefail
 
 mitsuba=0
@@ -38,9 +38,9 @@ for arg in "$@"; do
     # libclang-rt-14-dev, only recommended by clang, so named here.
     --fuzz) packages+=(clang libclang-rt-14-dev) ;;
     # Dr.Jit's LLVM back end (llvm_ad_rgb) loads libLLVM at run time.
-    --mitsuba) packages+=(libllvm19); mitsuba=1 ;;
+    --peers|--mitsuba) packages+=(libllvm19); mitsuba=1 ;;
     -h|--help) sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
-    *) echo "install-deps.sh: unknown option $arg (known: --slurm, --fuzz, --mitsuba)" >&2; exit 2 ;;
+    *) echo "install-deps.sh: unknown option $arg (known: --slurm, --fuzz, --peers)" >&2; exit 2 ;;
   esac
 done
 
@@ -68,10 +68,14 @@ if [ ! -x "$repo/.venv/bin/python3" ]; then python3 -m venv "$repo/.venv"; fi
 # (docs/image-quality.md).
 "$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "ifcopenshell==0.9.0.post1" "numpy>=1.24" \
   "pyradiance==1.3.1" "flip-evaluator==1.7"
+# LuxCoreRender (PyPI's pyluxcore, with its PhotonGI cache: the nearest
+# open-source photon-mapping peer) renders beside portico in `bench quality
+# --luxcore` (python/portico_peers; docs/image-quality.md).
+"$repo/.venv/bin/python3" -m pip install -q --disable-pip-version-check "pyluxcore==2.11.2"
 
 if [ "$mitsuba" = 1 ]; then
   venv="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}"
   [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
   "$venv/bin/pip" install -q mitsuba==3.9.1 drjit==1.5.0 numpy
-  echo "Mitsuba 3 in $venv: portico bench quality SCENE_DIR --mitsuba renders with it (docs/image-quality.md)"
+  echo "Mitsuba 3 in $venv: portico bench quality DIR --mitsuba renders with it (docs/image-quality.md)"
 fi

@@ -8,17 +8,13 @@
 #include <regex>
 
 #include "common/util/child_process.h"
+#include "common/util/project_python.h"
 
 namespace portico {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string flipPython() {
-  if (const char* python = std::getenv("PORTICO_PYTHON"); python && *python) return python;
-  return std::string(PORTICO_SOURCE_DIR) + "/.venv/bin/python3";
-}
 
 std::string lastLine(const std::string& text) {
   const size_t end = text.find_last_not_of('\n');
@@ -30,7 +26,7 @@ std::string lastLine(const std::string& text) {
 }  // namespace
 
 FlipResult flipError(const std::string& image, const std::string& reference) {
-  const std::string python = flipPython();
+  const std::string python = projectPython();
   if (::access(python.c_str(), X_OK) != 0)
     return {std::nullopt, "no " + python + " (deploy/install-deps.sh makes the .venv)"};
   const fs::path log = fs::temp_directory_path() / ("portico-flip-" + std::to_string(::getpid()) + ".log");

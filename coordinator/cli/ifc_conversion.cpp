@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/util/project_python.h"
 #include "coordinator/cli/python_modules.h"
 
 extern char** environ;
@@ -18,14 +19,6 @@ extern char** environ;
 namespace portico::cli {
 
 namespace {
-
-// The converter runs in the virtual environment deploy/install-deps.sh
-// makes beside the sources (IfcOpenShell is not packaged by Debian);
-// PORTICO_PYTHON names another interpreter that has IfcOpenShell.
-std::string converterPython() {
-  if (const char* python = std::getenv("PORTICO_PYTHON"); python && *python) return python;
-  return std::string(PORTICO_SOURCE_DIR) + "/.venv/bin/python3";
-}
 
 int runProcess(const std::vector<std::string>& arguments) {
   std::vector<char*> argv;
@@ -48,7 +41,7 @@ bool isIfcFile(const std::string& path) {
 
 std::string convertIfc(const std::string& ifc, const std::string& outDirectory, const IfcOptions& options) {
   if (!std::filesystem::is_regular_file(ifc)) throw std::runtime_error(fmt::format("{}: does not exist", ifc));
-  const std::string python = converterPython();
+  const std::string python = projectPython();   // IfcOpenShell is not packaged by Debian
   if (!std::filesystem::exists(python))
     throw std::runtime_error(fmt::format("{}: reading IFC needs IfcOpenShell in {} (run deploy/install-deps.sh, or set "
                                          "PORTICO_PYTHON to a python3 that has ifcopenshell)",

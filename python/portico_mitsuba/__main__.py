@@ -11,7 +11,7 @@ comes first). Each render is seeded with its spp, so rows are independent.
 `portico bench quality SCENE_DIR --mitsuba` runs this and scores the images
 against SCENE_DIR/reference.exr as it scores its own.
 
-Needs Mitsuba 3 and Dr.Jit (deploy/install-deps.sh --mitsuba: a virtual
+Needs Mitsuba 3 and Dr.Jit (deploy/install-deps.sh --peers: a virtual
 environment at ~/.local/share/portico/mitsuba-venv) and, for the LLVM
 variants, DRJIT_LIBLLVM_PATH naming Debian's libLLVM 19.
 """

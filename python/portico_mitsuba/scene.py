@@ -24,20 +24,26 @@ def check_supported(scene_dir, sc):
                                    "emitting objects only")
 
 
-def scene_dict(mi, scene_dir, sc, spp, max_depth=-1):
-    cam = sc["camera"]
-    d = {
+def base_dict(mi, origin, target, up, fov_y_deg, width, height, spp, max_depth=-1):
+    """The path integrator and a pinhole camera with a box pixel filter, as portico renders."""
+    return {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": max_depth, "hide_emitters": False},
         "sensor": {
-            "type": "perspective", "fov": cam["fov_y_deg"], "fov_axis": "y",
-            "near_clip": 0.001, "far_clip": 1000.0,
-            "to_world": mi.ScalarTransform4f().look_at(origin=cam["origin"], target=cam["target"], up=cam["up"]),
+            "type": "perspective", "fov": fov_y_deg, "fov_axis": "y",
+            "near_clip": 0.001, "far_clip": 10000.0,
+            "to_world": mi.ScalarTransform4f().look_at(origin=origin, target=target, up=up),
             "sampler": {"type": "independent", "sample_count": spp},
-            "film": {"type": "hdrfilm", "width": cam["width"], "height": cam["height"], "pixel_format": "rgb",
+            "film": {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "rgb",
                      "component_format": "float32", "rfilter": {"type": "box"}, "sample_border": False},
         },
     }
+
+
+def scene_dict(mi, scene_dir, sc, spp, max_depth=-1):
+    cam = sc["camera"]
+    d = base_dict(mi, cam["origin"], cam["target"], cam["up"], cam["fov_y_deg"], cam["width"], cam["height"], spp,
+                  max_depth)
     for i, o in enumerate(sc["objects"]):
         if "_texture" in o:
             # Bilinear, repeating, the image's sRGB values linearised: as portico looks textures up.

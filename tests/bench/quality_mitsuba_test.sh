@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # `portico bench quality --mitsuba` on cornell_closed: Mitsuba 3's rows beside
 # portico's, scored the same way, their error falling with the samples.
-# Skipped (exit 77) where Mitsuba is not installed (deploy/install-deps.sh --mitsuba).
+# Skipped (exit 77) where Mitsuba is not installed (deploy/install-deps.sh --peers).
 # The ladder's module refuses a scene it would render otherwise than portico,
 # naming it, with or without Mitsuba.
 set -euo pipefail
@@ -16,7 +16,7 @@ grep -q "daylight_window/scene.json: lit by render_args.txt" "$work/err.txt" || 
 
 python="${MITSUBA_VENV:-$HOME/.local/share/portico/mitsuba-venv}/bin/python"
 if ! "$python" -c "import mitsuba, drjit" 2> /dev/null; then
-  echo "skipped: no Mitsuba 3 in $python (deploy/install-deps.sh --mitsuba)"; exit 77
+  echo "skipped: no Mitsuba 3 in $python (deploy/install-deps.sh --peers)"; exit 77
 fi
 "$bin/portico" bench quality "$src/tests/scenes/cornell_closed" --settings "--spp 2 --gather 2 --photons 50000" \
   --mitsuba --mitsuba-spp 4,64 --csv "$work/q.csv" --plot "$work/q.png" | tee "$work/out.txt"

@@ -52,7 +52,10 @@ void addQuality(CLI::App& bench, CommandTable& table) {
   auto o = std::make_shared<BenchQualityOptions>();
   auto* benchQualityCommand = bench.add_subcommand(
       "quality", "error against time on a reference scene: a ladder of render settings (docs/image-quality.md)");
-  benchQualityCommand->add_option("SCENE_DIR", o->sceneDirectory, "folder of scene.json and reference.exr")
+  benchQualityCommand
+      ->add_option("DIR", o->sceneDirectory,
+                   "folder of reference.exr and scene.json (a reference scene) or view.json (a generated building's "
+                   "camera: tests/scenes/views)")
       ->required()
       ->check(CLI::ExistingDirectory);
   benchQualityCommand->add_option("--settings", o->settings,
@@ -62,12 +65,21 @@ void addQuality(CLI::App& bench, CommandTable& table) {
       ->capture_default_str();
   benchQualityCommand->add_flag("--mitsuba", o->mitsuba,
                                 "also render the scene with Mitsuba 3's path tracer, in the same run "
-                                "(deploy/install-deps.sh --mitsuba installs it)");
+                                "(deploy/install-deps.sh --peers installs it)");
   benchQualityCommand->add_option("--mitsuba-spp", o->mitsubaSpp, "Mitsuba's sample counts, comma-separated")
       ->capture_default_str();
   benchQualityCommand->add_option("--mitsuba-python", o->mitsubaPython,
                                   "a python with mitsuba and drjit (default: $MITSUBA_VENV/bin/python, else "
                                   "~/.local/share/portico/mitsuba-venv/bin/python)");
+  benchQualityCommand->add_flag("--luxcore", o->luxcore,
+                                "also render the scene with LuxCoreRender, in the same run (deploy/install-deps.sh "
+                                "installs pyluxcore in the sources' .venv)");
+  benchQualityCommand->add_option("--luxcore-spp", o->luxcoreSpp, "LuxCoreRender's sample counts, comma-separated")
+      ->capture_default_str();
+  benchQualityCommand
+      ->add_option("--luxcore-photongi", o->luxcorePhotonGi,
+                   "photons of LuxCoreRender's PhotonGI indirect cache (0: its plain path tracer)")
+      ->capture_default_str();
   benchQualityCommand->add_option("--csv", o->csv, "write one row per setting");
   benchQualityCommand->add_option("--plot", o->plot, "write a PNG: block RMSE and worst block against seconds");
   table.add(benchQualityCommand, [o] { return runBenchQuality(*o); });

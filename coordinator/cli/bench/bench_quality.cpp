@@ -1,12 +1,16 @@
 #include "coordinator/cli/bench/bench_quality.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -15,7 +19,7 @@
 #include "coordinator/cli/bench/bench_plot.h"
 #include "coordinator/cli/bench/image_score.h"
 #include "common/util/csv_field.h"
-#include "coordinator/cli/bench/mitsuba_ladder.h"
+#include "coordinator/cli/bench/peer_ladder.h"
 
 namespace portico::cli {
 namespace {
@@ -44,7 +48,7 @@ void runChild(const std::vector<std::string>& argv, const fs::path& log, const s
 struct Rung {
   std::string settings;
   double seconds = 0;
-  ImageScore score;
+  ImageScore score{};
 };
 
 constexpr const char* kCsvHeader = "settings,seconds,mean_err,worst_block,rel_rmse_blocks,rel_mse,flip\n";
@@ -58,59 +62,86 @@ std::string csvRow(const Rung& r) {
 }  // namespace
 
 int runBenchQuality(const BenchQualityOptions& options) {
-  const fs::path scene = fs::path(options.sceneDirectory) / "scene.json";
-  const fs::path reference = fs::path(options.sceneDirectory) / "reference.exr";
-  if (!fs::exists(scene)) throw std::invalid_argument(fmt::format("{}: no scene.json", options.sceneDirectory));
-  if (!fs::exists(reference))
-    throw std::invalid_argument(fmt::format("{}: no reference.exr beside scene.json", options.sceneDirectory));
   const std::vector<std::string> ladder = splitOn(options.settings, ';');
   if (ladder.empty()) throw std::invalid_argument("--settings: no setting to render");
 
   const fs::path work = fs::temp_directory_path() / fmt::format("portico-bench-quality-{}", getpid());
   fs::remove_all(work);
   fs::create_directories(work);
+  try {
+    runLadders(options, ladder, work);
+  } catch (...) {
+    fs::remove_all(work);
+    throw;
+  }
+  fs::remove_all(work);
+  return 0;
+}
+
+namespace {
+
+void runLadders(const BenchQualityOptions& options, const std::vector<std::string>& ladder, const fs::path& work) {
   const std::string portico = findProgram("portico"), compare = findProgram("portico-compare");
-  runChild({portico, "scene", "import", scene.string(), (work / "store").string()}, work / "import.log",
-           "importing " + scene.string());
+  const Subject subject = prepare(options, portico, work);
 
   std::vector<Rung> rungs;
   std::cout << kCsvHeader;
   for (size_t i = 0; i < ladder.size(); ++i) {
     const fs::path image = work / fmt::format("rung-{}.exr", i);
-    std::vector<std::string> argv{portico, "render", (work / "store").string(), "-o", image.string(),
-                                  "--workers", std::to_string(options.workers)};
+    std::vector<std::string> argv{portico, "render"};
+    argv.insert(argv.end(), subject.renderArguments.begin(), subject.renderArguments.end());
+    argv.insert(argv.end(), {"-o", image.string(), "--workers", std::to_string(options.workers)});
     for (const std::string& word : splitOn(ladder[i], ' ')) argv.push_back(word);
-    Rung rung{ladder[i], 0.0, {}};
+    Rung rung{ladder[i]};
     const auto started = std::chrono::steady_clock::now();
     runChild(argv, work / fmt::format("render-{}.log", i), "portico render " + ladder[i]);
     rung.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-    rung.score = scoreImage(compare, image, reference, work / fmt::format("compare-{}.log", i));
+    rung.score = scoreImage(compare, image, subject.reference, work / fmt::format("compare-{}.log", i));
     std::cout << csvRow(rung) << std::flush;
     rungs.push_back(rung);
   }
 
-  // Mitsuba in the same run, on as many threads as portico has workers.
-  std::vector<Rung> mitsubaRungs;
+  // The peers in the same run, on as many threads as portico has workers.
+  std::vector<PeerSeries> peers;
+  auto scorePeer = [&](const std::string& label, const std::string& rungPrefix, std::array<uint8_t, 3> color,
+                       const std::vector<PeerRender>& renders) {
+    PeerSeries series{label, {}, color};
+    for (const PeerRender& render : renders) {
+      Rung rung{fmt::format("{} --spp {}", rungPrefix, render.spp), render.seconds};
+      rung.score = scoreImage(compare, render.image, subject.reference,
+                              work / fmt::format("compare-{}.log", render.image.stem().string()));
+      std::cout << csvRow(rung) << std::flush;
+      series.rungs.push_back(rung);
+    }
+    peers.push_back(series);
+  };
+  const fs::path view = work / "view";
+  if ((options.mitsuba && !subject.sceneJson) || options.luxcore)
+    writePeerView(portico, (work / "store").string(), subject.camera, subject.width, subject.height, view);
   if (options.mitsuba) {
     const std::string python = options.mitsubaPython.empty() ? defaultMitsubaPython() : options.mitsubaPython;
-    for (const MitsubaRender& render :
-         renderWithMitsuba(options.sceneDirectory, options.mitsubaSpp, options.workers, python, work / "mitsuba")) {
-      Rung rung{fmt::format("mitsuba path --spp {}", render.spp), render.seconds, {}};
-      rung.score = scoreImage(compare, render.image, reference, work / fmt::format("compare-mitsuba-{}.log", render.spp));
-      std::cout << csvRow(rung) << std::flush;
-      mitsubaRungs.push_back(rung);
-    }
+    scorePeer("Mitsuba", "mitsuba path", {44, 160, 44},
+              subject.sceneJson
+                  ? renderWithMitsuba(options.sceneDirectory, options.mitsubaSpp, options.workers, python,
+                                      work / "mitsuba")
+                  : renderViewWithMitsuba(view, options.mitsubaSpp, options.workers, python));
   }
+  if (options.luxcore)
+    scorePeer(options.luxcorePhotonGi ? "LuxCore PhotonGI" : "LuxCore path",
+              options.luxcorePhotonGi ? fmt::format("luxcore path+photongi {}", options.luxcorePhotonGi)
+                                      : "luxcore path",
+              {148, 103, 189}, renderViewWithLuxcore(view, options.luxcoreSpp, options.workers, options.luxcorePhotonGi));
 
   if (!options.csv.empty()) {
     std::ofstream out(options.csv);
     out << kCsvHeader;
     for (const Rung& r : rungs) out << csvRow(r);
-    for (const Rung& r : mitsubaRungs) out << csvRow(r);
+    for (const PeerSeries& peer : peers)
+      for (const Rung& r : peer.rungs) out << csvRow(r);
     if (!out) throw std::runtime_error(fmt::format("{}: cannot write", options.csv));
   }
   if (!options.plot.empty()) {
-    PlotPanel panel{fmt::format("{}: error against time", fs::path(options.sceneDirectory).filename().string()),
+    PlotPanel panel{fmt::format("{}: error against time", subject.name),
                     "seconds (portico render, start-up included)", "relative error", true, true, {}};
     PlotSeries rmse, worst;
     rmse.label = "block RMSE", rmse.color = {31, 119, 180};
@@ -120,17 +151,17 @@ int runBenchQuality(const BenchQualityOptions& options) {
       worst.x.push_back(r.seconds), worst.y.push_back(r.score.worstBlock);
     }
     panel.series = {rmse, worst};
-    if (!mitsubaRungs.empty()) {
-      PlotSeries mitsuba;
-      mitsuba.label = "Mitsuba", mitsuba.color = {44, 160, 44};
-      panel.xLabel = "seconds (portico: command, Mitsuba: render)";
-      for (const Rung& r : mitsubaRungs) mitsuba.x.push_back(r.seconds), mitsuba.y.push_back(r.score.blockRmse);
-      panel.series.push_back(mitsuba);
+    for (const PeerSeries& peer : peers) {
+      PlotSeries series;
+      series.label = peer.label + " block RMSE", series.color = peer.color;
+      panel.xLabel = "seconds (portico: command, peers: render)";
+      for (const Rung& r : peer.rungs) series.x.push_back(r.seconds), series.y.push_back(r.score.blockRmse);
+      panel.series.push_back(series);
     }
     writePlotPng(options.plot, {panel});
   }
-  fs::remove_all(work);
-  return 0;
 }
+
+}  // namespace
 
 }  // namespace portico::cli
