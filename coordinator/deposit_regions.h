@@ -62,13 +62,13 @@ struct DepositRegionGrant {
 // ~3 per photon, portal copies included), a block per cell for the
 // records' tails, and the head, in whole blocks, at most kMostRegionBytes.
 // A lease that deposits more sends the rest in its Result.
-constexpr int64_t kRegionBytesPerWork = 8 * 16;
+constexpr int64_t kRegionBytesPerWork = 8 * 8;   // 8-byte records (photon_record.h)
 constexpr int64_t kMostRegionBytes = int64_t(256) << 20;
 int64_t depositRegionBytes(int64_t leaseWork, size_t cells);
 
 // A Result's deposits in its lease's region, checked: each names a cell
 // below cellCount, lies inside the region after its head, holds whole
-// 16-byte records and overlaps no other; and the Result carries the
+// records (photon_record.h) and overlaps no other; and the Result carries the
 // region's nonce. `grant` is null when the lease had no region. Throws
 // std::runtime_error naming the lease and the problem.
 struct RegionDeposit {

@@ -39,8 +39,9 @@ struct JobRecord {
   std::string error;
   std::string spec;            // packed wire::JobSpec
   int64_t createdMs = 0, phaseStartedMs = 0, finishedMs = 0;
-  // The size of the records its photon tables hold: sizeof(PhotonRecord),
-  // or 24 for a job begun by a portico before schema 5.
+  // The size of the records its photon tables hold: sizeof(PhotonRecord)
+  // (8 since protocol 21), 16 for a job begun by a portico before it, or 24
+  // before schema 5. Each size is one format, so the size tells them apart.
   int photonRecordBytes = 0;
   // What decides its photon tables (photon_reuse.h; "" for none: a job that
   // cannot lend its pass), the earlier job whose tables it renders with (0:

@@ -57,6 +57,9 @@ std::string photonPassKey(const JobSettings& resolved, const SceneStore& scene) 
                        int(d.sky), d.skyRadiance.x, d.skyRadiance.y, d.skyRadiance.z, d.turbidity, d.sun,
                        d.sunAzimuthDegrees, d.sunElevationDegrees, d.sunIrradiance.x, d.sunIrradiance.y,
                        d.sunIrradiance.z);
+  // A daylight-factor analysis leaves the lamps off (lampsLit): other
+  // photons, and another power unit (photon_power_unit.h).
+  if (!lampsLit(resolved)) key += " lamps=off";
   return key;
 }
 

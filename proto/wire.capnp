@@ -4,7 +4,7 @@
 using Cxx = import "/capnp/c++.capnp";
 $Cxx.namespace("portico::wire");
 
-const protocolVersion :UInt32 = 21;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture); 21: JobSpec.lightSampling (light tree or scan)
+const protocolVersion :UInt32 = 22;   # 2: fetchFile / fileChunk (cells over the wire); 3: PhotonsReply.error, flat Result frames; 4: Assign.moreCells; 5: 16-byte photon records; 6: JobSpec.irradiance, photons stored with their surface normal; 7: workers receive a complete JobSpec (the coordinator resolves its automatic values); 8: JobSpec.camera; 9: Assign.photonJob (a job may render with an earlier job's photon tables), Submit.freshPhotons; 10: JobSpec.targetError, timeLimit, maxPasses (render passes); 11: JobSpec.cameraName (a store camera by name); 12: JobSpec.daylight (sun and sky); 13: Daylight.sunTime (a sun by date, time and place, in a Submit), a ray's top depth bit marks a shadow ray bound for the sky (toSky); 14: Assign.depositRegion, CellPhotons in the job's photon file (workers sharing the coordinator's file system write their deposits themselves); 15: JobSpec.analysis, RayBatch.sensors, Submit.sensors (lighting analysis: illuminance at sensors); 16: render Results count rays.finished, which the coordinator checks (every ray a lease starts ends in it or is handed on); 17: Heartbeat.progress and tracingLease (the coordinator takes back the leases of a worker that stops moving); 18: JobDetailRequest and Reply, FetchPreview, PreviewReply (the dashboard's cells, log lines and film so far); 19: Submit.priority and requiredTags, Hello.tags, PriorityRequest (priorities and worker pools); 20: JobSpec.luminance (a render's image in cd/m^2, its false-colour picture); 21: JobSpec.lightSampling (light tree or scan); 22: 8-byte photon records (position, direction and power against the job's power unit)
 
 enum Phase {
   photons @0;
@@ -43,7 +43,7 @@ struct Ray {
 # (so density estimates near a doorway see both sides).
 struct CellPhotons {
   cell @0 :UInt32;
-  records @1 :Data;        # 16-byte photon records on the cell's lattice (common/transport/photon_record.h)
+  records @1 :Data;        # 8-byte photon records on the cell's lattice (common/transport/photon_record.h)
   # Or, in a Result with regionNonce, written by the worker into its lease's
   # deposit region (records empty): where, how many bytes, their CRC-32C.
   fileOffset @2 :UInt64;
@@ -353,7 +353,7 @@ struct FileExtent {
 struct PhotonsReply {
   job @0 :UInt64;
   cell @1 :UInt32;
-  batches @2 :List(Data);   # the cell's photon table: 16-byte records, batch by batch
+  batches @2 :List(Data);   # the cell's photon table: 8-byte records, batch by batch
   error @3 :Text;           # non-empty: the table could not be read (no batches); the lease is failed, nothing cached
   # To a worker that reads the photon file itself (FetchPhotons.readsPhotonFile):
   # the file (absolute) and the batches' places in it, in order, instead of

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/net/job_spec_wire.h"
+#include "common/transport/photon_power_unit.h"
 #include "common/transport/photon_record.h"
 #include "worker/lease_runner.h"
 
@@ -94,7 +95,9 @@ std::unique_ptr<IndirectLight> assembleIndirectLight(CellCache& cache, LoadedLea
   cache.makeRoom(count * (2 * sizeof(StoredPhoton) + kAssemblyScratchPerPhoton));
   std::vector<StoredPhoton> photons;
   unpackRecords(photonRecords.data(), photonRecords.size(),
-                PhotonFrame(lease.scene->cells()[cellId].bounds, parameters.photonRadius), parameters.gather > 0,
+                PhotonFrame(lease.scene->cells()[cellId].bounds, parameters.photonRadius,
+                            photonPowerUnit(*lease.scene, parameters)),
+                parameters.gather > 0,
                 photons);
   photonRecords.clear();
   photonRecords.shrink_to_fit();

@@ -6,6 +6,7 @@
 
 #include "common/rng.h"
 #include "common/transport/albedo_texture.h"
+#include "common/transport/photon_power_unit.h"
 #include "common/transport/photon_scattering.h"
 #include "common/transport/pixel_pattern.h"
 #include "common/transport/pixel_samples.h"
@@ -68,7 +69,7 @@ CellKernel::CellKernel(const SceneStore& scene, const CellTracer& tracer, const 
     : scene_(scene),
       tracer_(tracer),
       parameters_(parameters),
-      ownFrame_(scene.cells()[tracer.cell().id()].bounds, parameters.photonRadius),
+      ownFrame_(scene.cells()[tracer.cell().id()].bounds, parameters.photonRadius, photonPowerUnit(scene, parameters)),
       photons_(indirect ? &indirect->photons : nullptr),
       irradiance_(indirect && indirect->irradiance ? &*indirect->irradiance : nullptr),
       lights_(scene.lights()) {
@@ -710,7 +711,7 @@ void CellKernel::deposit(const StoredPhoton& photon, KernelOutputs& out) {
   thread_local std::vector<uint32_t> neighbors;
   tracer_.neighborsNear(photon.position, parameters_.photonRadius, neighbors);
   for (uint32_t neighbor : neighbors) {
-    const PhotonFrame neighborFrame(scene_.cells()[neighbor].bounds, parameters_.photonRadius);
+    const PhotonFrame neighborFrame(scene_.cells()[neighbor].bounds, parameters_.photonRadius, ownFrame_.powerUnit());
     out.deposits[neighbor].push_back(toRecord(photon, neighborFrame));
     ++out.counters.photonCopies;
   }

@@ -6,16 +6,25 @@
 
 namespace portico {
 
-PhotonFrame::PhotonFrame(const Bounds3& cellBounds, float photonRadius) {
+PhotonFrame::PhotonFrame(const Bounds3& cellBounds, float photonRadius, float powerUnit) {
   if (!isFinite(cellBounds.lo) || !isFinite(cellBounds.hi) || cellBounds.empty())
     throw std::invalid_argument(fmt::format("photon frame: cell bounds ({}, {}, {}) - ({}, {}, {}) are not a finite box",
                                             cellBounds.lo.x, cellBounds.lo.y, cellBounds.lo.z, cellBounds.hi.x,
                                             cellBounds.hi.y, cellBounds.hi.z));
   if (!std::isfinite(photonRadius))
     throw std::invalid_argument(fmt::format("photon frame: photon radius {} is not finite", photonRadius));
-  // The millimetre keeps a flat cell's lattice non-degenerate and covers
-  // hit points a rounding error outside the bounds.
-  const Vec3 margin(std::max(photonRadius, 0.0f) + 1e-3f);
+  if (!std::isnormal(powerUnit) || !(powerUnit > 0))
+    throw std::invalid_argument(fmt::format("photon frame: power unit {} is not a positive normal float", powerUnit));
+  for (int e = 0; e < kExponents; ++e) scales_[size_t(e)] = std::ldexp(powerUnit, e - kExponentBias);
+  if (!std::isfinite(scales_.back()))
+    throw std::invalid_argument(fmt::format("photon frame: power unit {} is too large", powerUnit));
+  // The millimetre keeps a flat cell's lattice non-degenerate; a 1/1024 of
+  // the cell's largest extent (16 steps) keeps hit points a rounding error
+  // outside the bounds, and copies at the photon radius from their portal,
+  // off the lattice's faces, where clamping would begin.
+  const Vec3 extent = cellBounds.hi - cellBounds.lo;
+  const float largest = std::max(extent.x, std::max(extent.y, extent.z));
+  const Vec3 margin(std::max(photonRadius, 0.0f) + 1e-3f + largest * 0x1p-10f);
   origin_ = cellBounds.lo - margin;
   step_ = (cellBounds.hi + margin - origin_) / float(kLastStep);
   inverseStep_ = Vec3(1.0f) / step_;
@@ -48,10 +57,9 @@ void unpackRecords(const void* bytes, size_t size, const PhotonFrame& frame, boo
   for (size_t i = 0; i < count; ++i) {
     PhotonRecord r;
     std::memcpy(&r, static_cast<const char*>(bytes) + i * sizeof r, sizeof r);
-    if (!(r.position & kBouncedBit) && !includeDirect) continue;
-    // Positions decode finite by construction; power may not (a bad file).
-    StoredPhoton p = fromRecord(r, frame);
-    if (isFinite(p.power)) out.push_back(p);
+    if (!(r.bits & photon_bits::kBounced) && !includeDirect) continue;
+    // Positions and powers decode finite by construction.
+    if (isWellFormed(r)) out.push_back(fromRecord(r, frame));
   }
 }
 

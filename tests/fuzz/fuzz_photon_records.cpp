@@ -1,4 +1,4 @@
-// Fuzz target: a photon table (16-byte records, as stored per cell and
+// Fuzz target: a photon table (8-byte records, as stored per cell and
 // sent in PhotonsReply) unpacked and built into a photon map, as the worker does.
 #include <cstddef>
 #include <cstdint>

@@ -48,9 +48,9 @@ inline size_t readRays(capnp::List<wire::Ray>::Reader rays) {
 }
 
 // The lattice of the photon tables the targets decode (and the seeds are
-// written on): a 20 m cell.
+// written on): a 20 m cell, power unit 1.
 inline const PhotonFrame& photonFrame() {
-  static const PhotonFrame frame(Bounds3(Vec3(-10.0f), Vec3(10.0f)), 0.5f);
+  static const PhotonFrame frame(Bounds3(Vec3(-10.0f), Vec3(10.0f)), 0.5f, 1.0f);
   return frame;
 }
 

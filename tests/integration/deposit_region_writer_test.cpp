@@ -66,7 +66,7 @@ class DepositRegionWriterTest : public ::testing::Test {
   }
   static std::vector<PhotonRecord> records(size_t count, uint64_t seed) {
     std::vector<PhotonRecord> out(count);
-    for (size_t i = 0; i < count; ++i) out[i] = PhotonRecord{seed * 1000 + i, uint32_t(i), {int16_t(i), int16_t(-i)}};
+    for (size_t i = 0; i < count; ++i) out[i] = PhotonRecord{(seed * 1000 + i) | uint64_t(i) << 40};
     return out;
   }
 
@@ -105,9 +105,11 @@ TEST_F(DepositRegionWriterTest, WritesEveryCellAfterTheHeadWhereItsExtentSays) {
 
 TEST_F(DepositRegionWriterTest, CellsThatDoNotFitGoInTheResult) {
   writeHead(0, 1, 5);
-  // Room for 2 * 4096 bytes: 256 records, then 300 that do not fit, then 250 that do.
+  // Room for 2 * 4096 bytes: a block of records, then more than a block
+  // that do not fit, then a little less than a block that do.
+  constexpr size_t perBlock = kBlock / sizeof(PhotonRecord);
   const std::map<uint32_t, std::vector<PhotonRecord>> deposits{
-      {1, records(256, 1)}, {2, records(300, 2)}, {3, records(250, 3)}};
+      {1, records(perBlock, 1)}, {2, records(perBlock * 300 / 256, 2)}, {3, records(perBlock * 250 / 256, 3)}};
   auto target = region(file_, 0, 3 * kBlock);
   DepositRegionWriter writer;
   const auto written = writer.write(target->getRoot<wire::DepositRegion>().asReader(), 1, 5, deposits);

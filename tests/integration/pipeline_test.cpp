@@ -13,6 +13,7 @@
 
 #include "common/image/image_reader.h"
 #include "common/net/client.h"
+#include "common/transport/photon_record.h"
 #include "tests/integration/service_harness.h"
 
 namespace portico {
@@ -135,7 +136,7 @@ TEST_F(Pipeline, DepositsWrittenByWorkersIntoThePhotonFileChangeNoBit) {
   expectConservation(regionStats);
   EXPECT_EQ(regionStats["photons"], resultStats["photons"]);
   const auto bytesOf = [](const nlohmann::json& stats, const char* key) { return stats["disk"][key].get<int64_t>(); };
-  const int64_t depositBytes = regionStats["photons"]["deposits"].get<int64_t>() * 16;
+  const int64_t depositBytes = regionStats["photons"]["deposits"].get<int64_t>() * int64_t(sizeof(PhotonRecord));
   EXPECT_GT(bytesOf(regionStats, "photon_bytes_from_workers"), depositBytes / 2);
   EXPECT_EQ(bytesOf(regionStats, "photon_bytes_from_workers") + bytesOf(regionStats, "photon_bytes_from_results"),
             bytesOf(resultStats, "photon_bytes_from_results"));

@@ -194,11 +194,11 @@ TEST_F(Resilience, AJobBegunWithAnOlderPhotonRecordRunsItsPhotonPassAgainWithThe
   const fs::path dir = dir_ / "older-records";
   const std::string log = restartAfter(dir, [&](uint64_t job) {
     sql::Database db((dir / "jobs.db").string(), sql::Database::Mode::ReadWriteCreate);
-    auto& update = db.prepare("UPDATE jobs SET photon_record_bytes = 24 WHERE id = ?");
+    auto& update = db.prepare("UPDATE jobs SET photon_record_bytes = 16 WHERE id = ?");
     update.bind(1, int64_t(job));
     update.run();
   });
-  EXPECT_NE(log.find("its photon tables hold 24-byte records of an older portico"), std::string::npos) << log;
+  EXPECT_NE(log.find("its photon tables hold 16-byte records of an older portico"), std::string::npos) << log;
 }
 
 // A cell whose work dies with every worker that takes it (here: workers

@@ -125,7 +125,7 @@ struct LeaseWalk {
       if (records > 0) {
         auto& table = deposits[cell];
         table.resize(size_t(records));
-        for (int64_t i = 0; i < records; ++i) table[size_t(i)] = PhotonRecord{uint64_t(i), 0x80808080u, {0, 0}};
+        for (int64_t i = 0; i < records; ++i) table[size_t(i)] = PhotonRecord{uint64_t(i)};
       }
     }
     started += cellStarted;

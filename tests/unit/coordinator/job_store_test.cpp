@@ -554,7 +554,7 @@ namespace {
 TEST_F(JobStoreTest, PhotonTablesRoundTripThroughDiskWithoutLoss) {
   // Records written batch by batch come back byte for byte, after the
   // database is closed and reopened, in the order they were appended.
-  const PhotonFrame frame(Bounds3(Vec3(0.0f), Vec3(1100.0f, 10.0f, 1.0f)), 0.5f);
+  const PhotonFrame frame(Bounds3(Vec3(0.0f), Vec3(1100.0f, 10.0f, 1.0f)), 0.5f, 0.001f);
   std::vector<std::string> written;
   {
     JobStore store(path_.string());
