@@ -59,6 +59,63 @@ std::string csvRow(const Rung& r) {
                      s.worstBlock, s.blockRmse, s.relativeMse, s.flip ? fmt::format("{:.4f}", *s.flip) : "");
 }
 
+// What the ladder renders: a reference scene (scene.json, imported once) or
+// a named camera of a generated building (view.json: the generator's
+// arguments, the camera and the image size), with reference.exr beside it.
+struct Subject {
+  std::string name;
+  fs::path reference;
+  std::vector<std::string> renderArguments;   // the store and the camera, for every rung
+  std::string camera;
+  uint32_t width = 0, height = 0;
+  bool sceneJson = false;
+};
+
+Subject prepare(const BenchQualityOptions& options, const std::string& portico, const fs::path& work) {
+  const fs::path folder(options.sceneDirectory);
+  Subject subject;
+  subject.name = folder.filename().string();
+  subject.reference = folder / "reference.exr";
+  const fs::path store = work / "store";
+  subject.renderArguments = {store.string()};
+  if (!fs::exists(folder / "scene.json") && !fs::exists(folder / "view.json"))
+    throw std::invalid_argument(fmt::format("{}: neither scene.json nor view.json", options.sceneDirectory));
+  if (!fs::exists(subject.reference))
+    throw std::invalid_argument(fmt::format("{}: no reference.exr", options.sceneDirectory));
+  if (fs::exists(folder / "scene.json")) {
+    subject.sceneJson = true;
+    runChild({portico, "scene", "import", (folder / "scene.json").string(), store.string()}, work / "import.log",
+             "importing " + (folder / "scene.json").string());
+  } else {
+    const fs::path viewJson = folder / "view.json";
+    nlohmann::json view;
+    try {
+      view = nlohmann::json::parse(readFile(viewJson));
+      subject.camera = view.at("camera").get<std::string>();
+      subject.width = view.at("width").get<uint32_t>();
+      subject.height = view.at("height").get<uint32_t>();
+      std::vector<std::string> generate{portico, "scene", "generate"};
+      for (const std::string& word : splitOn(view.at("generate").get<std::string>(), ' ')) generate.push_back(word);
+      generate.push_back(store.string());
+      runChild(generate, work / "generate.log", "generating the building of " + viewJson.string());
+    } catch (const nlohmann::json::exception& e) {
+      throw std::invalid_argument(fmt::format("{}: {}", viewJson.string(), e.what()));
+    }
+    subject.renderArguments.insert(subject.renderArguments.end(),
+                                   {"--camera", subject.camera, "--width", std::to_string(subject.width), "--height",
+                                    std::to_string(subject.height)});
+  }
+  return subject;
+}
+
+struct PeerSeries {
+  std::string label;
+  std::vector<Rung> rungs;
+  std::array<uint8_t, 3> color;
+};
+
+void runLadders(const BenchQualityOptions& options, const std::vector<std::string>& ladder, const fs::path& work);
+
 }  // namespace
 
 int runBenchQuality(const BenchQualityOptions& options) {
