@@ -19,8 +19,8 @@ import argparse
 import json
 import os
 import sys
-import time
 
+from portico_mitsuba.ladder import render_ladder
 from portico_mitsuba.scene import UnsupportedScene, check_supported, scene_dict
 
 
@@ -47,29 +47,10 @@ def main():
     except (OSError, json.JSONDecodeError, UnsupportedScene) as e:
         sys.exit(f"{scene_json}: {e}" if not isinstance(e, UnsupportedScene) else str(e))
 
-    # Imported once the scene is known to be one this ladder renders: the
-    # refusal needs neither Mitsuba nor numpy.
-    import numpy as np
-    import mitsuba as mi
-    mi.set_variant(a.variant)
-    import drjit as dr
-    dr.set_thread_count(a.threads)
-    os.makedirs(a.out_dir, exist_ok=True)
-    print("spp,seconds,image", flush=True)
-    warmed = False
-    for spp in counts:
-        scene = mi.load_dict(scene_dict(mi, a.scene_dir, sc, spp, a.max_depth))
-        if not warmed:  # the first render compiles the kernels: not counted
-            dr.eval(mi.render(scene, spp=1, seed=999))
-            warmed = True
-        started = time.perf_counter()
-        # Copied out inside the timing: Dr.Jit evaluates lazily, and asynchronously.
-        pixels = np.array(mi.render(scene, spp=spp, seed=spp), dtype=np.float32)[..., :3]
-        seconds = time.perf_counter() - started
-        path = os.path.join(a.out_dir, f"mitsuba-{spp}.exr")
-        mi.Bitmap(pixels, pixel_format=mi.Bitmap.PixelFormat.RGB).write(path)
-        print(f"{spp},{seconds:.3f},{path}", flush=True)
-
+    # Mitsuba is imported (by render_ladder) once the scene is known to be one
+    # this ladder renders: the refusal needs neither Mitsuba nor numpy.
+    render_ladder(lambda mi, spp: scene_dict(mi, a.scene_dir, sc, spp, a.max_depth), counts, a.threads, a.variant,
+                  a.out_dir, out=lambda row: print(row, flush=True))
 
 if __name__ == "__main__":
     main()

@@ -22,73 +22,71 @@ def image_path(view_dir, spp, photongi):
     return os.path.join(view_dir, f"luxcore-{'photongi-' if photongi else ''}{spp}.exr")
 
 
-def _config(pyluxcore, view_dir, view, spp, threads, photongi, seed):
+def _properties(pyluxcore, values):
     props = pyluxcore.Properties()
+    for name, value in values.items():
+        props.Set(pyluxcore.Property(name, value))
+    return props
 
-    def put(name, value):
-        props.Set(pyluxcore.Property(name, list(value) if isinstance(value, (tuple, list)) else value))
 
+def _config(pyluxcore, view_dir, view, spp, threads, photongi, seed):
     cam = view["camera"]
     if cam["width"] < cam["height"]:
         raise ValueError(f"camera {cam['name']!r}: taller than wide; LuxCore's field of view would be vertical")
-    scene_props = pyluxcore.Properties()
-
-    def scene_put(name, value):
-        scene_props.Set(pyluxcore.Property(name, list(value) if isinstance(value, (tuple, list)) else value))
-
-    scene_put("scene.camera.type", "perspective")
-    scene_put("scene.camera.lookat.orig", [float(c) for c in cam["origin"]])
-    scene_put("scene.camera.lookat.target", [float(c) for c in cam["look_at"]])
-    scene_put("scene.camera.up", [float(c) for c in cam["up"]])
+    scene_values, config = {}, {}
+    scene_values["scene.camera.type"] = "perspective"
+    scene_values["scene.camera.lookat.orig"] = [float(c) for c in cam["origin"]]
+    scene_values["scene.camera.lookat.target"] = [float(c) for c in cam["look_at"]]
+    scene_values["scene.camera.up"] = [float(c) for c in cam["up"]]
     # LuxCore's field of view spans the image's wider side.
     half_x = math.atan(math.tan(math.radians(cam["fov_y_deg"]) / 2) * cam["width"] / cam["height"])
-    scene_put("scene.camera.fieldofview", math.degrees(2 * half_x))
+    scene_values["scene.camera.fieldofview"] = math.degrees(2 * half_x)
     # Its default screen window, lowered by one pixel: LuxCore's images
     # come out one row lower than portico's and Mitsuba's (measured on the
     # edges of cornell_closed's light: +1.00 px in y).
     frame = cam["width"] / cam["height"]
     row = 2.0 / cam["width"]
-    scene_put("scene.camera.screenwindow", [-1.0, 1.0, -1.0 / frame - row, 1.0 / frame - row])
+    scene_values["scene.camera.screenwindow"] = [-1.0, 1.0, -1.0 / frame - row, 1.0 / frame - row]
     for i, m in enumerate(view["materials"]):
         name = f"m{i:02d}"
-        scene_put(f"scene.materials.{name}.type", "matte")
-        scene_put(f"scene.materials.{name}.kd", [float(c) for c in m["albedo"]])
+        scene_values[f"scene.materials.{name}.type"] = "matte"
+        scene_values[f"scene.materials.{name}.kd"] = [float(c) for c in m["albedo"]]
         if m["emission"]:
-            scene_put(f"scene.materials.{name}.emission", [float(c) for c in m["emission"]])
-            scene_put(f"scene.materials.{name}.emission.gain", [1.0, 1.0, 1.0])
-            scene_put(f"scene.materials.{name}.emission.power", 0.0)
-            scene_put(f"scene.materials.{name}.emission.efficency", 0.0)
-            scene_put(f"scene.materials.{name}.emission.normalizebycolor", False)
-        scene_put(f"scene.shapes.{name}.type", "mesh")
-        scene_put(f"scene.shapes.{name}.ply", os.path.join(view_dir, m["ply"]))
-        scene_put(f"scene.objects.{name}.shape", name)
-        scene_put(f"scene.objects.{name}.material", name)
+            scene_values[f"scene.materials.{name}.emission"] = [float(c) for c in m["emission"]]
+            scene_values[f"scene.materials.{name}.emission.gain"] = [1.0, 1.0, 1.0]
+            scene_values[f"scene.materials.{name}.emission.power"] = 0.0
+            scene_values[f"scene.materials.{name}.emission.efficency"] = 0.0
+            scene_values[f"scene.materials.{name}.emission.normalizebycolor"] = False
+        scene_values[f"scene.shapes.{name}.type"] = "mesh"
+        scene_values[f"scene.shapes.{name}.ply"] = os.path.join(view_dir, m["ply"])
+        scene_values[f"scene.objects.{name}.shape"] = name
+        scene_values[f"scene.objects.{name}.material"] = name
     scene = pyluxcore.Scene()
-    scene.Parse(scene_props)
+    scene.Parse(_properties(pyluxcore, scene_values))
 
-    put("renderengine.type", "PATHCPU")
-    put("renderengine.seed", seed)
-    put("sampler.type", "SOBOL")
-    put("native.threads.count", threads)
-    put("film.width", int(cam["width"]))
-    put("film.height", int(cam["height"]))
-    put("film.filter.type", "NONE")
-    put("film.imagepipelines.0.0.type", "NOP")
-    put("film.outputs.0.type", "RGB")
-    put("film.outputs.0.filename", image_path(view_dir, spp, photongi))
+    config["renderengine.type"] = "PATHCPU"
+    config["renderengine.seed"] = seed
+    config["sampler.type"] = "SOBOL"
+    config["native.threads.count"] = threads
+    config["film.width"] = int(cam["width"])
+    config["film.height"] = int(cam["height"])
+    config["film.filter.type"] = "NONE"
+    config["film.imagepipelines.0.0.type"] = "NOP"
+    config["film.outputs.0.type"] = "RGB"
+    config["film.outputs.0.filename"] = image_path(view_dir, spp, photongi)
     for kind in ("total", "diffuse", "glossy", "specular"):
-        put(f"path.pathdepth.{kind}", DEPTH)
-    put("path.clamping.variance.maxvalue", 0.0)
-    put("path.forceblackbackground.enable", True)
-    put("batch.haltspp", spp)
-    put("batch.halttime", 0)
-    put("path.photongi.indirect.enabled", bool(photongi))
-    put("path.photongi.caustic.enabled", False)
+        config[f"path.pathdepth.{kind}"] = DEPTH
+    config["path.clamping.variance.maxvalue"] = 0.0
+    config["path.forceblackbackground.enable"] = True
+    config["batch.haltspp"] = spp
+    config["batch.halttime"] = 0
+    config["path.photongi.indirect.enabled"] = bool(photongi)
+    config["path.photongi.caustic.enabled"] = False
     if photongi:
-        put("path.photongi.sampler.type", "METROPOLIS")
-        put("path.photongi.photon.maxcount", int(photongi))
-        put("path.photongi.indirect.maxsize", 0)   # stop at the halt threshold, as the Blender add-on does
-    return pyluxcore.RenderConfig(props, scene)
+        config["path.photongi.sampler.type"] = "METROPOLIS"
+        config["path.photongi.photon.maxcount"] = int(photongi)
+        config["path.photongi.indirect.maxsize"] = 0   # stop at the halt threshold, as the Blender add-on does
+    return pyluxcore.RenderConfig(_properties(pyluxcore, config), scene)
 
 
 def render(view_dir, view, counts, threads, photongi=0, out=print):

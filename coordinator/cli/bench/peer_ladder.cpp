@@ -18,10 +18,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// Dr.Jit's LLVM back end loads libLLVM at run time and does not look for
-// Debian's versioned name; libllvm19 (install-deps.sh --peers) installs it here.
-constexpr const char* kDebianLibLlvm = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1";
-
 std::string readAll(const fs::path& path) {
   std::ifstream in(path);
   return std::string(std::istreambuf_iterator<char>(in), {});
@@ -52,8 +48,6 @@ void requireMitsuba(const std::string& python) {
     throw std::runtime_error(fmt::format("--mitsuba: no Mitsuba 3 in {} (run deploy/install-deps.sh --peers, or "
                                          "give --mitsuba-python a python that has mitsuba and drjit)",
                                          python));
-  const char* libLlvm = std::getenv("DRJIT_LIBLLVM_PATH");
-  if ((!libLlvm || !*libLlvm) && fs::exists(kDebianLibLlvm)) setenv("DRJIT_LIBLLVM_PATH", kDebianLibLlvm, 1);
 }
 
 }  // namespace

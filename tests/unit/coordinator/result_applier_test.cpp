@@ -5,6 +5,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <initializer_list>
+#include <utility>
 
 #include "common/transport/film.h"
 #include "common/transport/photon_record.h"
@@ -15,6 +17,16 @@ namespace portico {
 namespace {
 
 // A real jobs.db and its files, in a directory of the test's own.
+// Fills a Result's crossings: per entry, a cell and how many rays go to it.
+void queueCrossings(wire::Result::Builder result, std::initializer_list<std::pair<uint32_t, uint32_t>> cellsAndRays) {
+  auto crossings = result.initCrossings(static_cast<unsigned>(cellsAndRays.size()));
+  unsigned i = 0;
+  for (const auto& [cell, rays] : cellsAndRays) {
+    crossings[i].setCell(cell);
+    crossings[i++].initRays(rays);
+  }
+}
+
 class ResultApplierTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -39,11 +51,7 @@ class ResultApplierTest : public ::testing::Test {
 TEST_F(ResultApplierTest, CrossingsDepositsAndFilmGoWhereTheResultSays) {
   capnp::MallocMessageBuilder message;
   auto result = message.initRoot<wire::Result>();
-  auto crossings = result.initCrossings(2);
-  crossings[0].setCell(2);
-  crossings[0].initRays(3);
-  crossings[1].setCell(3);
-  crossings[1].initRays(5);
+  queueCrossings(result, {{2, 3}, {3, 5}});
   auto deposits = result.initDeposits(1);
   deposits[0].setCell(1);
   std::string records(2 * sizeof(PhotonRecord), 'x');
@@ -85,11 +93,7 @@ TEST_F(ResultApplierTest, CrossingsDepositsAndFilmGoWhereTheResultSays) {
 TEST_F(ResultApplierTest, ACellThatDoesNotExistIsRefusedAndNothingIsKept) {
   capnp::MallocMessageBuilder message;
   auto result = message.initRoot<wire::Result>();
-  auto crossings = result.initCrossings(2);
-  crossings[0].setCell(1);
-  crossings[0].initRays(3);
-  crossings[1].setCell(4);   // the store has cells 0-3
-  crossings[1].initRays(1);
+  queueCrossings(result, {{1, 3}, {4, 1}});   // the store has cells 0-3
   {
     sql::Transaction tx(store_->database());
     EXPECT_THROW(applyResult(*store_, target(0), nullptr, result.asReader()), BadResultError);
